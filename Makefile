@@ -1,0 +1,36 @@
+# Quick start: `make demo` builds and runs the headline experiment, `make test` builds
+# and runs the whole test suite. Both install the Debian packages they need first.
+
+BUILD_DIR   ?= build
+JOBS        ?= $(shell nproc)
+DEMO_OUT    ?= runs/demo
+DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapacke-dev \
+               libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
+
+.PHONY: all deps build demo test clean
+
+all: build
+
+# Installs only what is missing, so repeated runs cost one dpkg query.
+deps:
+	@missing=$$(for p in $(DEB_PACKAGES); do \
+	    dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q 'install ok installed' || echo $$p; \
+	  done); \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian packages:" $$missing; \
+	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing; \
+	fi
+
+build: deps
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
+	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+demo: build
+	rm -rf $(DEMO_OUT)
+	$(BUILD_DIR)/physgrad run scaled-toy --out $(DEMO_OUT)
+
+test: build
+	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+
+clean:
+	rm -rf $(BUILD_DIR)

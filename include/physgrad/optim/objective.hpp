@@ -1,0 +1,37 @@
+// Objective — the direct-optimization problem L(x) = Loss(P(x; c), y*) for one sample,
+// with g = Jᵀ ∂L/∂y and the exact Hessian H = Jᵀ (∂²L/∂y²) J + Σ_k (∂L/∂y_k) ∂²P_k/∂x².
+#pragma once
+
+#include "physgrad/loss/loss.hpp"
+#include "physgrad/physics/simulator.hpp"
+
+namespace physgrad {
+
+// Holds references: the simulator and loss must outlive the Objective.
+class Objective {
+ public:
+  Objective(const Simulator& simulator, const Loss& loss, Vector target, Vector context = {});
+
+  Index dim() const { return simulator_->input_dim(); }
+  const Simulator& simulator() const { return *simulator_; }
+  const Loss& loss() const { return *loss_; }
+  const Vector& target() const { return target_; }
+  const Vector& context() const { return context_; }
+
+  Vector output(const Vector& x) const;  // y = P(x; c)
+  double value(const Vector& x) const;   // L(x)
+  Vector gradient(const Vector& x) const;
+  double value_and_gradient(const Vector& x, Vector& gradient) const;
+  Matrix jacobian(const Vector& x) const;  // ∂P/∂x
+  Matrix hessian(const Vector& x) const;   // exact ∂²L/∂x²
+
+ private:
+  void check_x(const Vector& x) const;
+
+  const Simulator* simulator_;
+  const Loss* loss_;
+  Vector target_;
+  Vector context_;
+};
+
+}  // namespace physgrad

@@ -1,0 +1,41 @@
+// Optimizer — one update rule for direct optimization: given x, propose Δx.
+// Per-run state (moments, curvature pairs, damping) lives in the object; reset() clears it.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "physgrad/optim/objective.hpp"
+
+namespace physgrad {
+
+struct Step {
+  enum class Status {
+    kOk,        // dx is the proposed update
+    kRejected,  // a trial was tried and rejected (trust region); x stays, the iteration counts
+    kFailed,    // the rule cannot continue (e.g. no acceptable step length)
+  };
+  Vector dx;
+  Status status = Status::kOk;
+  std::string message;  // why, when failed
+  int evaluations = 0;  // objective evaluations the step spent (value or value+gradient)
+};
+
+class Optimizer {
+ public:
+  virtual ~Optimizer() = default;
+  // Short lower-case id: gd, momentum, adam, newton, bfgs, lbfgs, gn, lm, ig, pg.
+  virtual std::string id() const = 0;
+  // Every setting that distinguishes a run (lr, beta, ...), for config and summary files.
+  virtual nlohmann::json params() const = 0;
+  // Forget per-run state; called by minimize() before the first step.
+  virtual void reset() {}
+  virtual Step step(const Objective& objective, const Vector& x) = 0;
+};
+
+// Throws Error naming `what` unless value is finite and > 0.
+void require_positive(const char* what, double value);
+// Throws Error naming `what` unless value is finite and lo ≤ value < hi.
+void require_in_range(const char* what, double value, double lo, double hi);
+
+}  // namespace physgrad
