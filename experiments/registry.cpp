@@ -1,2 +1,16 @@
-// Placeholder until the experiment framework lands.
-namespace physgrad_experiments_placeholder { int unused = 0; }
+#include "experiment_list.hpp"
+
+namespace physgrad::experiments {
+
+const std::vector<std::unique_ptr<Experiment>>& registry() {
+  static const std::vector<std::unique_ptr<Experiment>> experiments = [] {
+    std::vector<std::unique_ptr<Experiment>> list;
+    list.push_back(make_scaled_toy());
+    list.push_back(make_sensitivity());
+    list.push_back(make_comparison());
+    return list;
+  }();
+  return experiments;
+}
+
+}  // namespace physgrad::experiments

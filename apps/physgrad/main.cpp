@@ -1,1 +1,164 @@
-int main() { return 0; }
+// physgrad — command-line front end: `physgrad list`, `physgrad run NAME [options]`.
+// Every error is one line on stderr and exit code 2; a run writes its folder only on success.
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <ctime>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include "experiment.hpp"
+#include "physgrad/error.hpp"
+#include "run_folder.hpp"
+
+namespace {
+
+namespace ex = physgrad::experiments;
+namespace fs = std::filesystem;
+
+constexpr int kUsageError = 2;
+
+std::string timestamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm local{};
+  localtime_r(&now, &local);
+  std::ostringstream out;
+  out << std::put_time(&local, "%Y%m%d-%H%M%S");
+  return out.str();
+}
+
+std::string type_name(const ex::OptionSpec& spec) {
+  switch (spec.kind) {
+    case ex::OptionSpec::Kind::kReal: return "NUMBER";
+    case ex::OptionSpec::Kind::kInteger: return "INT";
+    case ex::OptionSpec::Kind::kText: return "TEXT";
+    case ex::OptionSpec::Kind::kRealList: return "NUMBERS";
+    case ex::OptionSpec::Kind::kTextList: return "NAMES";
+  }
+  return "TEXT";
+}
+
+std::string option_help(const ex::OptionSpec& spec) {
+  std::string help = spec.help;
+  const std::string range = ex::describe_range(spec);
+  if (!range.empty()) help += " (" + range + ")";
+  return help;
+}
+
+void print_table(const ex::RunContext::Table& table) {
+  std::vector<std::size_t> widths(table.header.size(), 0);
+  const auto width = [](const std::string& text) {
+    // Count code points, not bytes, so α and ≤ line up.
+    return static_cast<std::size_t>(std::count_if(
+        text.begin(), text.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
+  };
+  for (std::size_t c = 0; c < table.header.size(); ++c) widths[c] = width(table.header[c]);
+  for (const auto& row : table.rows) {
+    for (std::size_t c = 0; c < row.size() && c < widths.size(); ++c) {
+      widths[c] = std::max(widths[c], width(row[c]));
+    }
+  }
+  const auto print_row = [&](const std::vector<std::string>& row) {
+    for (std::size_t c = 0; c < row.size() && c < widths.size(); ++c) {
+      std::cout << row[c] << std::string(widths[c] - width(row[c]) + 2, ' ');
+    }
+    std::cout << '\n';
+  };
+  std::cout << table.title << '\n';
+  print_row(table.header);
+  for (const auto& row : table.rows) print_row(row);
+  std::cout << '\n';
+}
+
+int run_experiment(const ex::Experiment& experiment,
+                   const std::vector<std::pair<std::string, std::string>>& given,
+                   const std::string& command_line) {
+  const ex::Settings settings = ex::resolve_settings(experiment, given);
+  const fs::path out = settings.has("out") && !settings.text("out").empty()
+                           ? fs::path(settings.text("out"))
+                           : fs::path("runs") / (experiment.name() + "-" + timestamp());
+  const fs::path staging = ex::prepare_run_folder(out);
+  try {
+    ex::RunContext context;
+    experiment.run(settings, context);
+    ex::write_run_folder(staging, experiment, settings, context, command_line);
+    ex::commit_run_folder(staging, out);
+    for (const auto& table : context.tables()) print_table(table);
+    std::cout << "report: " << (out / "report.html").string() << '\n';
+  } catch (...) {
+    ex::discard_run_folder(staging);
+    throw;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string command_line;
+  for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
+
+  CLI::App app{"physgrad — inversion-based optimization for physics-based deep learning"};
+  app.require_subcommand(1);
+  CLI::App* list = app.add_subcommand("list", "list the experiments");
+  CLI::App* run = app.add_subcommand("run", "run an experiment: physgrad run NAME [options]");
+  run->require_subcommand(1);
+
+  // Each experiment is a subcommand of `run` with its own options, all read as text and
+  // validated by the experiment framework so every bad value gets the same kind of message.
+  std::map<std::string, std::map<std::string, std::string>> texts;
+  std::map<std::string, std::vector<CLI::Option*>> cli_options;
+  for (const auto& experiment : ex::registry()) {
+    CLI::App* sub = run->add_subcommand(experiment->name(), experiment->description());
+    for (const ex::OptionSpec& spec : ex::all_options(*experiment)) {
+      CLI::Option* option =
+          sub->add_option("--" + spec.name, texts[experiment->name()][spec.name], option_help(spec));
+      option->default_str(spec.default_text)->type_name(type_name(spec));
+      cli_options[experiment->name()].push_back(option);
+    }
+  }
+
+  try {
+    // Name an unknown experiment explicitly instead of CLI11's generic "not expected".
+    if (argc > 2 && std::string(argv[1]) == "run" && argv[2][0] != '-') {
+      ex::find_experiment(argv[2]);
+    }
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "physgrad: error: " << e.what() << '\n';
+    return kUsageError;
+  } catch (const std::exception& e) {
+    std::cerr << "physgrad: error: " << e.what() << '\n';
+    return kUsageError;
+  }
+
+  try {
+    if (list->parsed()) {
+      for (const auto& experiment : ex::registry()) {
+        std::cout << std::left << std::setw(14) << experiment->name() << experiment->description()
+                  << '\n';
+      }
+      return 0;
+    }
+    for (const auto& experiment : ex::registry()) {
+      CLI::App* sub = run->get_subcommand(experiment->name());
+      if (!sub->parsed()) continue;
+      std::vector<std::pair<std::string, std::string>> given;
+      for (CLI::Option* option : cli_options[experiment->name()]) {
+        if (option->count() == 0) continue;
+        const std::string name = option->get_name().substr(2);  // drop "--"
+        given.emplace_back(name, texts[experiment->name()][name]);
+      }
+      return run_experiment(*experiment, given, command_line);
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "physgrad: error: " << e.what() << '\n';
+    return kUsageError;
+  }
+  return 0;
+}

@@ -1,0 +1,147 @@
+// comparison: y = P(x) = (x₀, x₁²), L = ‖y‖² = x₀² + x₁⁴ from (3, 3), as in the book's simple
+// optimizer comparison: GD, Adam, Newton, IG and PG (analytic and numerical local inverse).
+#include <cmath>
+
+#include "direct_runs.hpp"
+#include "experiment_list.hpp"
+#include "physgrad/error.hpp"
+#include "physgrad/loss/loss.hpp"
+#include "physgrad/physics/comparison_toy.hpp"
+
+namespace physgrad::experiments {
+namespace {
+
+using Kind = OptionSpec::Kind;
+
+class Comparison final : public Experiment {
+ public:
+  std::string name() const override { return "comparison"; }
+  std::string description() const override {
+    return "y = (x0, x1^2), L = |y|^2 from (3,3): GD, Adam, Newton, IG, PG side by side";
+  }
+  std::vector<OptionSpec> options() const override {
+    return {
+        real_list_option("start", "3,3", "starting point x₀ (two values)"),
+        text_list_option("pg-inverse", "analytic,lbfgs", "local inverses PG runs with, one run each")
+            .one_of({"analytic", "lbfgs", "gn"}),
+    };
+  }
+  std::vector<std::string> optimizer_choices() const override { return direct_optimizer_ids(); }
+  std::vector<std::string> default_optimizers() const override {
+    return {"gd", "adam", "newton", "ig", "pg"};
+  }
+  long long default_iterations() const override { return 10; }
+
+  void validate(const Settings& settings) const override {
+    const std::size_t n = settings.reals("start").size();
+    if (n != 2) throw Error("--start: needs exactly 2 values, got " + std::to_string(n));
+  }
+
+  void run(const Settings& settings, RunContext& context) const override {
+    const std::vector<double> start = settings.reals("start");
+    const Vector x0{{start[0], start[1]}};
+    const auto iterations = static_cast<int>(settings.integer("iters"));
+
+    std::vector<RuleSetup> rules;
+    for (const RuleSetup& rule : selected_rules(settings, kDefaultLr)) {
+      if (rule.id != "pg") {
+        rules.push_back(rule);
+        continue;
+      }
+      for (const std::string& method : settings.texts("pg-inverse")) {
+        RuleSetup pg = rule;
+        pg.settings.inverse = parse_inverse_method(method);
+        pg.label = "PG (" + std::string(method == "analytic" ? "analytic" : optimizer_label(method)) +
+                   " inverse)";
+        pg.extra_params["inverse"] = method;
+        rules.push_back(pg);
+      }
+    }
+
+    const ComparisonToy physics;
+    const L2Loss squares(2.0);  // L = y₀² + y₁², the notebook's loss
+    const Objective objective(physics, squares, Vector::Zero(2));
+    std::vector<DirectResult> results;
+    for (const RuleSetup& rule : rules) {
+      context.progress("comparison: " + rule.label);
+      results.push_back(run_direct(context, rule, objective, x0, iterations, 0.0));
+    }
+    context.finish_progress();
+
+    RunContext::Table table{"After " + std::to_string(iterations) + " steps from (" +
+                                format_value(x0(0)) + ", " + format_value(x0(1)) + ")",
+                            {"rule", "step size", "final x", "distance to 0", "loss",
+                             "diagonal score of step 1"},
+                            {}};
+    for (const DirectResult& r : results) {
+      const auto& h = r.summary.history;
+      std::string diagonal = "–";
+      if (h.size() > 1) {
+        const Vector u = h[0].x - h[1].x;
+        diagonal = format_value(u.normalized().sum());
+      }
+      table.rows.push_back({r.rule.label,
+                            step_size_text(r.rule),
+                            "(" + format_value(r.summary.x(0)) + ", " +
+                                format_value(r.summary.x(1)) + ")",
+                            format_value(r.summary.x.norm()), format_value(r.summary.loss),
+                            diagonal});
+    }
+    context.add_table(std::move(table));
+    context.add_note(
+        "The last column is the first update's alignment with the diagonal, dot(u/|u|, (1,1)) "
+        "with u = x₀ − x₁; √2 ≈ 1.414 means the update points straight at the minimum.");
+
+    add_figures(context, x0, physics, results);
+  }
+
+ private:
+  inline static const std::map<std::string, double> kDefaultLr = {
+      {"gd", 0.01}, {"momentum", 0.01}, {"adam", 0.3}, {"newton", 1.0 / 3.0},
+      {"gn", 0.3},  {"ig", 0.3},        {"pg", 0.3}};
+
+  static void add_figures(RunContext& context, const Vector& x0, const ComparisonToy& physics,
+                          const std::vector<DirectResult>& results) {
+    const double reach = x0.cwiseAbs().maxCoeff();
+    LandscapeOptions x_options;
+    x_options.title = "x space: L = x₀² + x₁⁴";
+    x_options.x_label = "x₀";
+    x_options.y_label = "x₁";
+    x_options.markers = {{0.0, 0.0, "minimum"}};
+    const Grid2D x_grid =
+        sample_grid([](double a, double b) { return a * a + b * b * b * b; }, -0.2 * reach,
+                    1.15 * reach, -0.2 * reach, 1.15 * reach, 81);
+    context.add_figure({"trajectories_x.svg", "Trajectories in x space over the isolines of L.",
+                        landscape_svg(x_grid, trajectories(results), x_options)});
+
+    // The same runs seen in y = P(x): PG moves along the straight line to the minimum.
+    std::vector<Trajectory> in_y = trajectories(results);
+    for (std::size_t r = 0; r < results.size(); ++r) {
+      for (std::size_t k = 0; k < in_y[r].x.size(); ++k) {
+        const Vector y = physics.forward(results[r].summary.history[k].x);
+        in_y[r].x[k] = y(0);
+        in_y[r].y[k] = y(1);
+      }
+    }
+    const Vector y0 = physics.forward(x0);
+    const double y_reach = y0.cwiseAbs().maxCoeff();
+    LandscapeOptions y_options;
+    y_options.title = "y space: L = y₀² + y₁²";
+    y_options.x_label = "y₀";
+    y_options.y_label = "y₁";
+    y_options.markers = {{0.0, 0.0, "minimum"}};
+    const Grid2D y_grid = sample_grid([](double a, double b) { return a * a + b * b; },
+                                      -0.2 * y_reach, 1.15 * y_reach, -0.2 * y_reach,
+                                      1.15 * y_reach, 81);
+    context.add_figure({"trajectories_y.svg", "The same trajectories mapped to y = P(x).",
+                        landscape_svg(y_grid, in_y, y_options)});
+    context.add_figure({"loss.svg", "Loss per iteration.",
+                        loss_curves_svg(results, "Loss vs iteration")});
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Experiment> make_comparison() { return std::make_unique<Comparison>(); }
+
+}  // namespace physgrad::experiments

@@ -1,0 +1,150 @@
+#include "direct_runs.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "physgrad/report/svg_plot.hpp"
+
+namespace physgrad::experiments {
+
+std::vector<RuleSetup> selected_rules(const Settings& settings,
+                                      const std::map<std::string, double>& default_lr) {
+  std::vector<RuleSetup> rules;
+  for (const std::string& id : settings.texts("optimizers")) {
+    RuleSetup rule{id, optimizer_label(id), {}, nlohmann::json::object()};
+    if (settings.has("lr")) {
+      rule.settings.lr = settings.real("lr");
+    } else if (const auto it = default_lr.find(id); it != default_lr.end()) {
+      rule.settings.lr = it->second;
+    }
+    rules.push_back(rule);
+  }
+  return rules;
+}
+
+DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Objective& objective,
+                        const Vector& x0, int iterations, double tolerance,
+                        const nlohmann::json& row_extras) {
+  const std::unique_ptr<Optimizer> optimizer = make_optimizer(rule.id, rule.settings);
+  MinimizeOptions options;
+  options.max_iterations = iterations;
+  options.loss_tolerance = tolerance;
+  DirectResult result{rule, minimize(*optimizer, objective, x0, options), 0};
+  result.initial_loss = result.summary.history.front().loss;
+
+  for (const IterationRecord& record : result.summary.history) {
+    nlohmann::json row = {{"label", rule.label},
+                          {"optimizer", rule.id},
+                          {"iteration", record.iteration},
+                          {"wall_seconds", record.seconds},
+                          {"loss", record.loss},
+                          {"step_norm", record.step_norm}};
+    for (const auto& [key, value] : row_extras.items()) row[key] = value;
+    for (Index i = 0; i < record.x.size(); ++i) {
+      std::string column = "x";
+      column += std::to_string(i);
+      row[column] = record.x(i);
+    }
+    context.add_metrics_row(std::move(row));
+  }
+
+  nlohmann::json params = optimizer->params();
+  for (const auto& [key, value] : rule.extra_params.items()) params[key] = value;
+  for (const auto& [key, value] : row_extras.items()) params[key] = value;
+  const MinimizeSummary& s = result.summary;
+  context.add_run({{"label", rule.label},
+                   {"optimizer", rule.id},
+                   {"params", params},
+                   {"initial", {{"loss", result.initial_loss}}},
+                   {"final", {{"loss", s.loss}, {"x", std::vector<double>(s.x.begin(), s.x.end())}}},
+                   {"iterations", s.iterations},
+                   {"epochs", nullptr},
+                   {"wall_seconds", s.wall_seconds},
+                   {"termination", to_string(s.termination)},
+                   {"message", s.message}});
+  return result;
+}
+
+std::string iterations_cell(const DirectResult& result) {
+  const MinimizeSummary& s = result.summary;
+  switch (s.termination) {
+    case Termination::kConverged: return std::to_string(s.iterations);
+    case Termination::kNumericalFailure: return "diverged at " + std::to_string(s.iterations + 1);
+    case Termination::kFailed: return "failed at " + std::to_string(s.iterations + 1);
+    case Termination::kStationary: return "stalled at " + std::to_string(s.iterations);
+    default: break;
+  }
+  if (s.loss > result.initial_loss) {
+    return "diverging (L ×" + format_value(s.loss / result.initial_loss) + " after " +
+           std::to_string(s.iterations) + ")";
+  }
+  return "> " + std::to_string(s.iterations);
+}
+
+std::string step_size_text(const RuleSetup& rule) {
+  const nlohmann::json params = make_optimizer(rule.id, rule.settings)->params();
+  if (params.contains("lr")) return format_value(params["lr"].get<double>());
+  if (params.contains("initial_step")) {
+    return "line search from " + format_value(params["initial_step"].get<double>());
+  }
+  if (params.contains("initial_damping")) {
+    return "adaptive μ from " + format_value(params["initial_damping"].get<double>());
+  }
+  return "–";
+}
+
+std::string loss_curves_svg(const std::vector<DirectResult>& results, const std::string& title) {
+  std::vector<Series> series;
+  for (const DirectResult& result : results) {
+    Series line{result.rule.label, {}, {}, color_for(result.rule.id), false, false};
+    for (const IterationRecord& record : result.summary.history) {
+      line.x.push_back(static_cast<double>(record.iteration));
+      line.y.push_back(record.loss);
+    }
+    line.markers = line.x.size() <= 40;
+    line.dashed = result.rule.extra_params.contains("inverse") &&
+                  result.rule.extra_params["inverse"] != "analytic";
+    series.push_back(std::move(line));
+  }
+  LinePlotOptions options;
+  options.title = title;
+  options.x_label = "iteration";
+  options.y_label = "loss";
+  options.log_y = true;
+  return line_plot_svg(series, options);
+}
+
+Grid2D sample_grid(const std::function<double(double, double)>& f, double x_min, double x_max,
+                   double y_min, double y_max, int n) {
+  Grid2D grid{x_min, x_max, y_min, y_max, n, n, std::vector<double>(static_cast<std::size_t>(n * n))};
+  for (int j = 0; j < n; ++j) {
+    const double y = y_min + (y_max - y_min) * j / (n - 1);
+    for (int i = 0; i < n; ++i) {
+      const double x = x_min + (x_max - x_min) * i / (n - 1);
+      grid.values[static_cast<std::size_t>(j * n + i)] = f(x, y);
+    }
+  }
+  return grid;
+}
+
+std::vector<Trajectory> trajectories(const std::vector<DirectResult>& results) {
+  std::vector<Trajectory> out;
+  for (const DirectResult& result : results) {
+    Trajectory t{result.rule.label, {}, {}, color_for(result.rule.id)};
+    for (const IterationRecord& record : result.summary.history) {
+      t.x.push_back(record.x(0));
+      t.y.push_back(record.x.size() > 1 ? record.x(1) : 0.0);
+    }
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+std::string format_value(double value) {
+  std::ostringstream out;
+  out.precision(4);
+  out << value;
+  return out.str();
+}
+
+}  // namespace physgrad::experiments

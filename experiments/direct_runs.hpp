@@ -1,0 +1,63 @@
+// Shared pieces of the direct-optimization experiments: build the selected update rules with
+// per-experiment step sizes, run them, and record metrics rows and summary entries.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "experiment.hpp"
+#include "physgrad/optim/minimize.hpp"
+#include "physgrad/optim/registry.hpp"
+#include "physgrad/report/svg_plot.hpp"
+
+namespace physgrad::experiments {
+
+// One configured rule of an experiment: id, display label and its settings.
+struct RuleSetup {
+  std::string id;
+  std::string label;
+  OptimizerSettings settings;
+  nlohmann::json extra_params = nlohmann::json::object();  // e.g. {"inverse": "lbfgs"}
+};
+
+// The rules selected by --optimizers, each with --lr if given, else the experiment's default
+// step size for that id (absent from `default_lr`: the library default).
+std::vector<RuleSetup> selected_rules(const Settings& settings,
+                                      const std::map<std::string, double>& default_lr);
+
+struct DirectResult {
+  RuleSetup rule;
+  MinimizeSummary summary;
+  double initial_loss = 0;
+};
+
+// Runs one rule from x0, records one metrics row per iterate (with `row_extras` columns) and
+// a summary entry (with `extra_params` merged into params). `tolerance` is the loss level
+// counted as converged.
+DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Objective& objective,
+                        const Vector& x0, int iterations, double tolerance,
+                        const nlohmann::json& row_extras = nlohmann::json::object());
+
+// "12" when converged, "diverged at 7" on numerical failure, "diverging (L ×…)" when the
+// budget ran out with the loss above its start, "> N" otherwise.
+std::string iterations_cell(const DirectResult& result);
+// The step size a rule actually runs with: "0.5", "line search from 1", "adaptive μ from 0.001".
+std::string step_size_text(const RuleSetup& rule);
+
+// Loss vs iteration (log y) of several runs.
+std::string loss_curves_svg(const std::vector<DirectResult>& results, const std::string& title);
+
+// Samples f on an n×n grid over [x_min, x_max]×[y_min, y_max].
+Grid2D sample_grid(const std::function<double(double, double)>& f, double x_min, double x_max,
+                   double y_min, double y_max, int n);
+
+// Each run's iterates as a trajectory (first two coordinates).
+std::vector<Trajectory> trajectories(const std::vector<DirectResult>& results);
+
+// Compact number formatting for tables: 4 significant digits.
+std::string format_value(double value);
+
+}  // namespace physgrad::experiments

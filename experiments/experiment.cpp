@@ -1,0 +1,272 @@
+#include "experiment.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+#include "physgrad/error.hpp"
+
+namespace physgrad::experiments {
+
+namespace {
+
+using Kind = OptionSpec::Kind;
+
+std::string flag(const OptionSpec& spec) { return "--" + spec.name; }
+
+std::string trim(const std::string& text) {
+  const auto first = text.find_first_not_of(" \t");
+  if (first == std::string::npos) return {};
+  return text.substr(first, text.find_last_not_of(" \t") - first + 1);
+}
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) items.push_back(trim(item));
+  return items;
+}
+
+std::string join(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& item : items) out += (out.empty() ? "" : ", ") + item;
+  return out;
+}
+
+std::string format_number(double value) {
+  std::ostringstream out;
+  out.precision(10);
+  out << value;
+  return out.str();
+}
+
+double parse_real(const OptionSpec& spec, const std::string& text) {
+  const std::string item = trim(text);
+  double value = 0;
+  std::size_t used = 0;
+  try {
+    value = std::stod(item, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (item.empty() || used != item.size()) {
+    throw Error(flag(spec) + ": '" + text + "' is not a number");
+  }
+  if (!std::isfinite(value)) throw Error(flag(spec) + ": must be finite, got '" + text + "'");
+  const bool below = spec.min_exclusive ? !(value > spec.min) : !(value >= spec.min);
+  if (below || value > spec.max || (spec.nonzero && value == 0)) {
+    throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got '" + text + "'");
+  }
+  return value;
+}
+
+long long parse_integer(const OptionSpec& spec, const std::string& text) {
+  const std::string item = trim(text);
+  long long value = 0;
+  std::size_t used = 0;
+  try {
+    value = std::stoll(item, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (item.empty() || used != item.size()) {
+    throw Error(flag(spec) + ": '" + text + "' is not a whole number");
+  }
+  const auto as_double = static_cast<double>(value);
+  if (as_double < spec.min || as_double > spec.max || (spec.nonzero && value == 0)) {
+    throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got '" + text + "'");
+  }
+  return value;
+}
+
+std::string parse_text(const OptionSpec& spec, const std::string& text) {
+  const std::string item = trim(text);
+  if (!spec.choices.empty() &&
+      std::find(spec.choices.begin(), spec.choices.end(), item) == spec.choices.end()) {
+    throw Error(flag(spec) + ": unknown value '" + item + "' (known: " + join(spec.choices) + ")");
+  }
+  return item;
+}
+
+}  // namespace
+
+namespace {
+OptionSpec make_option(std::string name, Kind kind, std::string default_text, std::string help) {
+  OptionSpec spec;
+  spec.name = std::move(name);
+  spec.kind = kind;
+  spec.default_text = std::move(default_text);
+  spec.help = std::move(help);
+  return spec;
+}
+}  // namespace
+
+OptionSpec real_option(std::string name, std::string default_text, std::string help) {
+  return make_option(std::move(name), Kind::kReal, std::move(default_text), std::move(help));
+}
+OptionSpec integer_option(std::string name, std::string default_text, std::string help) {
+  return make_option(std::move(name), Kind::kInteger, std::move(default_text), std::move(help));
+}
+OptionSpec text_option(std::string name, std::string default_text, std::string help) {
+  return make_option(std::move(name), Kind::kText, std::move(default_text), std::move(help));
+}
+OptionSpec real_list_option(std::string name, std::string default_text, std::string help) {
+  return make_option(std::move(name), Kind::kRealList, std::move(default_text), std::move(help));
+}
+OptionSpec text_list_option(std::string name, std::string default_text, std::string help) {
+  return make_option(std::move(name), Kind::kTextList, std::move(default_text), std::move(help));
+}
+
+std::string describe_range(const OptionSpec& spec) {
+  if (spec.kind == Kind::kText || spec.kind == Kind::kTextList) {
+    return spec.choices.empty() ? "" : "one of: " + join(spec.choices);
+  }
+  std::vector<std::string> parts;
+  const bool has_min = std::isfinite(spec.min);
+  const bool has_max = std::isfinite(spec.max);
+  if (has_min && has_max) {
+    parts.push_back("in " + std::string(spec.min_exclusive ? "(" : "[") + format_number(spec.min) +
+                    ", " + format_number(spec.max) + "]");
+  } else if (has_min) {
+    parts.push_back((spec.min_exclusive ? "> " : "≥ ") + format_number(spec.min));
+  } else if (has_max) {
+    parts.push_back("≤ " + format_number(spec.max));
+  }
+  if (spec.nonzero) parts.push_back("nonzero");
+  std::string out = join(parts);
+  if (out.empty()) out = spec.kind == Kind::kInteger ? "a whole number" : "a finite number";
+  return out;
+}
+
+nlohmann::json parse_option(const OptionSpec& spec, const std::string& text) {
+  switch (spec.kind) {
+    case Kind::kReal: return parse_real(spec, text);
+    case Kind::kInteger: return parse_integer(spec, text);
+    case Kind::kText: return parse_text(spec, text);
+    case Kind::kRealList:
+    case Kind::kTextList: {
+      nlohmann::json items = nlohmann::json::array();
+      for (const std::string& item : split_list(text)) {
+        if (item.empty()) throw Error(flag(spec) + ": empty entry in list '" + text + "'");
+        if (spec.kind == Kind::kRealList) {
+          items.push_back(parse_real(spec, item));
+        } else {
+          const std::string value = parse_text(spec, item);
+          if (std::find(items.begin(), items.end(), value) != items.end()) {
+            throw Error(flag(spec) + ": '" + value + "' is listed twice");
+          }
+          items.push_back(value);
+        }
+      }
+      if (items.empty()) throw Error(flag(spec) + ": needs at least one value");
+      return items;
+    }
+  }
+  return nullptr;
+}
+
+const nlohmann::json& Settings::at(const std::string& name) const {
+  if (!values_.contains(name) || values_.at(name).is_null()) {
+    throw Error("setting '" + name + "' is not set");
+  }
+  return values_.at(name);
+}
+
+bool Settings::has(const std::string& name) const {
+  return values_.contains(name) && !values_.at(name).is_null();
+}
+double Settings::real(const std::string& name) const { return at(name).get<double>(); }
+long long Settings::integer(const std::string& name) const { return at(name).get<long long>(); }
+std::string Settings::text(const std::string& name) const { return at(name).get<std::string>(); }
+std::vector<double> Settings::reals(const std::string& name) const {
+  return at(name).get<std::vector<double>>();
+}
+std::vector<std::string> Settings::texts(const std::string& name) const {
+  return at(name).get<std::vector<std::string>>();
+}
+
+void RunContext::add_metrics_row(nlohmann::json row) { metrics_.push_back(std::move(row)); }
+void RunContext::add_run(nlohmann::json run) { runs_.push_back(std::move(run)); }
+
+void RunContext::progress(const std::string& line) {
+  if (quiet_) return;
+  static const bool terminal = isatty(fileno(stderr)) != 0;
+  const double now = std::chrono::duration<double>(
+                         std::chrono::steady_clock::now().time_since_epoch())
+                         .count();
+  if (terminal) {
+    std::cerr << "\r\033[K" << line << std::flush;
+    progress_line_open_ = true;
+  } else if (now - last_progress_seconds_ >= 2.0) {
+    std::cerr << line << '\n';
+    last_progress_seconds_ = now;
+  }
+}
+
+void RunContext::finish_progress() {
+  if (progress_line_open_) std::cerr << '\n';
+  progress_line_open_ = false;
+}
+
+std::vector<OptionSpec> common_options(const Experiment& experiment) {
+  std::string defaults = join(experiment.default_optimizers());
+  defaults.erase(std::remove(defaults.begin(), defaults.end(), ' '), defaults.end());
+  return {
+      text_list_option("optimizers", defaults, "comma-separated update rules to run")
+          .one_of(experiment.optimizer_choices()),
+      integer_option("iters", std::to_string(experiment.default_iterations()),
+                     "iterations per run")
+          .at_least(1)
+          .at_most(1e9),
+      real_option("lr", "",
+                  "step size η for every selected rule (default: each rule's own, see the report)")
+          .above(0),
+      integer_option("seed", "0", "random seed of stochastic parts (data, initialisation)").at_least(0).at_most(4294967295.0),
+      text_option("out", "", "run folder (default: runs/NAME-<timestamp>)"),
+  };
+}
+
+
+std::vector<OptionSpec> all_options(const Experiment& experiment) {
+  std::vector<OptionSpec> options = common_options(experiment);
+  for (OptionSpec& spec : experiment.options()) options.push_back(std::move(spec));
+  return options;
+}
+
+Settings resolve_settings(const Experiment& experiment,
+                          const std::vector<std::pair<std::string, std::string>>& given) {
+  const std::vector<OptionSpec> specs = all_options(experiment);
+  nlohmann::json values = nlohmann::json::object();
+  for (const auto& [name, text] : given) {
+    const auto spec = std::find_if(specs.begin(), specs.end(),
+                                   [&](const OptionSpec& s) { return s.name == name; });
+    if (spec == specs.end()) {
+      throw Error("experiment '" + experiment.name() + "' has no option --" + name);
+    }
+    values[name] = parse_option(*spec, text);
+  }
+  for (const OptionSpec& spec : specs) {
+    if (values.contains(spec.name)) continue;
+    values[spec.name] = spec.default_text.empty() ? nlohmann::json(nullptr)
+                                                  : parse_option(spec, spec.default_text);
+  }
+  Settings settings(std::move(values));
+  experiment.validate(settings);
+  return settings;
+}
+
+const Experiment& find_experiment(const std::string& name) {
+  std::vector<std::string> known;
+  for (const auto& experiment : registry()) {
+    if (experiment->name() == name) return *experiment;
+    known.push_back(experiment->name());
+  }
+  throw Error("unknown experiment '" + name + "' (known: " + join(known) + ")");
+}
+
+}  // namespace physgrad::experiments

@@ -1,0 +1,141 @@
+// Experiment framework — a reference experiment declares its options and runs into a
+// RunContext, which collects metrics, per-run summaries, figures and tables for the run folder.
+#pragma once
+
+#include <limits>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "physgrad/types.hpp"
+
+namespace physgrad::experiments {
+
+// One command-line option of an experiment. Values are parsed and validated by parse_option(),
+// so every bad value gets the same kind of one-line error naming the option and the value.
+struct OptionSpec {
+  enum class Kind { kReal, kInteger, kText, kRealList, kTextList };
+  std::string name;          // "lr" is given as --lr
+  Kind kind = Kind::kReal;
+  std::string default_text;  // as typed on the command line; empty = unset (optional)
+  std::string help;
+  double min = -std::numeric_limits<double>::infinity();  // numeric bounds, inclusive unless
+  double max = std::numeric_limits<double>::infinity();   // min_exclusive
+  bool min_exclusive = false;
+  bool nonzero = false;              // numeric: 0 is not allowed
+  std::vector<std::string> choices;  // allowed texts (text kinds); empty = any
+
+  // Chainable constraints: real_option("lr", "0.1", "step size").above(0).
+  OptionSpec& above(double bound) { min = bound; min_exclusive = true; return *this; }
+  OptionSpec& at_least(double bound) { min = bound; min_exclusive = false; return *this; }
+  OptionSpec& at_most(double bound) { max = bound; return *this; }
+  OptionSpec& not_zero() { nonzero = true; return *this; }
+  OptionSpec& one_of(std::vector<std::string> allowed) { choices = std::move(allowed); return *this; }
+};
+
+OptionSpec real_option(std::string name, std::string default_text, std::string help);
+OptionSpec integer_option(std::string name, std::string default_text, std::string help);
+OptionSpec text_option(std::string name, std::string default_text, std::string help);
+OptionSpec real_list_option(std::string name, std::string default_text, std::string help);
+OptionSpec text_list_option(std::string name, std::string default_text, std::string help);
+
+// Parses `text` for `spec` into JSON (number, integer, string or array). Throws Error such as
+// "--lr: 'abc' is not a number" or "--iters: must be ≥ 1, got 0".
+nlohmann::json parse_option(const OptionSpec& spec, const std::string& text);
+// "a range like ≥ 1" for help texts; empty when unbounded.
+std::string describe_range(const OptionSpec& spec);
+
+// The resolved settings of a run: option name → parsed value (null when unset).
+class Settings {
+ public:
+  explicit Settings(nlohmann::json values) : values_(std::move(values)) {}
+  const nlohmann::json& json() const { return values_; }
+  bool has(const std::string& name) const;
+  double real(const std::string& name) const;
+  long long integer(const std::string& name) const;
+  std::string text(const std::string& name) const;
+  std::vector<double> reals(const std::string& name) const;
+  std::vector<std::string> texts(const std::string& name) const;
+
+ private:
+  const nlohmann::json& at(const std::string& name) const;
+  nlohmann::json values_;
+};
+
+// Collects what a run produces; the CLI turns it into the run folder.
+class RunContext {
+ public:
+  struct Figure {
+    std::string file;  // e.g. "loss.svg"
+    std::string caption;
+    std::string svg;
+  };
+  struct Table {
+    std::string title;
+    std::vector<std::string> header;
+    std::vector<std::vector<std::string>> rows;
+  };
+
+  // Metrics: one row per run × evaluation; columns are the union of all keys in first-seen
+  // order (label, optimizer and iteration first).
+  void add_metrics_row(nlohmann::json row);
+  // A summary entry: {"label", "optimizer", "params", "initial", "final", "iterations", ...}.
+  void add_run(nlohmann::json run);
+  void add_figure(Figure figure) { figures_.push_back(std::move(figure)); }
+  void add_table(Table table) { tables_.push_back(std::move(table)); }
+  void add_note(std::string text) { notes_.push_back(std::move(text)); }
+  // Progress on stderr: an updating line on a terminal, periodic plain lines otherwise.
+  void progress(const std::string& line);
+
+  const std::vector<nlohmann::json>& metrics() const { return metrics_; }
+  const std::vector<nlohmann::json>& runs() const { return runs_; }
+  const std::vector<Figure>& figures() const { return figures_; }
+  const std::vector<Table>& tables() const { return tables_; }
+  const std::vector<std::string>& notes() const { return notes_; }
+  void set_quiet(bool quiet) { quiet_ = quiet; }
+  void finish_progress();
+
+ private:
+  std::vector<nlohmann::json> metrics_;
+  std::vector<nlohmann::json> runs_;
+  std::vector<Figure> figures_;
+  std::vector<Table> tables_;
+  std::vector<std::string> notes_;
+  bool quiet_ = false;
+  bool progress_line_open_ = false;
+  double last_progress_seconds_ = -1e9;
+};
+
+class Experiment {
+ public:
+  virtual ~Experiment() = default;
+  virtual std::string name() const = 0;
+  virtual std::string description() const = 0;
+  // The experiment's own options, after the common ones (optimizers, iters, lr, seed, out).
+  virtual std::vector<OptionSpec> options() const = 0;
+  // Ids accepted by --optimizers, and the default selection.
+  virtual std::vector<std::string> optimizer_choices() const = 0;
+  virtual std::vector<std::string> default_optimizers() const = 0;
+  virtual long long default_iterations() const = 0;
+  // Checks between options that one option alone cannot express; throws Error. Runs before
+  // anything is written.
+  virtual void validate(const Settings& /*settings*/) const {}
+  virtual void run(const Settings& settings, RunContext& context) const = 0;
+};
+
+// The options every experiment has, with this experiment's choices and defaults.
+std::vector<OptionSpec> common_options(const Experiment& experiment);
+// common_options() followed by experiment.options().
+std::vector<OptionSpec> all_options(const Experiment& experiment);
+// Parses option name → text (missing names take their defaults). Throws Error on bad values
+// and on names the experiment does not have.
+Settings resolve_settings(const Experiment& experiment,
+                          const std::vector<std::pair<std::string, std::string>>& given);
+
+// Every registered experiment, in display order.
+const std::vector<std::unique_ptr<Experiment>>& registry();
+// Throws Error "unknown experiment 'x' (known: ...)".
+const Experiment& find_experiment(const std::string& name);
+
+}  // namespace physgrad::experiments

@@ -1,0 +1,14 @@
+// Factories of the built-in experiments; registry.cpp lists them in display order.
+#pragma once
+
+#include <memory>
+
+#include "experiment.hpp"
+
+namespace physgrad::experiments {
+
+std::unique_ptr<Experiment> make_scaled_toy();
+std::unique_ptr<Experiment> make_sensitivity();
+std::unique_ptr<Experiment> make_comparison();
+
+}  // namespace physgrad::experiments

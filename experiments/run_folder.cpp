@@ -1,0 +1,163 @@
+#include "run_folder.hpp"
+
+#include <unistd.h>
+
+#include <set>
+#include <system_error>
+
+#include "physgrad/error.hpp"
+#include "physgrad/report/atomic_file.hpp"
+#include "physgrad/report/csv.hpp"
+#include "physgrad/report/html_report.hpp"
+
+namespace physgrad::experiments {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string reason(const std::error_code& error) { return error.message(); }
+
+CsvCell to_cell(const nlohmann::json& value) {
+  if (value.is_number_integer()) return value.get<long long>();
+  if (value.is_number()) return value.get<double>();
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_null()) return std::string();
+  return value.dump();
+}
+
+std::string metrics_csv(const RunContext& context) {
+  std::vector<std::string> columns;
+  std::set<std::string> seen;
+  for (const nlohmann::json& row : context.metrics()) {
+    // nlohmann::json sorts object keys; the fixed leading columns come first.
+    for (const char* key : {"label", "optimizer", "iteration", "epoch", "wall_seconds"}) {
+      if (row.contains(key) && seen.insert(key).second) columns.emplace_back(key);
+    }
+    for (const auto& [key, value] : row.items()) {
+      if (seen.insert(key).second) columns.push_back(key);
+    }
+  }
+  CsvTable table(columns);
+  for (const nlohmann::json& row : context.metrics()) {
+    std::vector<CsvCell> cells;
+    for (const std::string& column : columns) {
+      cells.push_back(row.contains(column) ? to_cell(row.at(column)) : CsvCell(std::string()));
+    }
+    table.add_row(std::move(cells));
+  }
+  return table.str();
+}
+
+std::string format_number(const nlohmann::json& value) {
+  if (!value.is_number()) return value.is_null() ? "–" : value.dump();
+  std::ostringstream out;
+  out.precision(4);
+  out << value.get<double>();
+  return out.str();
+}
+
+HtmlTable runs_table(const RunContext& context) {
+  HtmlTable table{{"run", "settings", "initial loss", "final loss", "iterations", "end",
+                   "wall s"},
+                  {}};
+  for (const nlohmann::json& run : context.runs()) {
+    std::string params;
+    for (const auto& [key, value] : run.at("params").items()) {
+      params += (params.empty() ? "" : ", ") + key + " = " +
+                (value.is_string() ? value.get<std::string>() : format_number(value));
+    }
+    table.rows.push_back({run.at("label").get<std::string>(), params,
+                          format_number(run.at("initial").at("loss")),
+                          format_number(run.at("final").at("loss")),
+                          std::to_string(run.at("iterations").get<long long>()),
+                          run.value("termination", std::string()),
+                          format_number(run.at("wall_seconds"))});
+  }
+  return table;
+}
+
+std::string report_html(const Experiment& experiment, const Settings& settings,
+                        const RunContext& context, const std::string& command_line) {
+  std::vector<HtmlSection> sections;
+  HtmlSection results{"Results", "", {}, {}};
+  for (const RunContext::Table& table : context.tables()) {
+    results.tables.push_back({table.header, table.rows});
+  }
+  for (const std::string& note : context.notes()) results.text += note + "\n\n";
+  sections.push_back(std::move(results));
+
+  HtmlSection figures{"Figures", "", {}, {}};
+  for (const RunContext::Figure& figure : context.figures()) {
+    figures.figures.push_back({figure.caption, figure.svg});
+  }
+  sections.push_back(std::move(figures));
+  sections.push_back({"Every run", "Final figures per run; metrics.csv has every iterate.",
+                      {runs_table(context)}, {}});
+  sections.push_back({"Settings", "Command: " + command_line + "\n\n" + settings.json().dump(),
+                      {}, {}});
+  return html_report(experiment.name() + " — physgrad", experiment.description(), sections);
+}
+
+}  // namespace
+
+fs::path prepare_run_folder(const fs::path& out) {
+  std::error_code error;
+  if (fs::exists(out, error)) {
+    if (!fs::is_directory(out, error)) {
+      throw Error("--out: '" + out.string() + "' exists and is not a directory");
+    }
+    if (!fs::is_empty(out, error)) {
+      throw Error("--out: '" + out.string() + "' already exists and is not empty");
+    }
+  }
+  const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
+  fs::create_directories(parent, error);
+  if (error) {
+    throw Error("--out: cannot create '" + parent.string() + "': " + reason(error));
+  }
+  const fs::path staging =
+      parent / (std::string(".") + out.filename().string() + ".partial-" + std::to_string(getpid()));
+  fs::remove_all(staging, error);
+  if (!fs::create_directory(staging, error) || error) {
+    throw Error("--out: cannot write in '" + parent.string() + "': " +
+                (error ? reason(error) : "staging folder exists"));
+  }
+  return staging;
+}
+
+nlohmann::json summary_document(const Experiment& experiment, const RunContext& context) {
+  return {{"experiment", experiment.name()}, {"runs", context.runs()}};
+}
+
+void write_run_folder(const fs::path& staging, const Experiment& experiment,
+                      const Settings& settings, const RunContext& context,
+                      const std::string& command_line) {
+  const nlohmann::json config = {{"experiment", experiment.name()},
+                                 {"command", command_line},
+                                 {"settings", settings.json()}};
+  write_file_atomic(staging / "config.json", config.dump(2) + "\n");
+  write_file_atomic(staging / "metrics.csv", metrics_csv(context));
+  write_file_atomic(staging / "summary.json", summary_document(experiment, context).dump(2) + "\n");
+  for (const RunContext::Figure& figure : context.figures()) {
+    write_file_atomic(staging / figure.file, figure.svg);
+  }
+  write_file_atomic(staging / "report.html",
+                    report_html(experiment, settings, context, command_line));
+}
+
+void commit_run_folder(const fs::path& staging, const fs::path& out) {
+  std::error_code error;
+  if (fs::exists(out, error)) fs::remove(out, error);  // an empty directory, checked before
+  fs::rename(staging, out, error);
+  if (error) {
+    throw Error("--out: cannot move the results to '" + out.string() + "': " + reason(error));
+  }
+}
+
+void discard_run_folder(const fs::path& staging) noexcept {
+  std::error_code error;
+  fs::remove_all(staging, error);
+}
+
+}  // namespace physgrad::experiments

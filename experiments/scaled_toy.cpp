@@ -1,0 +1,152 @@
+// scaled-toy: P(x) = (x₁, αx₂), L = ½‖P(x)‖². For every α of the sweep, every selected rule
+// runs from the same start with one fixed step size; the iterations it needs to reduce the
+// loss by the tolerance show which rules are scale-invariant (independent of α).
+#include <cmath>
+
+#include "direct_runs.hpp"
+#include "experiment_list.hpp"
+#include "physgrad/error.hpp"
+#include "physgrad/loss/loss.hpp"
+#include "physgrad/physics/diagonal_scale.hpp"
+
+namespace physgrad::experiments {
+namespace {
+
+using Kind = OptionSpec::Kind;
+
+class ScaledToy final : public Experiment {
+ public:
+  std::string name() const override { return "scaled-toy"; }
+  std::string description() const override {
+    return "P(x) = (x1, alpha*x2), L = 1/2 |P(x)|^2: iterations to converge per rule and alpha";
+  }
+  std::vector<OptionSpec> options() const override {
+    return {
+        real_list_option("alpha", "1,10,100,1000", "scales α of the second component").above(0),
+        real_list_option("start", "0.48,0.84", "starting point x₀ (two values)"),
+        real_option("tol", "1e-6", "convergence level of the loss (see --tol-mode)")
+            .above(0)
+            .at_most(1),
+        text_option("tol-mode", "relative",
+                    "relative: stop at L(x) ≤ tol·L(x₀); absolute: at L(x) ≤ tol")
+            .one_of({"relative", "absolute"}),
+    };
+  }
+  std::vector<std::string> optimizer_choices() const override { return direct_optimizer_ids(); }
+  std::vector<std::string> default_optimizers() const override { return direct_optimizer_ids(); }
+  long long default_iterations() const override { return 1000; }
+
+  void validate(const Settings& settings) const override {
+    const std::size_t n = settings.reals("start").size();
+    if (n != 2) throw Error("--start: needs exactly 2 values, got " + std::to_string(n));
+    if (settings.reals("start") == std::vector<double>{0.0, 0.0}) {
+      throw Error("--start: must not be the minimum (0, 0)");
+    }
+  }
+
+  void run(const Settings& settings, RunContext& context) const override {
+    const std::vector<double> alphas = settings.reals("alpha");
+    const std::vector<double> start = settings.reals("start");
+    const Vector x0{{start[0], start[1]}};
+    const double tol = settings.real("tol");
+    const bool relative = settings.text("tol-mode") == "relative";
+    const auto iterations = static_cast<int>(settings.integer("iters"));
+    const std::vector<RuleSetup> rules = selected_rules(settings, kDefaultLr);
+
+    const L2Loss loss;
+    std::vector<std::vector<DirectResult>> by_alpha;
+    for (const double alpha : alphas) {
+      const DiagonalScale physics(Vector{{1.0, alpha}});
+      const Objective objective(physics, loss, Vector::Zero(2));
+      const double level = relative ? tol * objective.value(x0) : tol;
+      std::vector<DirectResult> results;
+      for (const RuleSetup& rule : rules) {
+        context.progress("scaled-toy: alpha = " + format_value(alpha) + ", " + rule.label);
+        results.push_back(run_direct(context, rule, objective, x0, iterations, level,
+                                     {{"alpha", alpha}}));
+      }
+      by_alpha.push_back(std::move(results));
+    }
+    context.finish_progress();
+
+    add_iteration_table(context, alphas, by_alpha, tol, relative);
+    add_iteration_figure(context, alphas, by_alpha);
+    for (std::size_t a = 0; a < alphas.size(); ++a) {
+      add_alpha_figures(context, alphas[a], x0, by_alpha[a]);
+    }
+  }
+
+ private:
+  inline static const std::map<std::string, double> kDefaultLr = {
+      {"gd", 0.01},     {"momentum", 0.01}, {"adam", 0.01}, {"newton", 0.5},
+      {"gn", 0.5},      {"ig", 0.5},        {"pg", 0.5}};
+
+  static void add_iteration_table(RunContext& context, const std::vector<double>& alphas,
+                                  const std::vector<std::vector<DirectResult>>& by_alpha,
+                                  double tol, bool relative) {
+    RunContext::Table table;
+    table.title = std::string("Iterations until L(x) ≤ ") + format_value(tol) +
+                  (relative ? "·L(x₀)" : "") + " (same start and step size for every α)";
+    table.header = {"rule", "step size"};
+    for (const double alpha : alphas) table.header.push_back("α = " + format_value(alpha));
+    for (std::size_t r = 0; r < by_alpha.front().size(); ++r) {
+      const RuleSetup& rule = by_alpha.front()[r].rule;
+      std::vector<std::string> row = {rule.label, step_size_text(rule)};
+      for (const auto& results : by_alpha) row.push_back(iterations_cell(results[r]));
+      table.rows.push_back(std::move(row));
+    }
+    context.add_table(std::move(table));
+  }
+
+  static void add_iteration_figure(RunContext& context, const std::vector<double>& alphas,
+                                   const std::vector<std::vector<DirectResult>>& by_alpha) {
+    std::vector<Series> series;
+    for (std::size_t r = 0; r < by_alpha.front().size(); ++r) {
+      const RuleSetup& rule = by_alpha.front()[r].rule;
+      Series line{rule.label, {}, {}, color_for(rule.id), true, false};
+      for (std::size_t a = 0; a < alphas.size(); ++a) {
+        const MinimizeSummary& s = by_alpha[a][r].summary;
+        line.x.push_back(alphas[a]);
+        line.y.push_back(s.termination == Termination::kConverged ? static_cast<double>(s.iterations) : NAN);
+      }
+      series.push_back(std::move(line));
+    }
+    LinePlotOptions options;
+    options.title = "Iterations to converge vs α (missing: diverged or not converged)";
+    options.x_label = "α";
+    options.y_label = "iterations";
+    options.log_x = true;
+    options.log_y = true;
+    context.add_figure({"iterations_vs_alpha.svg",
+                        "Iterations to converge per α. Flat lines are scale-invariant rules.",
+                        line_plot_svg(series, options)});
+  }
+
+  static void add_alpha_figures(RunContext& context, double alpha, const Vector& x0,
+                                const std::vector<DirectResult>& results) {
+    const std::string tag = format_value(alpha);
+    const double margin = 0.15 * x0.cwiseAbs().maxCoeff();
+    const double x_lo = std::min(0.0, x0(0)) - margin, x_hi = std::max(0.0, x0(0)) + margin;
+    const double y_lo = std::min(0.0, x0(1)) - margin, y_hi = std::max(0.0, x0(1)) + margin;
+    const Grid2D grid = sample_grid(
+        [alpha](double a, double b) { return 0.5 * (a * a + alpha * alpha * b * b); }, x_lo, x_hi,
+        y_lo, y_hi, 81);
+    LandscapeOptions options;
+    options.title = "Loss landscape and trajectories, α = " + tag;
+    options.x_label = "x₁";
+    options.y_label = "x₂";
+    options.markers = {{0.0, 0.0, "minimum"}};
+    context.add_figure({"landscape_alpha_" + tag + ".svg",
+                        "x-space trajectories for α = " + tag +
+                            " over the isolines of L (log-spaced levels).",
+                        landscape_svg(grid, trajectories(results), options)});
+    context.add_figure({"loss_alpha_" + tag + ".svg", "Loss per iteration for α = " + tag + ".",
+                        loss_curves_svg(results, "Loss vs iteration, α = " + tag)});
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Experiment> make_scaled_toy() { return std::make_unique<ScaledToy>(); }
+
+}  // namespace physgrad::experiments

@@ -1,0 +1,44 @@
+// Adam: m ← β₁m + (1−β₁)g, v ← β₂v + (1−β₂)g², Δx = −η m̂ / (√v̂ + ε) with bias-corrected
+// m̂ = m/(1−β₁ᵗ), v̂ = v/(1−β₂ᵗ); a diagonal (per-component) rescaling of the gradient.
+#pragma once
+
+#include "physgrad/optim/optimizer.hpp"
+
+namespace physgrad {
+
+struct AdamOptions {
+  double lr = 1e-3;      // η > 0
+  double beta1 = 0.9;    // 0 ≤ β₁ < 1
+  double beta2 = 0.999;  // 0 ≤ β₂ < 1
+  double epsilon = 1e-8; // ε > 0
+};
+
+// The moment update on a given gradient, shared by direct optimization and network training.
+class AdamState {
+ public:
+  using Options = AdamOptions;
+  explicit AdamState(Options options = {});
+  const Options& options() const { return options_; }
+  void reset();
+  Vector update(const Vector& gradient);  // returns Δ = −η m̂ / (√v̂ + ε)
+
+ private:
+  Options options_;
+  Vector m_, v_;
+  long long t_ = 0;
+};
+
+class Adam final : public Optimizer {
+ public:
+  using Options = AdamOptions;
+  explicit Adam(Options options = {}) : state_(options) {}
+  std::string id() const override { return "adam"; }
+  nlohmann::json params() const override;
+  void reset() override { state_.reset(); }
+  Step step(const Objective& objective, const Vector& x) override;
+
+ private:
+  AdamState state_;
+};
+
+}  // namespace physgrad

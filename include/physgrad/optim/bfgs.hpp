@@ -1,0 +1,34 @@
+// BFGS — quasi-Newton steps Δx = α p, p = −H ∇L, with α from a strong-Wolfe line search and the
+// inverse-Hessian update H₊ = (I − ρ s yᵀ) H (I − ρ y sᵀ) + ρ s sᵀ, ρ = 1/yᵀs (N&W eq. 6.17).
+#pragma once
+
+#include "physgrad/optim/quasi_newton.hpp"
+
+namespace physgrad {
+
+// H starts as I; just before the first update it is rescaled to (yᵀs / yᵀy) I (N&W eq. 6.20).
+// Line search, restarts and the curvature test: see QuasiNewton.
+class Bfgs final : public QuasiNewton {
+ public:
+  struct Options {
+    double initial_step = 1.0;  // first trial α₀ of every line search (this rule's "lr"), > 0
+    LineSearchOptions line_search;
+  };
+  // Throws Error naming the field when an option is out of range.
+  Bfgs();
+  explicit Bfgs(Options options);
+
+  std::string id() const override { return "bfgs"; }
+  nlohmann::json params() const override;
+
+ private:
+  Vector direction(const Vector& gradient) const override;
+  bool has_curvature() const override { return updated_; }
+  void clear_curvature() override;
+  void add_pair(const Vector& s, const Vector& y) override;
+
+  Matrix h_;              // inverse-Hessian approximation H (empty: the identity)
+  bool updated_ = false;  // false while H is the unscaled identity
+};
+
+}  // namespace physgrad

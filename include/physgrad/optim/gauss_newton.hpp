@@ -1,0 +1,26 @@
+// Gauss-Newton: Δx = −η (Jᵀ H_y J)⁺ Jᵀ ∂L/∂y with J = ∂P/∂x and H_y = ∂²L/∂y².
+// For an L2 loss (H_y = w·I) this is −η J⁺ (y − y*): the inverse-gradient step with Δy = η(y* − y).
+#pragma once
+
+#include "physgrad/optim/optimizer.hpp"
+
+namespace physgrad {
+
+struct GaussNewtonOptions {
+  double lr = 1.0;       // η > 0
+  double rcond = 1e-12;  // eigenvalues of Jᵀ H_y J ≤ rcond·λ_max are dropped, in [0, 1)
+};
+
+class GaussNewton final : public Optimizer {
+ public:
+  using Options = GaussNewtonOptions;
+  explicit GaussNewton(Options options = {});
+  std::string id() const override { return "gn"; }
+  nlohmann::json params() const override { return {{"lr", options_.lr}, {"rcond", options_.rcond}}; }
+  Step step(const Objective& objective, const Vector& x) override;
+
+ private:
+  Options options_;
+};
+
+}  // namespace physgrad

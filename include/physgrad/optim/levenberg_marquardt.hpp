@@ -1,0 +1,30 @@
+// Levenberg-Marquardt: Δx = −(A + μ·diag(A))⁻¹ Jᵀ ∂L/∂y with A = Jᵀ H_y J; a trial is accepted
+// when the gain ratio ρ = (L(x) − L(x+Δx)) / (−gᵀΔx − ½ΔxᵀAΔx) > 0, and μ adapts by ρ (Nielsen).
+#pragma once
+
+#include "physgrad/optim/optimizer.hpp"
+
+namespace physgrad {
+
+struct LevenbergMarquardtOptions {
+  double initial_damping = 1e-3;  // μ₀ > 0, relative to diag(A) (Marquardt scaling)
+  double min_damping = 1e-15;     // μ never drops below this (> 0)
+};
+
+class LevenbergMarquardt final : public Optimizer {
+ public:
+  using Options = LevenbergMarquardtOptions;
+  explicit LevenbergMarquardt(Options options = {});
+  std::string id() const override { return "lm"; }
+  nlohmann::json params() const override { return {{"initial_damping", options_.initial_damping}}; }
+  void reset() override;
+  double damping() const { return mu_; }
+  Step step(const Objective& objective, const Vector& x) override;
+
+ private:
+  Options options_;
+  double mu_ = 0;
+  double nu_ = 2;  // growth factor of μ after consecutive rejections
+};
+
+}  // namespace physgrad

@@ -1,0 +1,30 @@
+// Gradient descent with heavy-ball momentum: v ← β v + ∂L/∂x, Δx = −η v.
+// With β = 0 it is plain gradient descent.
+#pragma once
+
+#include "physgrad/optim/optimizer.hpp"
+
+namespace physgrad {
+
+struct MomentumOptions {
+  double lr = 0.01;   // η > 0
+  double beta = 0.9;  // 0 ≤ β < 1
+};
+
+class Momentum final : public Optimizer {
+ public:
+  using Options = MomentumOptions;
+  explicit Momentum(Options options = {});
+  std::string id() const override { return "momentum"; }
+  nlohmann::json params() const override {
+    return {{"lr", options_.lr}, {"beta", options_.beta}};
+  }
+  void reset() override { velocity_.resize(0); }
+  Step step(const Objective& objective, const Vector& x) override;
+
+ private:
+  Options options_;
+  Vector velocity_;
+};
+
+}  // namespace physgrad

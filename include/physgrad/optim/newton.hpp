@@ -1,0 +1,26 @@
+// Newton's method with the exact Hessian: Δx = −η (∂²L/∂x²)⁻¹ ∂L/∂x.
+// H = Jᵀ(∂²L/∂y²)J + Σₖ(∂L/∂yₖ)∂²Pₖ/∂x²; a singular H is pseudo-inverted (eigenvalues ≤ rcond·|λ|max dropped).
+#pragma once
+
+#include "physgrad/optim/optimizer.hpp"
+
+namespace physgrad {
+
+struct NewtonOptions {
+  double lr = 1.0;       // η > 0
+  double rcond = 1e-12;  // relative eigenvalue cutoff of the Hessian solve, in [0, 1)
+};
+
+class Newton final : public Optimizer {
+ public:
+  using Options = NewtonOptions;
+  explicit Newton(Options options = {});
+  std::string id() const override { return "newton"; }
+  nlohmann::json params() const override { return {{"lr", options_.lr}, {"rcond", options_.rcond}}; }
+  Step step(const Objective& objective, const Vector& x) override;
+
+ private:
+  Options options_;
+};
+
+}  // namespace physgrad

@@ -1,0 +1,29 @@
+// Physical gradient (PG), the update through an inverse simulator: Δx = P⁻¹(y₀ + Δy; x₀) − x₀
+// with y₀ = P(x₀), Δy = η·(Newton step of L in y), and P⁻¹(·; x₀) a local inverse.
+#pragma once
+
+#include "physgrad/optim/local_inverse.hpp"
+#include "physgrad/optim/optimizer.hpp"
+
+namespace physgrad {
+
+struct PhysicalGradientOptions {
+  double lr = 1.0;  // η > 0
+  // kAnalytic needs a simulator with has_inverse(); the numerical methods work for any
+  // simulator with a VJP.
+  LocalInverseOptions inverse;
+};
+
+class PhysicalGradient final : public Optimizer {
+ public:
+  using Options = PhysicalGradientOptions;
+  explicit PhysicalGradient(Options options = {});
+  std::string id() const override { return "pg"; }
+  nlohmann::json params() const override;
+  Step step(const Objective& objective, const Vector& x) override;
+
+ private:
+  Options options_;
+};
+
+}  // namespace physgrad

@@ -1,0 +1,35 @@
+// html_report — one self-contained HTML5 page of sections with text, tables and inline SVG
+// figures; no external resources.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace physgrad {
+
+struct HtmlTable {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;  // each with header.size() cells
+};
+
+struct HtmlFigure {
+  std::string caption;
+  std::string svg;  // an SVG document, embedded as is
+};
+
+struct HtmlSection {
+  std::string heading;
+  std::string text;  // plain text; blank lines separate paragraphs
+  std::vector<HtmlTable> tables;
+  std::vector<HtmlFigure> figures;
+};
+
+// Escapes & < > " ' for use in HTML (and XML) text and attribute values.
+std::string html_escape(std::string_view text);
+
+// Throws Error when a table row's cell count differs from its header's.
+std::string html_report(const std::string& title, const std::string& intro,
+                        const std::vector<HtmlSection>& sections);
+
+}  // namespace physgrad

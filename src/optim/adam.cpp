@@ -1,0 +1,44 @@
+#include "physgrad/optim/adam.hpp"
+
+#include <cmath>
+
+namespace physgrad {
+
+AdamState::AdamState(Options options) : options_(options) {
+  require_positive("adam: lr", options_.lr);
+  require_in_range("adam: beta1", options_.beta1, 0.0, 1.0);
+  require_in_range("adam: beta2", options_.beta2, 0.0, 1.0);
+  require_positive("adam: epsilon", options_.epsilon);
+}
+
+void AdamState::reset() {
+  m_.resize(0);
+  v_.resize(0);
+  t_ = 0;
+}
+
+Vector AdamState::update(const Vector& gradient) {
+  if (m_.size() != gradient.size()) {
+    m_ = Vector::Zero(gradient.size());
+    v_ = Vector::Zero(gradient.size());
+    t_ = 0;
+  }
+  ++t_;
+  m_ = options_.beta1 * m_ + (1 - options_.beta1) * gradient;
+  v_ = options_.beta2 * v_ + (1 - options_.beta2) * gradient.cwiseAbs2();
+  const double m_correction = 1 - std::pow(options_.beta1, static_cast<double>(t_));
+  const double v_correction = 1 - std::pow(options_.beta2, static_cast<double>(t_));
+  return -options_.lr * (m_ / m_correction).array() /
+         ((v_ / v_correction).array().sqrt() + options_.epsilon);
+}
+
+nlohmann::json Adam::params() const {
+  const auto& o = state_.options();
+  return {{"lr", o.lr}, {"beta1", o.beta1}, {"beta2", o.beta2}, {"epsilon", o.epsilon}};
+}
+
+Step Adam::step(const Objective& objective, const Vector& x) {
+  return {state_.update(objective.gradient(x)), Step::Status::kOk, {}, 1};
+}
+
+}  // namespace physgrad

@@ -1,0 +1,21 @@
+#include "physgrad/optim/gauss_newton.hpp"
+
+#include "physgrad/linalg/power_pinv.hpp"
+
+namespace physgrad {
+
+GaussNewton::GaussNewton(Options options) : options_(options) {
+  require_positive("gn: lr", options_.lr);
+  require_in_range("gn: rcond", options_.rcond, 0.0, 1.0);
+}
+
+Step GaussNewton::step(const Objective& objective, const Vector& x) {
+  const Vector y = objective.output(x);
+  const Matrix j = objective.jacobian(x);
+  const Matrix curvature = j.transpose() * objective.loss().hessian(y, objective.target()) * j;
+  const Vector gradient = j.transpose() * objective.loss().gradient(y, objective.target());
+  return {-options_.lr * symmetric_pinv_apply(curvature, gradient, options_.rcond),
+          Step::Status::kOk, {}, 1};
+}
+
+}  // namespace physgrad

@@ -1,0 +1,429 @@
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "physgrad/error.hpp"
+#include "physgrad/report/atomic_file.hpp"
+#include "physgrad/report/csv.hpp"
+#include "physgrad/report/html_report.hpp"
+#include "physgrad/report/svg_plot.hpp"
+
+namespace physgrad {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::size_t count(const std::string& text, const std::string& needle) {
+  std::size_t n = 0;
+  for (auto pos = text.find(needle); pos != std::string::npos; pos = text.find(needle, pos + 1))
+    ++n;
+  return n;
+}
+
+// True when the text contains "nan" or "inf" in any letter case.
+bool has_non_finite_text(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text.find("nan") != std::string::npos || text.find("inf") != std::string::npos;
+}
+
+std::vector<std::string> split(const std::string& text, char sep) {
+  std::vector<std::string> parts;
+  std::stringstream in(text);
+  for (std::string part; std::getline(in, part, sep);) parts.push_back(part);
+  return parts;
+}
+
+// A fresh empty directory, removed at the end of the test.
+class AtomicFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("physgrad_report_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::vector<std::string> entries() const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir_))
+      names.push_back(e.path().filename().string());
+    return names;
+  }
+
+  fs::path dir_;
+};
+
+std::string read(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// f(x, y) = x² + y² on [-1, 1]² sampled n × n.
+Grid2D radial_grid(int n) {
+  Grid2D g{-1, 1, -1, 1, n, n, {}};
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double x = -1 + 2.0 * i / (n - 1), y = -1 + 2.0 * j / (n - 1);
+      g.values.push_back(x * x + y * y);
+    }
+  }
+  return g;
+}
+
+// ----- CSV ------------------------------------------------------------------------------------
+
+TEST(Csv, QuotesFieldsWithCommaQuoteOrNewline) {
+  CsvTable table({"name", "note"});
+  table.add_row({std::string("plain"), std::string("a,b")});
+  table.add_row({std::string("say \"hi\""), std::string("two\nlines")});
+  EXPECT_EQ(table.rows(), 2u);
+  EXPECT_EQ(table.str(), "name,note\nplain,\"a,b\"\n\"say \"\"hi\"\"\",\"two\nlines\"\n");
+}
+
+TEST(Csv, DoublesRoundTripBitExact) {
+  const std::vector<double> values{0.1,
+                                   -1.0 / 3.0,
+                                   6.02214076e23,
+                                   std::acos(-1.0),
+                                   1e300,
+                                   -0.0,
+                                   std::nextafter(1.0, 2.0),
+                                   std::numeric_limits<double>::max(),
+                                   std::numeric_limits<double>::min(),
+                                   123456789.123456789};
+  CsvTable table({"v"});
+  for (const double v : values) table.add_row({v});
+  const std::vector<std::string> lines = split(table.str(), '\n');
+  ASSERT_EQ(lines.size(), values.size() + 1);
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(std::stod(lines[k + 1])),
+              std::bit_cast<std::uint64_t>(values[k]))
+        << lines[k + 1];
+  }
+}
+
+TEST(Csv, IntegersAndNonFiniteDoubles) {
+  CsvTable table({"i", "a", "b", "c"});
+  table.add_row({-42LL, kNaN, kInf, -kInf});
+  EXPECT_EQ(table.str(), "i,a,b,c\n-42,nan,inf,-inf\n");
+}
+
+TEST(Csv, RowSizeMismatchThrowsNamingBothCounts) {
+  CsvTable table({"a", "b", "c"});
+  try {
+    table.add_row({1.0, 2.0});
+    FAIL() << "no Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find('2'), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find('3'), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(table.rows(), 0u);
+}
+
+// ----- atomic file ----------------------------------------------------------------------------
+
+TEST_F(AtomicFile, CreatesFileWithExactContent) {
+  const std::string content =
+      std::string("line one\nbinary \0 byte\n", 23) + std::string(100000, 'x');
+  write_file_atomic(dir_ / "out.txt", content);
+  EXPECT_EQ(read(dir_ / "out.txt"), content);
+  EXPECT_EQ(entries(), std::vector<std::string>{"out.txt"});
+}
+
+TEST_F(AtomicFile, OverwritesExistingFileAndLeavesNoTempFiles) {
+  write_file_atomic(dir_ / "out.txt", "a much longer first version");
+  write_file_atomic(dir_ / "out.txt", "second");
+  EXPECT_EQ(read(dir_ / "out.txt"), "second");
+  write_file_atomic(dir_ / "empty.txt", "");
+  EXPECT_EQ(read(dir_ / "empty.txt"), "");
+  const std::vector<std::string> names = entries();
+  EXPECT_EQ(std::set<std::string>(names.begin(), names.end()),
+            (std::set<std::string>{"out.txt", "empty.txt"}));
+}
+
+TEST_F(AtomicFile, MissingDirectoryThrowsAndCreatesNothing) {
+  const fs::path target = dir_ / "missing" / "out.txt";
+  try {
+    write_file_atomic(target, "content");
+    FAIL() << "no Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(target.string()), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "missing"));
+  EXPECT_TRUE(entries().empty());
+}
+
+TEST_F(AtomicFile, TargetThatIsADirectoryThrowsAndCleansUp) {
+  fs::create_directory(dir_ / "taken");
+  EXPECT_THROW(write_file_atomic(dir_ / "taken", "content"), Error);
+  EXPECT_EQ(entries(), std::vector<std::string>{"taken"});
+}
+
+// ----- line plot ------------------------------------------------------------------------------
+
+TEST(SvgLinePlot, HasHeaderLegendLabelsAndTitle) {
+  const std::vector<Series> series{{"gradient descent", {0, 1, 2}, {3, 2, 1}, color_for("gd")},
+                                   {"Newton <fast>", {0, 1, 2}, {3, 1, 0.5}, "", true, true}};
+  const std::string svg = line_plot_svg(series, {"Loss & more", "iteration", "loss"});
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("xmlns=\"http://www.w3.org/2000/svg\""), std::string::npos);
+  EXPECT_NE(svg.find("viewBox=\"0 0 640 420\""), std::string::npos);
+  EXPECT_NE(svg.find(">gradient descent<"), std::string::npos);
+  EXPECT_NE(svg.find(">Newton &lt;fast&gt;<"), std::string::npos);
+  EXPECT_NE(svg.find(">Loss &amp; more<"), std::string::npos);
+  EXPECT_NE(svg.find("clipPath"), std::string::npos);
+  EXPECT_NE(svg.find("stroke-dasharray"), std::string::npos);
+  EXPECT_EQ(svg.substr(svg.size() - 7), "</svg>\n");
+}
+
+TEST(SvgLinePlot, NonFiniteAndNonPositiveValuesOnLogAxisAreSkipped) {
+  const std::vector<Series> series{
+      {"adam", {1, 2, 3, 4, 5, 6, 7}, {1, kNaN, 0.1, -1, 0.0, kInf, 1e-3}},
+      {"all bad", {1, 2}, {kNaN, -kInf}}};
+  LinePlotOptions options;
+  options.log_y = true;
+  const std::string svg = line_plot_svg(series, options);
+  EXPECT_FALSE(has_non_finite_text(svg));
+  EXPECT_NE(svg.find(">adam<"), std::string::npos);
+  options.log_x = true;
+  EXPECT_FALSE(has_non_finite_text(line_plot_svg(series, options)));
+}
+
+TEST(SvgLinePlot, BrokenPointsSplitTheLine) {
+  // Three usable runs separated by a NaN and a non-positive value: three subpaths.
+  const std::vector<Series> series{{"s", {1, 2, 3, 4, 5, 6, 7}, {1, 2, kNaN, 3, 4, -1, 5}}};
+  LinePlotOptions options;
+  options.log_y = true;
+  const std::string svg = line_plot_svg(series, options);
+  const auto start = svg.find("<g clip-path");
+  const auto line = svg.find("<path d=\"", start);
+  const auto end = svg.find('"', line + 9);
+  EXPECT_EQ(count(svg.substr(line, end - line), "M"), 3u);
+}
+
+TEST(SvgLinePlot, LogAxisOverManyDecadesHasDecadeLabels) {
+  Series s{"loss", {}, {}};
+  for (int k = 0; k <= 80; ++k) {
+    s.x.push_back(k);
+    s.y.push_back(std::pow(10.0, -k / 10.0));
+  }
+  LinePlotOptions options;
+  options.log_y = true;
+  const std::string svg = line_plot_svg({s}, options);
+  for (const char* label : {">1e-8<", ">1e-6<", ">1e-4<", ">0.01<", ">1<"}) {
+    EXPECT_NE(svg.find(label), std::string::npos) << label;
+  }
+}
+
+TEST(SvgLinePlot, LinearTicksAreNiceValues) {
+  const std::string svg = line_plot_svg({{"s", {0, 10}, {0.13, 0.87}}}, {});
+  for (const char* label : {">0.2<", ">0.4<", ">0.6<", ">0.8<", ">0<", ">10<"}) {
+    EXPECT_NE(svg.find(label), std::string::npos) << label;
+  }
+}
+
+TEST(SvgLinePlot, DegenerateInputsProduceFiniteOutput) {
+  const std::vector<std::vector<Series>> cases{
+      {},
+      {{"empty", {}, {}}},
+      {{"single", {3}, {7}}},
+      {{"flat", {0, 1, 2}, {5, 5, 5}}},
+      {{"zero", {1, 1}, {0, 0}}},
+  };
+  for (const auto& series : cases) {
+    for (const bool log : {false, true}) {
+      LinePlotOptions options;
+      options.log_x = options.log_y = log;
+      const std::string svg = line_plot_svg(series, options);
+      EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+      EXPECT_FALSE(has_non_finite_text(svg)) << svg;
+    }
+  }
+}
+
+TEST(SvgLinePlot, InvalidInputThrows) {
+  EXPECT_THROW(line_plot_svg({{"bad", {1, 2, 3}, {1, 2}}}, {}), Error);
+  LinePlotOptions tiny;
+  tiny.width = 10;
+  EXPECT_THROW(line_plot_svg({}, tiny), Error);
+}
+
+TEST(SvgColor, FixedColoursForOptimizerIdsAndStableHashForOthers) {
+  const std::vector<std::string> ids{"gd", "momentum", "adam", "newton", "bfgs", "lbfgs", "gn",
+                                     "lm", "ig",       "pg",   "sgd",    "hig",  "sip"};
+  std::set<std::string> colors;
+  for (const auto& id : ids) colors.insert(color_for(id));
+  EXPECT_EQ(colors.size(), ids.size());
+  EXPECT_EQ(color_for("my-optimizer"), color_for("my-optimizer"));
+  for (const auto& c : {color_for("adam"), color_for("something else")}) {
+    EXPECT_EQ(c.size(), 7u);
+    EXPECT_EQ(c[0], '#');
+  }
+}
+
+// ----- landscape ------------------------------------------------------------------------------
+
+TEST(SvgIsolines, CircleOfRadiusHalfOnRadialField) {
+  const Grid2D grid = radial_grid(41);
+  const auto lines = isolines(grid, 0.25);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_GT(lines[0].size(), 20u);
+  EXPECT_EQ(lines[0].front(), lines[0].back());  // closed
+  for (const auto& line : lines) {
+    for (const auto& [x, y] : line) EXPECT_NEAR(std::hypot(x, y), 0.5, 0.02);
+  }
+}
+
+TEST(SvgIsolines, OpenCurvesEndOnTheBoundaryAndOutOfRangeLevelsAreEmpty) {
+  const Grid2D grid = radial_grid(21);
+  // Level 1.5 cuts the four corners off: four open arcs of radius √1.5.
+  const auto arcs = isolines(grid, 1.5);
+  ASSERT_EQ(arcs.size(), 4u);
+  for (const auto& arc : arcs) {
+    EXPECT_NE(arc.front(), arc.back());
+    for (const auto& [x, y] : arc) EXPECT_NEAR(std::hypot(x, y), std::sqrt(1.5), 0.03);
+  }
+  EXPECT_TRUE(isolines(grid, 5.0).empty());
+  EXPECT_TRUE(isolines(grid, -1.0).empty());
+  EXPECT_THROW(isolines(grid, kNaN), Error);
+}
+
+TEST(SvgIsolines, SaddleCellsGiveTwoSeparateCurves) {
+  // f = x·y has a saddle at the origin; level 0.1 gives two hyperbola branches.
+  Grid2D grid{-1, 1, -1, 1, 4, 4, {}};
+  for (int j = 0; j < 4; ++j) {
+    for (int i = 0; i < 4; ++i) grid.values.push_back((-1 + 2.0 * i / 3) * (-1 + 2.0 * j / 3));
+  }
+  const auto lines = isolines(grid, 0.1);
+  ASSERT_EQ(lines.size(), 2u);
+  for (const auto& line : lines) {
+    for (const auto& [x, y] : line) EXPECT_GT(x * y, 0.0);  // each point in quadrant I or III
+  }
+}
+
+TEST(SvgLandscape, RadialFieldHasOneIsolinePerLevelAndTrajectories) {
+  const Grid2D grid = radial_grid(41);
+  const std::vector<Trajectory> trajectories{
+      {"gd", {0.9, 0.5, 0.2, kNaN, 0.05}, {0.8, 0.4, 0.1, 0.0, 0.02}, color_for("gd")},
+      {"diverging newton", {-0.5, -2, 1e6}, {0.5, 3, -1e9}, ""}};
+  LandscapeOptions options;
+  options.title = "x² + y²";
+  options.markers = {{0, 0, "minimum"}};
+  for (const bool log : {true, false}) {
+    options.log_levels = log;
+    const std::string svg = landscape_svg(grid, trajectories, options);
+    EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+    EXPECT_EQ(count(svg, "class=\"isoline\""), static_cast<std::size_t>(options.levels));
+    EXPECT_NE(svg.find(">gd<"), std::string::npos);
+    EXPECT_NE(svg.find(">diverging newton<"), std::string::npos);
+    EXPECT_NE(svg.find(">minimum<"), std::string::npos);
+    EXPECT_NE(svg.find("clipPath"), std::string::npos);
+    EXPECT_FALSE(has_non_finite_text(svg));
+    // The far-away iterates are cut to a neighbourhood of the plot, not printed as is.
+    EXPECT_FALSE(std::regex_search(svg, std::regex("[ ,M-][0-9]{5,}")));
+  }
+}
+
+TEST(SvgLandscape, LargeGridStaysSmall) {
+  Grid2D grid{-3, 3, -2, 2, 80, 80, {}};
+  for (int j = 0; j < 80; ++j) {
+    for (int i = 0; i < 80; ++i) {
+      const double x = -3 + 6.0 * i / 79, y = -2 + 4.0 * j / 79;
+      grid.values.push_back(std::pow(1 - x, 2) + 100 * std::pow(y - x * x, 2));  // Rosenbrock
+    }
+  }
+  Trajectory t{"adam", {}, {}, color_for("adam")};
+  for (int k = 0; k < 500; ++k) {
+    t.x.push_back(-2 + 3.0 * k / 499);
+    t.y.push_back(1.5 * std::cos(k / 50.0));
+  }
+  const std::string svg = landscape_svg(grid, {t}, {});
+  EXPECT_LT(svg.size(), 400'000u);
+  EXPECT_FALSE(has_non_finite_text(svg));
+}
+
+TEST(SvgLandscape, ConstantAndPartlyNonFiniteFieldsAreHandled) {
+  Grid2D flat{0, 1, 0, 1, 3, 3, std::vector<double>(9, 2.0)};
+  EXPECT_FALSE(has_non_finite_text(landscape_svg(flat, {}, {})));
+  Grid2D holes = radial_grid(9);
+  holes.values[40] = kNaN;
+  holes.values[3] = kInf;
+  holes.values[10] = -5;
+  EXPECT_FALSE(has_non_finite_text(landscape_svg(holes, {}, {})));
+}
+
+TEST(SvgLandscape, InvalidInputThrows) {
+  Grid2D grid = radial_grid(5);
+  grid.values.pop_back();
+  EXPECT_THROW(landscape_svg(grid, {}, {}), Error);
+  EXPECT_THROW(isolines(grid, 0.5), Error);
+  EXPECT_THROW(landscape_svg({0, 1, 0, 1, 1, 2, {0, 0}}, {}, {}), Error);
+  EXPECT_THROW(landscape_svg({1, 1, 0, 1, 2, 2, {0, 0, 0, 0}}, {}, {}), Error);
+  EXPECT_THROW(landscape_svg(radial_grid(5), {{"t", {1, 2}, {1}, ""}}, {}), Error);
+  LandscapeOptions options;
+  options.levels = -1;
+  EXPECT_THROW(landscape_svg(radial_grid(5), {}, options), Error);
+}
+
+TEST(SvgLandscape, ClipPathIdsDifferBetweenFigures) {
+  const std::string a = landscape_svg(radial_grid(5), {}, {});
+  const std::string b = line_plot_svg({{"s", {0, 1}, {0, 1}}}, {});
+  const auto id = [](const std::string& svg) {
+    const auto start = svg.find("clipPath id=\"") + 13;
+    return svg.substr(start, svg.find('"', start) - start);
+  };
+  EXPECT_NE(id(a), id(b));
+}
+
+// ----- HTML -----------------------------------------------------------------------------------
+
+TEST(HtmlReport, EscapesTextAndEmbedsFiguresAndTables) {
+  const std::string svg = line_plot_svg({{"s", {0, 1}, {0, 1}}}, {});
+  HtmlSection section{"Results <1>",
+                      "First <script>alert(1)</script> paragraph.\n\nSecond & last.",
+                      {{{"optimizer", "loss"}, {{"adam", "1e-3"}, {"newton", "<0.1>"}}}},
+                      {{"Loss curves", svg}, {"Again", svg}}};
+  const std::string html = html_report("Report \"A\"", "Intro", {section});
+  EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
+  EXPECT_NE(html.find("<meta charset=\"utf-8\">"), std::string::npos);
+  EXPECT_EQ(html.find("<script>"), std::string::npos);
+  EXPECT_NE(html.find("&lt;script&gt;alert(1)&lt;/script&gt;"), std::string::npos);
+  EXPECT_NE(html.find("<p>Second &amp; last.</p>"), std::string::npos);
+  EXPECT_NE(html.find("Report &quot;A&quot;"), std::string::npos);
+  EXPECT_EQ(count(html, svg), 2u);
+  for (const char* cell :
+       {">optimizer<", ">loss<", ">adam<", ">1e-3<", ">newton<", ">&lt;0.1&gt;<"}) {
+    EXPECT_NE(html.find(cell), std::string::npos) << cell;
+  }
+  EXPECT_NE(html.find(">Loss curves</figcaption>"), std::string::npos);
+}
+
+TEST(HtmlReport, RaggedTableRowThrows) {
+  const HtmlSection section{"S", "", {{{"a", "b"}, {{"1"}}}}, {}};
+  EXPECT_THROW(html_report("T", "", {section}), Error);
+}
+
+TEST(HtmlEscape, EscapesAllSpecialCharacters) {
+  EXPECT_EQ(html_escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&#39;");
+}
+
+}  // namespace
+}  // namespace physgrad

@@ -1,0 +1,72 @@
+// Test problems — small simulators with known minimizers for the optimizer tests.
+// Rosenbrock P(x) = (10(x₂ − x₁²), 1 − x₁): L2Loss(2) makes L = 100(x₂ − x₁²)² + (1 − x₁)².
+#pragma once
+
+#include <string>
+#include <utility>
+
+#include "physgrad/error.hpp"
+#include "physgrad/physics/simulator.hpp"
+
+namespace physgrad::testing {
+
+// Extended Rosenbrock in n (even) dimensions: independent pairs (x_{2i}, x_{2i+1}) with residuals
+// r_{2i} = 10(x_{2i+1} − x_{2i}²), r_{2i+1} = 1 − x_{2i}. n = 2 is the classic function; with
+// L2Loss(2) and target 0 the minimum L = 0 is at x = (1, …, 1).
+class Rosenbrock final : public Simulator {
+ public:
+  explicit Rosenbrock(Index n = 2) : n_(n) {
+    if (n < 2 || n % 2 != 0) {
+      throw Error("Rosenbrock: n must be even and ≥ 2, got " + std::to_string(n));
+    }
+  }
+  std::string name() const override { return "rosenbrock"; }
+  Index input_dim() const override { return n_; }
+  Index output_dim() const override { return n_; }
+
+  Matrix forward_batch(const Matrix& x, const Matrix& context) const override {
+    check_batch(x, context, "forward_batch");
+    Matrix y(n_, x.cols());
+    for (Index i = 0; i + 1 < n_; i += 2) {
+      y.row(i) = 10 * (x.row(i + 1).array() - x.row(i).array().square());
+      y.row(i + 1) = 1 - x.row(i).array();
+    }
+    return y;
+  }
+  Matrix vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const override {
+    check_batch(x, context, "vjp_batch");
+    Matrix gx(n_, x.cols());
+    for (Index i = 0; i + 1 < n_; i += 2) {
+      gx.row(i) = -20 * x.row(i).array() * gy.row(i).array() - gy.row(i + 1).array();
+      gx.row(i + 1) = 10 * gy.row(i);
+    }
+    return gx;
+  }
+
+ private:
+  Index n_;
+};
+
+// P(x) = A x. With L2Loss(w) and target A x* the loss (w/2)‖A(x − x*)‖² is a convex quadratic
+// with Hessian w AᵀA, minimized at x* when A has full column rank.
+class LinearSimulator final : public Simulator {
+ public:
+  explicit LinearSimulator(Matrix a) : a_(std::move(a)) {}
+  std::string name() const override { return "linear"; }
+  Index input_dim() const override { return a_.cols(); }
+  Index output_dim() const override { return a_.rows(); }
+
+  Matrix forward_batch(const Matrix& x, const Matrix& context) const override {
+    check_batch(x, context, "forward_batch");
+    return a_ * x;
+  }
+  Matrix vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const override {
+    check_batch(x, context, "vjp_batch");
+    return a_.transpose() * gy;
+  }
+
+ private:
+  Matrix a_;
+};
+
+}  // namespace physgrad::testing
