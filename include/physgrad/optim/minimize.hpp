@@ -33,7 +33,7 @@ struct MinimizeOptions {
   int max_iterations = 100;              // ≥ 1
   double loss_tolerance = 0.0;           // stop once L(x) ≤ loss_tolerance
   // Called after every iteration (and for the start); return true to stop the run.
-  std::function<bool(const IterationRecord&)> callback;
+  std::function<bool(const IterationRecord&)> callback = nullptr;
 };
 
 struct MinimizeSummary {

@@ -1,0 +1,105 @@
+// Reference experiments through the experiment API: settings resolution and the qualitative
+// outcome each experiment exists to show.
+#include <gtest/gtest.h>
+
+#include "experiment.hpp"
+#include "physgrad/error.hpp"
+
+namespace physgrad::experiments {
+namespace {
+
+RunContext run(const std::string& name,
+               const std::vector<std::pair<std::string, std::string>>& given) {
+  const Experiment& experiment = find_experiment(name);
+  RunContext context;
+  context.set_quiet(true);
+  experiment.run(resolve_settings(experiment, given), context);
+  return context;
+}
+
+const nlohmann::json& find_run(const RunContext& context, const std::string& optimizer,
+                               double alpha) {
+  for (const nlohmann::json& entry : context.runs()) {
+    if (entry["optimizer"] == optimizer && entry["params"]["alpha"] == alpha) return entry;
+  }
+  throw Error("no run " + optimizer);
+}
+
+TEST(ScaledToyExperiment, InvertedRulesNeedTheSameIterationsForEveryAlphaAndGdDoesNot) {
+  const RunContext context = run("scaled-toy", {{"alpha", "1,10,100,1000"}});
+  for (const std::string id : {"newton", "gn", "ig", "pg", "lm"}) {
+    const nlohmann::json& reference = find_run(context, id, 1.0);
+    EXPECT_EQ(reference["termination"], "converged") << id;
+    for (const double alpha : {10.0, 100.0, 1000.0}) {
+      const nlohmann::json& entry = find_run(context, id, alpha);
+      EXPECT_EQ(entry["termination"], "converged") << id << " alpha " << alpha;
+      EXPECT_EQ(entry["iterations"], reference["iterations"]) << id << " alpha " << alpha;
+    }
+  }
+  // One fixed step size: GD converges for α = 1 and diverges for α = 1000 (η α² ≫ 2).
+  EXPECT_EQ(find_run(context, "gd", 1.0)["termination"], "converged");
+  EXPECT_EQ(find_run(context, "gd", 1000.0)["termination"], "numerical_failure");
+  EXPECT_EQ(context.tables().size(), 1u);
+  EXPECT_EQ(context.figures().size(), 1u + 2u * 4u);  // iterations vs α, landscape + loss per α
+}
+
+TEST(SensitivityExperiment, GdStepGrowsWithAlphaSquaredInvertedStepsDoNot) {
+  const RunContext context = run("sensitivity", {{"alpha", "0.1,1,10"}, {"iters", "1"}});
+  const auto first_step = [&](const std::string& id, double alpha) {
+    for (const nlohmann::json& row : context.metrics()) {
+      if (row["optimizer"] == id && row["alpha"] == alpha && row["iteration"] == 1) {
+        return row["step_norm"].get<double>();
+      }
+    }
+    return -1.0;
+  };
+  EXPECT_NEAR(first_step("gd", 10.0) / first_step("gd", 1.0), 100.0, 1e-9);
+  EXPECT_NEAR(first_step("gd", 1.0) / first_step("gd", 0.1), 100.0, 1e-9);
+  for (const std::string id : {"newton", "ig"}) {
+    EXPECT_NEAR(first_step(id, 10.0), first_step(id, 0.1), 1e-12) << id;
+  }
+}
+
+TEST(ComparisonExperiment, PgEndsClosestToTheMinimumAndBothInversesAgree) {
+  const RunContext context = run("comparison", {});
+  std::map<std::string, double> distance;
+  for (const nlohmann::json& entry : context.runs()) {
+    const std::vector<double> x = entry["final"]["x"];
+    distance[entry["label"]] = std::hypot(x[0], x[1]);
+  }
+  // experiments.md E2: distances GD 2.63, Newton 0.925, PG 0.51 after 10 steps.
+  EXPECT_NEAR(distance["GD"], 2.63, 0.005);
+  EXPECT_NEAR(distance["Newton"], 0.925, 0.0005);
+  EXPECT_NEAR(distance["PG (analytic inverse)"], 0.511, 0.0005);
+  EXPECT_NEAR(distance["PG (L-BFGS inverse)"], distance["PG (analytic inverse)"], 1e-6);
+  for (const auto& [label, d] : distance) {
+    EXPECT_LE(distance["PG (analytic inverse)"], d + 1e-6) << label;
+  }
+}
+
+TEST(ExperimentSettings, DefaultsResolveAndBadValuesNameTheOption) {
+  const Experiment& experiment = find_experiment("scaled-toy");
+  const Settings settings = resolve_settings(experiment, {});
+  EXPECT_EQ(settings.integer("iters"), 1000);
+  EXPECT_FALSE(settings.has("lr"));
+  EXPECT_EQ(settings.reals("alpha"), (std::vector<double>{1, 10, 100, 1000}));
+  const auto message = [&](const std::string& name, const std::string& text) {
+    try {
+      resolve_settings(experiment, {{name, text}});
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message("lr", "-1"), "--lr: must be > 0, got '-1'");
+  EXPECT_EQ(message("lr", "1e400"), "--lr: '1e400' is not a number");
+  EXPECT_EQ(message("iters", "ten"), "--iters: 'ten' is not a whole number");
+  EXPECT_EQ(message("optimizers", "gd,gd"), "--optimizers: 'gd' is listed twice");
+  EXPECT_EQ(message("alpha", "1,,2"), "--alpha: empty entry in list '1,,2'");
+  EXPECT_EQ(message("tol-mode", "loose"),
+            "--tol-mode: unknown value 'loose' (known: relative, absolute)");
+  EXPECT_THROW(find_experiment("scaled_toy"), Error);
+}
+
+}  // namespace
+}  // namespace physgrad::experiments
