@@ -140,11 +140,5 @@ std::vector<Trajectory> trajectories(const std::vector<DirectResult>& results) {
   return out;
 }
 
-std::string format_value(double value) {
-  std::ostringstream out;
-  out.precision(4);
-  out << value;
-  return out.str();
-}
 
 }  // namespace physgrad::experiments

@@ -57,7 +57,4 @@ Grid2D sample_grid(const std::function<double(double, double)>& f, double x_min,
 // Each run's iterates as a trajectory (first two coordinates).
 std::vector<Trajectory> trajectories(const std::vector<DirectResult>& results);
 
-// Compact number formatting for tables: 4 significant digits.
-std::string format_value(double value);
-
 }  // namespace physgrad::experiments

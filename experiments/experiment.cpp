@@ -260,6 +260,13 @@ Settings resolve_settings(const Experiment& experiment,
   return settings;
 }
 
+std::string format_value(double value) {
+  std::ostringstream out;
+  out.precision(4);
+  out << value;
+  return out.str();
+}
+
 const Experiment& find_experiment(const std::string& name) {
   std::vector<std::string> known;
   for (const auto& experiment : registry()) {

@@ -94,6 +94,8 @@ class RunContext {
   const std::vector<Table>& tables() const { return tables_; }
   const std::vector<std::string>& notes() const { return notes_; }
   void set_quiet(bool quiet) { quiet_ = quiet; }
+  void set_experiment_name(std::string name) { experiment_name_ = std::move(name); }
+  const std::string& experiment_name() const { return experiment_name_; }
   void finish_progress();
 
  private:
@@ -102,6 +104,7 @@ class RunContext {
   std::vector<Figure> figures_;
   std::vector<Table> tables_;
   std::vector<std::string> notes_;
+  std::string experiment_name_;
   bool quiet_ = false;
   bool progress_line_open_ = false;
   double last_progress_seconds_ = -1e9;
@@ -132,6 +135,9 @@ std::vector<OptionSpec> all_options(const Experiment& experiment);
 // and on names the experiment does not have.
 Settings resolve_settings(const Experiment& experiment,
                           const std::vector<std::pair<std::string, std::string>>& given);
+
+// Compact number formatting for tables and labels: 4 significant digits.
+std::string format_value(double value);
 
 // Every registered experiment, in display order.
 const std::vector<std::unique_ptr<Experiment>>& registry();

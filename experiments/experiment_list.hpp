@@ -10,5 +10,6 @@ namespace physgrad::experiments {
 std::unique_ptr<Experiment> make_scaled_toy();
 std::unique_ptr<Experiment> make_sensitivity();
 std::unique_ptr<Experiment> make_comparison();
+std::unique_ptr<Experiment> make_hig_toy();
 
 }  // namespace physgrad::experiments

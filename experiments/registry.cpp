@@ -8,6 +8,7 @@ const std::vector<std::unique_ptr<Experiment>>& registry() {
     list.push_back(make_scaled_toy());
     list.push_back(make_sensitivity());
     list.push_back(make_comparison());
+    list.push_back(make_hig_toy());
     return list;
   }();
   return experiments;

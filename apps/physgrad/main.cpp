@@ -81,6 +81,7 @@ int run_experiment(const ex::Experiment& experiment,
   const fs::path staging = ex::prepare_run_folder(out);
   try {
     ex::RunContext context;
+    context.set_experiment_name(experiment.name());
     experiment.run(settings, context);
     ex::write_run_folder(staging, experiment, settings, context, command_line);
     ex::commit_run_folder(staging, out);

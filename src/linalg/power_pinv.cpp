@@ -1,13 +1,28 @@
 #include "physgrad/linalg/power_pinv.hpp"
 
+#include <cblas.h>
+#include <lapacke.h>
+
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <sstream>
+#include <utility>
 
 #include "physgrad/error.hpp"
 
 namespace physgrad {
 
 namespace {
+
+constexpr std::array<std::pair<PinvBackend, const char*>, 4> kBackendNames{{
+    {PinvBackend::kAuto, "auto"},
+    {PinvBackend::kSvd, "svd"},
+    {PinvBackend::kGram, "gram"},
+    {PinvBackend::kNormal, "normal"},
+}};
+
 void check_rcond(double rcond) {
   if (!(rcond >= 0 && rcond < 1)) {
     std::ostringstream msg;
@@ -23,28 +38,114 @@ void check_operands(const Matrix& a, const Vector& g, const char* what) {
         << " entries";
     throw Error(msg.str());
   }
-  if (!all_finite(a) || !all_finite(g)) {
-    throw Error(std::string(what) + ": non-finite entry in the matrix or vector");
+  if (!all_finite(a)) throw Error(std::string(what) + ": non-finite entry in the matrix");
+  if (!all_finite(g)) throw Error(std::string(what) + ": non-finite entry in the vector");
+}
+
+lapack_int lapack_dim(Index n) {
+  if (n > std::numeric_limits<lapack_int>::max()) {
+    throw Error("power_pinv_apply: dimension " + std::to_string(n) + " too large for LAPACK");
+  }
+  return static_cast<lapack_int>(n);
+}
+
+void check_lapack(lapack_int status, const char* routine) {
+  if (status != 0) {
+    throw Error(std::string("power_pinv_apply: LAPACK ") + routine + " failed (info = " +
+                std::to_string(status) + ")");
   }
 }
+
+// Thin SVD J = U Σ Vᵀ by divide and conquer (dgesdd), then V Σ^{−κ} Uᵀ g over the kept σ, which
+// are the leading ones (dgesdd sorts σ descending).
+Vector svd_apply(const Matrix& j, const Vector& g, double kappa, PowerPinvInfo& info) {
+  const lapack_int m = lapack_dim(j.rows());
+  const lapack_int n = lapack_dim(j.cols());
+  const lapack_int k = std::min(m, n);
+  Matrix a = j;  // dgesdd overwrites its input
+  Matrix u(m, k);
+  Matrix vt(k, n);
+  Vector sigma(k);
+  check_lapack(LAPACKE_dgesdd(LAPACK_COL_MAJOR, 'S', m, n, a.data(), m, sigma.data(), u.data(), m,
+                              vt.data(), k),
+               "dgesdd");
+  info.sigma_max = sigma(0);
+  info.rank = (sigma.array() > info.rcond_used * info.sigma_max).count();
+  Vector c = u.leftCols(info.rank).transpose() * g;
+  c.array() *= sigma.head(info.rank).array().pow(-kappa);
+  return vt.topRows(info.rank).transpose() * c;
+}
+
+// Eigen-decomposition W Σ² Wᵀ of J Jᵀ (gram = true; W = U) or Jᵀ J (W = V) by dsyrk and dsyevd,
+// then W Σ^{−1−κ} Wᵀ x over the kept σ, which are the trailing ones (dsyevd sorts ascending).
+Vector squared_apply(const Matrix& j, bool gram, const Vector& x, double kappa,
+                     PowerPinvInfo& info) {
+  const lapack_int n = lapack_dim(gram ? j.rows() : j.cols());
+  const lapack_int k = lapack_dim(gram ? j.cols() : j.rows());
+  Matrix w(n, n);
+  cblas_dsyrk(CblasColMajor, CblasLower, gram ? CblasNoTrans : CblasTrans, n, k, 1.0, j.data(),
+              lapack_dim(j.rows()), 0.0, w.data(), n);
+  Vector lambda(n);
+  check_lapack(LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', n, w.data(), n, lambda.data()),
+               "dsyevd");
+  const Vector sigma = lambda.cwiseMax(0.0).cwiseSqrt();  // rounding can leave λ slightly < 0
+  info.sigma_max = sigma(n - 1);
+  info.rank = (sigma.array() > info.rcond_used * info.sigma_max).count();
+  Vector c = w.rightCols(info.rank).transpose() * x;
+  c.array() *= sigma.tail(info.rank).array().pow(-1 - kappa);
+  return w.rightCols(info.rank) * c;
+}
+
 }  // namespace
 
-Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions& options) {
+std::string to_string(PinvBackend backend) {
+  for (const auto& [value, name] : kBackendNames) {
+    if (value == backend) return name;
+  }
+  throw Error("to_string: invalid PinvBackend value " +
+              std::to_string(static_cast<int>(backend)));
+}
+
+PinvBackend parse_pinv_backend(const std::string& name) {
+  std::string known;
+  for (const auto& [value, candidate] : kBackendNames) {
+    if (name == candidate) return value;
+    known += known.empty() ? "" : ", ";
+    known += candidate;
+  }
+  throw Error(std::string("unknown pinv backend '") + name + "' (known: " + known + ")");
+}
+
+Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions& options,
+                        PowerPinvInfo* info) {
   check_operands(j, g, "power_pinv_apply");
   check_rcond(options.rcond);
-  if (!std::isfinite(options.kappa)) throw Error("power_pinv_apply: kappa must be finite");
+  if (!std::isfinite(options.kappa)) {
+    std::ostringstream msg;
+    msg << "power_pinv_apply: kappa must be finite, got " << options.kappa;
+    throw Error(msg.str());
+  }
+
+  PowerPinvInfo local;
+  PowerPinvInfo& out = info != nullptr ? *info : local;
+  out = {};
+  out.backend = options.backend;
+  if (out.backend == PinvBackend::kAuto) {
+    out.backend = options.rcond < kMinGramRcond ? PinvBackend::kSvd
+                  : j.rows() <= j.cols()        ? PinvBackend::kGram
+                                                : PinvBackend::kNormal;
+  }
+  out.rcond_used =
+      out.backend == PinvBackend::kSvd ? options.rcond : std::max(options.rcond, kMinGramRcond);
   if (j.size() == 0) return Vector::Zero(j.cols());
 
-  const Eigen::BDCSVD<Matrix> svd(j, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const Vector& sigma = svd.singularValues();
-  const double cutoff = options.rcond * sigma(0);
-  Vector coefficients = svd.matrixU().transpose() * g;
-  for (Index i = 0; i < sigma.size(); ++i) {
-    coefficients(i) = sigma(i) > cutoff && sigma(i) > 0
-                          ? coefficients(i) * std::pow(sigma(i), -options.kappa)
-                          : 0.0;
+  if (out.backend == PinvBackend::kGram) {
+    return j.transpose() * squared_apply(j, true, g, options.kappa, out);
   }
-  return svd.matrixV() * coefficients;
+  if (out.backend == PinvBackend::kNormal) {
+    return squared_apply(j, false, j.transpose() * g, options.kappa, out);
+  }
+  return svd_apply(j, g, options.kappa, out);
 }
 
 Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, double rcond) {

@@ -88,4 +88,22 @@ void derivative(Activation activation, const Eigen::Ref<const Eigen::ArrayXXd>& 
   }
 }
 
+void apply_with_derivative(Activation activation, Eigen::Ref<Eigen::ArrayXXd> z,
+                           Eigen::Ref<Eigen::ArrayXXd> slope) {
+  check_shape("apply_with_derivative", z, slope);
+  switch (activation) {
+    case Activation::kTanh:
+      z = z.tanh();
+      slope = 1 - z.square();
+      return;
+    case Activation::kRelu:
+      z = z.max(0.0);
+      slope = (z > 0).cast<double>();
+      return;
+    default:
+      derivative(activation, z, slope);
+      apply(activation, z, z);
+  }
+}
+
 }  // namespace physgrad

@@ -381,6 +381,30 @@ std::vector<Polyline> to_pixels(const std::vector<double>& x, const std::vector<
 
 void append_point(std::string& d, const Point& p) { d += num(p.x) + " " + num(p.y); }
 
+// Closed path data of the band between `low` and `high` over x, each point clamped to `bounds`.
+std::string band_path(const std::vector<double>& x, const std::vector<double>& low,
+                      const std::vector<double>& high, const Scale& sx, const Scale& sy,
+                      const Box& bounds) {
+  std::vector<Point> upper, lower;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const Point a{sx(x[k]), sy(high[k])}, b{sx(x[k]), sy(low[k])};
+    if (!(std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(b.y))) continue;
+    upper.push_back(a);
+    lower.push_back(b);
+  }
+  if (upper.size() < 2) return {};
+  std::string d = "M";
+  const auto add = [&](Point p) {
+    p.x = std::clamp(p.x, bounds.left, bounds.right);
+    p.y = std::clamp(p.y, bounds.top, bounds.bottom);
+    if (d.size() > 1) d += " ";
+    append_point(d, p);
+  };
+  for (const Point& p : upper) add(p);
+  for (auto it = lower.rbegin(); it != lower.rend(); ++it) add(*it);
+  return d + "Z";
+}
+
 // Path data for the pieces cut to `bounds`; a lone point becomes a dot (with round caps).
 std::string line_path(const std::vector<Polyline>& pieces, const Box& bounds) {
   std::string d;
@@ -583,12 +607,20 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
   double x_lo = kInf, x_hi = -kInf, y_lo = kInf, y_hi = -kInf;
   for (const Series& s : series) {
     check_lengths("line_plot_svg: series", s.label, s.x, s.y);
+    const bool band = !s.band_low.empty() || !s.band_high.empty();
+    if (band) {
+      check_lengths("line_plot_svg: band low of", s.label, s.x, s.band_low);
+      check_lengths("line_plot_svg: band high of", s.label, s.x, s.band_high);
+    }
     for (std::size_t k = 0; k < s.x.size(); ++k) {
-      if (!usable(s.x[k], options.log_x) || !usable(s.y[k], options.log_y)) continue;
-      x_lo = std::min(x_lo, s.x[k]);
-      x_hi = std::max(x_hi, s.x[k]);
-      y_lo = std::min(y_lo, s.y[k]);
-      y_hi = std::max(y_hi, s.y[k]);
+      if (!usable(s.x[k], options.log_x)) continue;
+      for (const double v : {s.y[k], band ? s.band_low[k] : s.y[k], band ? s.band_high[k] : s.y[k]}) {
+        if (!usable(v, options.log_y)) continue;
+        x_lo = std::min(x_lo, s.x[k]);
+        x_hi = std::max(x_hi, s.x[k]);
+        y_lo = std::min(y_lo, v);
+        y_hi = std::max(y_hi, v);
+      }
     }
   }
   const Box box = plot_box(options.width, options.height, !options.title.empty());
@@ -603,6 +635,10 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
     const Series& s = series[n];
     const std::string color = xml_escape(series_color(s.color, n));
     const std::vector<Polyline> pieces = to_pixels(s.x, s.y, ax.scale, ay.scale, true);
+    if (!s.band_low.empty()) {
+      const std::string band = band_path(s.x, s.band_low, s.band_high, ax.scale, ay.scale, bounds);
+      if (!band.empty()) content += path(band, "fill=\"" + color + "\" fill-opacity=\"0.18\"");
+    }
     content +=
         path(line_path(pieces, bounds),
              "fill=\"none\" stroke=\"" + color +

@@ -2,18 +2,48 @@
 // singular values σᵢ > rcond·σ_max of J = U Σ Vᵀ; the others contribute nothing (κ = 1: J⁺ g).
 #pragma once
 
+#include <string>
+
 #include "physgrad/types.hpp"
 
 namespace physgrad {
 
+// How J^{−κ} g is computed (r = rows, c = cols of J). All give the same result up to rounding;
+// the Gram and normal paths square the spectrum and so resolve σ only down to ~√ε·σ_max.
+//   kSvd:    thin SVD of J (LAPACK dgesdd), O(r·c·min(r, c)); any rcond.
+//   kGram:   G = J Jᵀ = U Σ² Uᵀ (dsyrk + dsyevd), result Jᵀ U Σ^{−1−κ} Uᵀ g;
+//            O(r²·c + r³) — the fast choice for wide J (r ≤ c).
+//   kNormal: A = Jᵀ J = V Σ² Vᵀ, result V Σ^{−1−κ} Vᵀ (Jᵀ g); O(c²·r + c³) — for tall J.
+//   kAuto:   kGram when r ≤ c, kNormal otherwise; kSvd when rcond < kMinGramRcond.
+enum class PinvBackend { kAuto, kSvd, kGram, kNormal };
+
+std::string to_string(PinvBackend backend);  // "auto", "svd", "gram", "normal"
+PinvBackend parse_pinv_backend(const std::string& name);  // throws Error on an unknown name
+
+// Smallest relative cutoff the Gram and normal paths use. Forming Σ² and its eigensolve leave
+// an absolute error of a few ε·σ_max² on every eigenvalue σᵢ², so σᵢ below √ε·σ_max ≈ 1.5e-8·σ_max
+// are noise; at 1e-7 the smallest kept σᵢ² is ~45 ε·σ_max², clear of that noise. A smaller
+// rcond is raised to this value there (and makes kAuto choose the SVD).
+inline constexpr double kMinGramRcond = 1e-7;
+
 struct PowerPinvOptions {
-  double kappa = 1.0;    // exponent: 1 = pseudo-inverse (Gauss-Newton, IG), 0.5 = HIG
+  double kappa = 1.0;    // exponent: 1 = pseudo-inverse (Gauss-Newton, IG), 0.5 = HIG, −1 = Jᵀ
   double rcond = 1e-10;  // keep σᵢ > rcond·σ_max (strictly); 0 ≤ rcond < 1
+  PinvBackend backend = PinvBackend::kAuto;
 };
 
-// Thin SVD of J (Eigen's divide-and-conquer BDCSVD). Throws Error on mismatched sizes,
-// non-finite entries or options out of range.
-Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions& options = {});
+// What a call did.
+struct PowerPinvInfo {
+  PinvBackend backend = PinvBackend::kAuto;  // the path taken (never kAuto after a call)
+  Index rank = 0;                            // number of kept singular values
+  double sigma_max = 0;                      // largest singular value of J
+  double rcond_used = 0;                     // the cutoff applied (rcond, or the Gram floor)
+};
+
+// J^{−κ} g for J with rows() == g.size(); an empty J gives the zero vector of size cols().
+// Throws Error on mismatched sizes, non-finite entries, rcond outside [0, 1) or non-finite κ.
+Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions& options = {},
+                        PowerPinvInfo* info = nullptr);
 
 // Truncated pseudo-inverse of a symmetric positive semi-definite matrix applied to g:
 // A⁺ g over the eigenvalues λᵢ > rcond·λ_max (the normal-equation solve of Gauss-Newton).

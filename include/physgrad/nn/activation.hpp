@@ -23,4 +23,9 @@ void apply(Activation activation, const Eigen::Ref<const Eigen::ArrayXXd>& z,
 void derivative(Activation activation, const Eigen::Ref<const Eigen::ArrayXXd>& z,
                 Eigen::Ref<Eigen::ArrayXXd> out);
 
+// Both at once: z is replaced by σ(z) and slope receives σ'(z), the same values as apply() and
+// derivative(), but tanh and relu take σ' from σ (1 − σ², σ > 0) instead of evaluating twice.
+void apply_with_derivative(Activation activation, Eigen::Ref<Eigen::ArrayXXd> z,
+                           Eigen::Ref<Eigen::ArrayXXd> slope);
+
 }  // namespace physgrad

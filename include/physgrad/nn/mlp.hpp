@@ -59,7 +59,6 @@ class Mlp {
   // f(x) for a batch x (input_dim × B); returns output_dim × B.
   Matrix forward(const Matrix& x) const;
   // Same, filling `cache` for backward(); the cache's storage is reused when shapes match.
-  Matrix forward(const Matrix& x, const MlpCache& cache) const = delete;
   Matrix forward(const Matrix& x, MlpCache& cache) const;
 
   // ∇θ of Σ_b gy_bᵀ f(x_b), laid out like θ, for the batch cached by forward(); gy is
@@ -75,9 +74,6 @@ class Mlp {
 
  private:
   Activation activation(Index layer) const;
-  void check_layer(Index layer) const;
-  void check_input(const Matrix& x) const;
-  Index check_cache(const MlpCache& cache, const Matrix& gy) const;  // returns B
 
   std::vector<Index> widths_;
   std::vector<Index> offsets_;  // offsets_[l] = start of layer l in θ; back() = |θ|

@@ -15,6 +15,9 @@ struct Series {
   std::string color{};  // any SVG colour; empty = a palette colour chosen by position
   bool markers = false;
   bool dashed = false;
+  // Optional shaded band (e.g. mean ± std) drawn under the line: both empty or both the size
+  // of x. Samples where a bound cannot be drawn are left out of the band.
+  std::vector<double> band_low{}, band_high{};
 };
 
 struct LinePlotOptions {

@@ -1,0 +1,224 @@
+#include "learning_runs.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "direct_runs.hpp"
+#include "physgrad/report/svg_plot.hpp"
+
+namespace physgrad::experiments {
+
+namespace {
+
+std::string rule_label(const std::string& id) {
+  if (id == "sgd") return "SGD";
+  if (id == "adam") return "Adam";
+  if (id == "gn") return "Gauss-Newton";
+  if (id == "hig") return "HIG";
+  return id;
+}
+
+double final_test_loss(const LearningResult& r) { return r.summary.history.back().test_loss; }
+
+std::string milliseconds(double seconds, long long steps) {
+  return steps > 0 ? format_value(1e3 * seconds / static_cast<double>(steps)) : "–";
+}
+
+}  // namespace
+
+LearningSweep::LearningSweep(const Settings& settings, RunContext& context,
+                             std::map<std::string, double> default_lr)
+    : settings_(settings), context_(context), default_lr_(std::move(default_lr)) {}
+
+const LearningResult& LearningSweep::run(const std::string& id, const std::string& tag,
+                                         const nlohmann::json& params, Mlp& network,
+                                         const LearningProblem& problem,
+                                         const Dataset& train_set, const Dataset* test_set,
+                                         std::function<void(const Mlp&, TrainingRecord&)> observe) {
+  LearningUpdateSettings update_settings;
+  if (settings_.has("lr")) {
+    update_settings.lr = settings_.real("lr");
+  } else if (const auto it = default_lr_.find(id); it != default_lr_.end()) {
+    update_settings.lr = it->second;
+  }
+  update_settings.rcond = settings_.real("rcond");
+  const std::unique_ptr<LearningUpdate> update = make_learning_update(id, update_settings);
+
+  LearningResult result;
+  result.id = id;
+  result.tag = tag;
+  result.label = rule_label(id) + " (" + tag + ")";
+  result.seed = params.value("seed", 0LL);
+
+  TrainerOptions options;
+  options.batch_size = settings_.integer("batch");
+  options.max_iterations = settings_.integer("iters");
+  if (settings_.has("time")) options.time_budget_seconds = settings_.real("time");
+  options.eval_every = settings_.integer("eval-every");
+  options.seed = static_cast<std::uint64_t>(result.seed);
+  options.on_evaluate = std::move(observe);
+  options.on_progress = [&](const TrainingRecord& r) {
+    context_.progress(context_.experiment_name() + ": " + result.label + " seed " +
+                      std::to_string(result.seed) + ", iteration " +
+                      std::to_string(r.iteration) + ", test loss " + format_value(r.test_loss));
+  };
+  result.summary = train(network, *update, problem, train_set, test_set, options);
+  context_.finish_progress();
+
+  nlohmann::json run_params = update->params();
+  run_params["batch"] = options.batch_size;
+  for (const auto& [key, value] : params.items()) run_params[key] = value;
+  for (const TrainingRecord& r : result.summary.history) {
+    nlohmann::json row = {{"label", result.label},  {"optimizer", id},
+                          {"iteration", r.iteration}, {"epoch", r.epoch},
+                          {"wall_seconds", r.train_seconds}, {"train_loss", r.train_loss},
+                          {"test_loss", r.test_loss}};
+    for (const auto& [key, value] : params.items()) row[key] = value;
+    for (const auto& [key, value] : r.extras.items()) row[key] = value;
+    context_.add_metrics_row(std::move(row));
+  }
+  const TrainingSummary& s = result.summary;
+  nlohmann::json final_figures = {{"loss", s.history.back().train_loss},
+                                  {"test_loss", s.history.back().test_loss}};
+  for (const auto& [key, value] : s.history.back().extras.items()) final_figures[key] = value;
+  context_.add_run({{"label", result.label},
+                    {"optimizer", id},
+                    {"params", run_params},
+                    {"initial", {{"loss", s.history.front().train_loss},
+                                 {"test_loss", s.history.front().test_loss}}},
+                    {"final", final_figures},
+                    {"iterations", s.iterations},
+                    {"epochs", s.history.back().epoch},
+                    {"wall_seconds", s.train_seconds},
+                    {"termination", s.termination},
+                    {"message", s.message},
+                    {"seconds_per_part", {{"forward", s.forward_seconds},
+                                          {"derivatives", s.derivative_seconds},
+                                          {"inversion", s.inversion_seconds},
+                                          {"update", s.update_seconds}}}});
+  results_.push_back(std::move(result));
+  return results_.back();
+}
+
+std::vector<const LearningResult*> LearningSweep::first_seed_runs(const std::string& tag) const {
+  std::vector<const LearningResult*> runs;
+  for (const LearningResult& r : results_) {
+    const bool seen = std::any_of(runs.begin(), runs.end(),
+                                  [&](const LearningResult* other) { return other->id == r.id; });
+    if (r.tag == tag && !seen) runs.push_back(&r);
+  }
+  return runs;
+}
+
+void LearningSweep::add_loss_figures(RunContext& context,
+                                     const std::vector<const LearningResult*>& runs,
+                                     const std::string& tag, const std::string& file_tag) const {
+  for (const bool by_time : {false, true}) {
+    std::vector<Series> series;
+    for (const LearningResult* run : runs) {
+      Series s{run->label, {}, {}, color_for(run->id)};
+      for (const TrainingRecord& r : run->summary.history) {
+        s.x.push_back(by_time ? r.train_seconds : static_cast<double>(r.iteration));
+        s.y.push_back(r.test_loss);
+      }
+      series.push_back(std::move(s));
+    }
+    LinePlotOptions options;
+    options.title = std::string("Test loss vs ") + (by_time ? "training time" : "iteration") +
+                    " (" + tag + ", first seed)";
+    options.x_label = by_time ? "training seconds" : "iteration";
+    options.y_label = "mean test loss";
+    options.log_y = true;
+    context.add_figure({std::string(by_time ? "loss_vs_time_" : "loss_vs_iteration_") +
+                            file_tag + ".svg",
+                        options.title + ".", line_plot_svg(series, options)});
+  }
+}
+
+void LearningSweep::add_tables() const {
+  std::vector<std::string> tags, ids;
+  std::vector<long long> seeds;
+  for (const LearningResult& r : results_) {
+    if (std::find(tags.begin(), tags.end(), r.tag) == tags.end()) tags.push_back(r.tag);
+    if (std::find(ids.begin(), ids.end(), r.id) == ids.end()) ids.push_back(r.id);
+    if (std::find(seeds.begin(), seeds.end(), r.seed) == seeds.end()) seeds.push_back(r.seed);
+  }
+  const auto find = [&](const std::string& tag, const std::string& id, long long seed) {
+    const auto it = std::find_if(results_.begin(), results_.end(), [&](const LearningResult& r) {
+      return r.tag == tag && r.id == id && r.seed == seed;
+    });
+    return it == results_.end() ? nullptr : &*it;
+  };
+  const bool has_saturation =
+      !results_.empty() && results_.front().summary.history.back().extras.contains(
+                               "saturated_fraction");
+
+  for (const std::string& tag : tags) {
+    RunContext::Table losses{"Final test loss per seed (" + tag + ")", {"rule"}, {}};
+    RunContext::Table saturation{"Saturated hidden neurons at the end, fraction per seed (" +
+                                     tag + ")",
+                                 {"rule"}, {}};
+    for (const long long seed : seeds) {
+      losses.header.push_back("seed " + std::to_string(seed));
+      saturation.header.push_back("seed " + std::to_string(seed));
+    }
+    losses.header.insert(losses.header.end(), {"median", "worst"});
+    for (const std::string& id : ids) {
+      std::vector<std::string> row = {rule_label(id)}, saturated = {rule_label(id)};
+      std::vector<double> values;
+      for (const long long seed : seeds) {
+        const LearningResult* r = find(tag, id, seed);
+        if (r == nullptr) {
+          row.push_back("–");
+          saturated.push_back("–");
+          continue;
+        }
+        values.push_back(final_test_loss(*r));
+        row.push_back(format_value(values.back()) +
+                      (r->summary.termination == "numerical_failure" ? " (NaN stop)" : ""));
+        if (has_saturation) {
+          saturated.push_back(format_value(r->summary.history.back().extras["saturated_fraction"]));
+        }
+      }
+      std::sort(values.begin(), values.end());
+      const std::size_t n = values.size();
+      const double median = n == 0 ? NAN
+                            : n % 2 ? values[n / 2]
+                                    : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+      row.push_back(format_value(median));
+      row.push_back(n == 0 ? "–" : format_value(values.back()));
+      losses.rows.push_back(std::move(row));
+      saturation.rows.push_back(std::move(saturated));
+    }
+    context_.add_table(std::move(losses));
+    if (has_saturation) context_.add_table(std::move(saturation));
+  }
+
+  RunContext::Table timing{"Time per step in ms (mean over seeds)",
+                           {"rule", "setting", "network+physics+loss", "gradient or Jacobian",
+                            "inversion", "update", "total"},
+                           {}};
+  for (const std::string& tag : tags) {
+    for (const std::string& id : ids) {
+      TrainingSummary total;
+      for (const LearningResult& r : results_) {
+        if (r.tag != tag || r.id != id) continue;
+        total.iterations += r.summary.iterations;
+        total.forward_seconds += r.summary.forward_seconds;
+        total.derivative_seconds += r.summary.derivative_seconds;
+        total.inversion_seconds += r.summary.inversion_seconds;
+        total.update_seconds += r.summary.update_seconds;
+        total.train_seconds += r.summary.train_seconds;
+      }
+      const long long steps = total.iterations;
+      timing.rows.push_back({rule_label(id), tag, milliseconds(total.forward_seconds, steps),
+                             milliseconds(total.derivative_seconds, steps),
+                             milliseconds(total.inversion_seconds, steps),
+                             milliseconds(total.update_seconds, steps),
+                             milliseconds(total.train_seconds, steps)});
+    }
+  }
+  context_.add_table(std::move(timing));
+}
+
+}  // namespace physgrad::experiments

@@ -1,0 +1,56 @@
+// Shared pieces of the learning experiments: train one configuration per (rule, setting,
+// seed) with the common options, record metrics and summaries, and build the comparison
+// tables (per-seed final losses with median and worst, time split per step) and loss figures.
+#pragma once
+
+#include <deque>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "experiment.hpp"
+#include "physgrad/train/trainer.hpp"
+
+namespace physgrad::experiments {
+
+struct LearningResult {
+  std::string id;     // update rule id
+  std::string tag;    // the setting, e.g. "λ=0.01"
+  std::string label;  // "HIG (λ=0.01)"
+  long long seed = 0;
+  TrainingSummary summary;
+};
+
+// Reads the options every learning experiment has: optimizers, lr, iters, seed, batch, rcond,
+// time (optional) and eval-every.
+class LearningSweep {
+ public:
+  LearningSweep(const Settings& settings, RunContext& context,
+                std::map<std::string, double> default_lr);
+
+  // Trains `network` with rule `id` and records it; `params` (e.g. {"lambda", "seed"}) are
+  // added to the summary entry and to every metrics row.
+  const LearningResult& run(const std::string& id, const std::string& tag,
+                            const nlohmann::json& params, Mlp& network,
+                            const LearningProblem& problem, const Dataset& train_set,
+                            const Dataset* test_set,
+                            std::function<void(const Mlp&, TrainingRecord&)> observe = {});
+
+  // The first-seed run of every rule for `tag`, in the order they ran.
+  std::vector<const LearningResult*> first_seed_runs(const std::string& tag) const;
+  // Test loss vs iteration and vs training time (log y) of `runs`.
+  void add_loss_figures(RunContext& context, const std::vector<const LearningResult*>& runs,
+                        const std::string& tag, const std::string& file_tag) const;
+  // Per setting: final test loss per seed with median and worst; the saturated-neuron
+  // fraction when recorded; the time split per step of every rule.
+  void add_tables() const;
+
+ private:
+  const Settings& settings_;
+  RunContext& context_;
+  std::map<std::string, double> default_lr_;
+  std::deque<LearningResult> results_;  // stable addresses
+};
+
+}  // namespace physgrad::experiments

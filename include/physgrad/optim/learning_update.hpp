@@ -1,0 +1,106 @@
+// LearningUpdate — one update rule for training network weights θ through a simulator:
+// given what it declares it needs for a mini-batch (∇θ, or the stacked Jacobian), it returns Δθ.
+#pragma once
+
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "physgrad/linalg/power_pinv.hpp"
+#include "physgrad/optim/adam.hpp"
+
+namespace physgrad {
+
+enum class UpdateNeed {
+  kGradient,         // ∇θ of the batch-mean loss
+  kStackedJacobian,  // J = ∂(y₁…y_B)/∂θ stacked over samples and outputs, and ∂(mean L)/∂y
+};
+
+// What the trainer computed for one mini-batch; only the fields the update needs are filled.
+// J and ∂L/∂y share one row order (output-major: row k·B + i for sample i, output k); any
+// consistent order gives the same J^{−κ}g.
+struct BatchState {
+  Index batch_size = 0;
+  double loss = 0;          // mean per-sample loss over the batch
+  Vector gradient;          // ∇θ (mean loss)                          [kGradient]
+  Matrix jacobian;          // B·m × |θ|, row k·B + i = ∂y_ik/∂θ      [kStackedJacobian]
+  Vector loss_gradient_y;   // B·m, entry k·B + i = ∂(mean L)/∂y_ik    [kStackedJacobian]
+};
+
+struct UpdateStep {
+  Vector delta;                   // Δθ
+  double inversion_seconds = 0;   // time spent in the (pseudo-)inversion, if any
+};
+
+class LearningUpdate {
+ public:
+  virtual ~LearningUpdate() = default;
+  virtual std::string id() const = 0;  // sgd, adam, gn, hig
+  virtual nlohmann::json params() const = 0;
+  virtual UpdateNeed need() const = 0;
+  virtual void reset() {}
+  virtual UpdateStep step(const BatchState& batch) = 0;
+};
+
+// Stochastic gradient descent: Δθ = −η ∇θ.
+class SgdUpdate final : public LearningUpdate {
+ public:
+  explicit SgdUpdate(double lr);
+  std::string id() const override { return "sgd"; }
+  nlohmann::json params() const override { return {{"lr", lr_}}; }
+  UpdateNeed need() const override { return UpdateNeed::kGradient; }
+  UpdateStep step(const BatchState& batch) override;
+
+ private:
+  double lr_;
+};
+
+// Adam on ∇θ (AdamState, the same moments as the direct-optimization rule).
+class AdamUpdate final : public LearningUpdate {
+ public:
+  explicit AdamUpdate(AdamOptions options);
+  std::string id() const override { return "adam"; }
+  nlohmann::json params() const override;
+  UpdateNeed need() const override { return UpdateNeed::kGradient; }
+  void reset() override { state_.reset(); }
+  UpdateStep step(const BatchState& batch) override { return {state_.update(batch.gradient), 0}; }
+
+ private:
+  AdamState state_;
+};
+
+// Δθ = −η J^{−κ} ∂(mean L)/∂y with the truncated power-pseudo-inverse of the stacked Jacobian:
+// κ = 1 is Gauss-Newton ("gn"), κ = ½ the half-inverse gradient ("hig").
+class JacobianInverseUpdate final : public LearningUpdate {
+ public:
+  JacobianInverseUpdate(std::string id, double lr, PowerPinvOptions pinv);
+  std::string id() const override { return id_; }
+  nlohmann::json params() const override;
+  UpdateNeed need() const override { return UpdateNeed::kStackedJacobian; }
+  UpdateStep step(const BatchState& batch) override;
+  // Backend and kept rank of the last step.
+  const PowerPinvInfo& last_info() const { return info_; }
+
+ private:
+  std::string id_;
+  double lr_;
+  PowerPinvOptions pinv_;
+  PowerPinvInfo info_{};
+};
+
+// Learning-rule ids, in display order: sgd, adam, gn, hig.
+const std::vector<std::string>& learning_update_ids();
+
+struct LearningUpdateSettings {
+  std::optional<double> lr = std::nullopt;     // default: sgd 1e-2, adam 1e-3, gn 1, hig 1
+  std::optional<double> rcond = std::nullopt;  // truncation τ of gn/hig (default 1e-6)
+  PinvBackend backend = PinvBackend::kAuto;
+};
+
+// Throws Error naming an unknown id (and the known ones) or an out-of-range setting.
+std::unique_ptr<LearningUpdate> make_learning_update(const std::string& id,
+                                                     const LearningUpdateSettings& settings = {});
+
+}  // namespace physgrad

@@ -1,0 +1,239 @@
+#include "physgrad/nn/mlp.hpp"
+
+#include <array>
+#include <cmath>
+#include <random>
+#include <sstream>
+#include <utility>
+
+#include "physgrad/error.hpp"
+
+namespace physgrad {
+
+namespace {
+
+constexpr std::array<std::pair<Init, const char*>, 2> kInitNames{{
+    {Init::kGlorotUniform, "glorot"},
+    {Init::kHeUniform, "he"},
+}};
+
+std::string shape(Index rows, Index cols) {
+  return std::to_string(rows) + "x" + std::to_string(cols);
+}
+
+void check_layer(const Mlp& mlp, Index layer) {
+  if (layer < 0 || layer >= mlp.num_layers()) {
+    throw Error(std::string("Mlp: layer ") + std::to_string(layer) + " out of range [0, " +
+                std::to_string(mlp.num_layers()) + ")");
+  }
+}
+
+// parameters() hands out θ by reference; make sure nobody resized it.
+void check_parameters(const Mlp& mlp) {
+  if (mlp.parameters().size() != mlp.num_parameters()) {
+    throw Error(std::string("Mlp: parameters() was resized to ") +
+                std::to_string(mlp.parameters().size()) + ", the network has " +
+                std::to_string(mlp.num_parameters()));
+  }
+}
+
+void check_input(const Mlp& mlp, const Matrix& x) {
+  check_parameters(mlp);
+  if (x.rows() != mlp.input_dim()) {
+    throw Error(std::string("Mlp::forward: input x is ") + shape(x.rows(), x.cols()) +
+                ", expected " + std::to_string(mlp.input_dim()) + " rows");
+  }
+}
+
+// Checks that `cache` comes from forward() on this network and gy matches it; returns B.
+Index check_cache(const Mlp& mlp, const MlpCache& cache, const Matrix& gy) {
+  check_parameters(mlp);
+  const auto& widths = mlp.widths();
+  if (cache.activations.size() != widths.size() ||
+      cache.derivatives.size() + 1 != widths.size()) {
+    throw Error(std::string("Mlp: cache holds ") + std::to_string(cache.activations.size()) +
+                " activations and " + std::to_string(cache.derivatives.size()) +
+                " derivatives; run forward(x, cache) on this network first");
+  }
+  const Index batch = cache.activations[0].cols();
+  const auto expect = [&](const Matrix& m, Index rows, const std::string& what) {
+    if (m.rows() != rows || m.cols() != batch) {
+      throw Error(std::string("Mlp: ") + what + " is " + shape(m.rows(), m.cols()) +
+                  ", expected " + shape(rows, batch));
+    }
+  };
+  for (std::size_t l = 0; l < widths.size(); ++l) {
+    expect(cache.activations[l], widths[l],
+           std::string("cache.activations[") + std::to_string(l) + "]");
+    if (l > 0) {
+      expect(cache.derivatives[l - 1], widths[l],
+             std::string("cache.derivatives[") + std::to_string(l - 1) + "]");
+    }
+  }
+  expect(gy, mlp.output_dim(), "output cotangent gy");
+  return batch;
+}
+
+// Runs the backward sweep of the batch in `cache` with output cotangents gy, calling
+// visit(l, δ_l) for l = L−1 … 0, where δ_l = ∂(Σ_b gy_bᵀ f(x_b))/∂z_l (width[l+1] × B).
+template <typename Visit>
+void backpropagate(const Mlp& mlp, const MlpCache& cache, const Matrix& gy, Visit&& visit) {
+  Matrix delta = gy.cwiseProduct(cache.derivatives.back());
+  for (Index l = mlp.num_layers() - 1;; --l) {
+    visit(l, delta);
+    if (l == 0) return;
+    delta = (mlp.weight(l).transpose() * delta).cwiseProduct(cache.derivatives[l - 1]);
+  }
+}
+
+}  // namespace
+
+std::string to_string(Init init) {
+  for (const auto& [value, name] : kInitNames) {
+    if (value == init) return name;
+  }
+  throw Error(std::string("to_string: unknown Init value ") +
+              std::to_string(static_cast<int>(init)));
+}
+
+Init parse_init(const std::string& text) {
+  for (const auto& [value, name] : kInitNames) {
+    if (text == name) return value;
+  }
+  throw Error(std::string("unknown init '") + text + "'; known: glorot he");
+}
+
+Mlp::Mlp(std::vector<Index> widths, Activation hidden, Activation output)
+    : widths_(std::move(widths)), hidden_(hidden), output_(output) {
+  if (widths_.size() < 2) {
+    throw Error(std::string("Mlp: widths need at least 2 entries {input, ..., output}, got ") +
+                std::to_string(widths_.size()));
+  }
+  offsets_.push_back(0);
+  for (std::size_t i = 0; i < widths_.size(); ++i) {
+    if (widths_[i] < 1) {
+      std::ostringstream msg;
+      msg << "Mlp: widths[" << i << "] = " << widths_[i] << ", every width must be >= 1";
+      throw Error(msg.str());
+    }
+    if (i > 0) offsets_.push_back(offsets_.back() + (widths_[i - 1] + 1) * widths_[i]);
+  }
+  theta_ = Vector::Zero(offsets_.back());
+}
+
+void Mlp::set_parameters(const Vector& theta) {
+  if (theta.size() != num_parameters()) {
+    throw Error(std::string("Mlp::set_parameters: got ") + std::to_string(theta.size()) +
+                " parameters, the network has " + std::to_string(num_parameters()));
+  }
+  theta_ = theta;  // same size: Eigen copies into the existing storage
+}
+
+Activation Mlp::activation(Index layer) const {
+  return layer + 1 == num_layers() ? output_ : hidden_;
+}
+
+Eigen::Map<const Matrix> Mlp::weight(Index layer) const {
+  check_layer(*this, layer);
+  return {theta_.data() + offsets_[layer], widths_[layer + 1], widths_[layer]};
+}
+
+Eigen::Map<Matrix> Mlp::weight(Index layer) {
+  check_layer(*this, layer);
+  return {theta_.data() + offsets_[layer], widths_[layer + 1], widths_[layer]};
+}
+
+Eigen::Map<const Vector> Mlp::bias(Index layer) const {
+  check_layer(*this, layer);
+  return {theta_.data() + offsets_[layer + 1] - widths_[layer + 1], widths_[layer + 1]};
+}
+
+Eigen::Map<Vector> Mlp::bias(Index layer) {
+  check_layer(*this, layer);
+  return {theta_.data() + offsets_[layer + 1] - widths_[layer + 1], widths_[layer + 1]};
+}
+
+void Mlp::initialize(std::uint64_t seed, Init init) {
+  std::mt19937_64 engine(seed);
+  for (Index l = 0; l < num_layers(); ++l) {
+    const auto fan_in = static_cast<double>(widths_[l]);
+    const auto fan_out = static_cast<double>(widths_[l + 1]);
+    const double limit =
+        std::sqrt(6.0 / (init == Init::kGlorotUniform ? fan_in + fan_out : fan_in));
+    for (double& w : theta_.segment(offsets_[l], widths_[l] * widths_[l + 1])) {
+      const double u = static_cast<double>(engine() >> 11) * 0x1p-53;  // uniform in [0, 1)
+      w = limit * (2 * u - 1);
+    }
+    bias(l).setZero();
+  }
+}
+
+Matrix Mlp::forward(const Matrix& x) const {
+  check_input(*this, x);
+  Matrix a = x;
+  for (Index l = 0; l < num_layers(); ++l) {
+    Matrix z = (weight(l) * a).colwise() + bias(l);
+    apply(activation(l), z.array(), z.array());
+    a = std::move(z);
+  }
+  return a;
+}
+
+Matrix Mlp::forward(const Matrix& x, MlpCache& cache) const {
+  check_input(*this, x);
+  cache.activations.resize(widths_.size());
+  cache.derivatives.resize(widths_.size() - 1);
+  cache.activations[0] = x;
+  for (Index l = 0; l < num_layers(); ++l) {
+    Matrix& a = cache.activations[l + 1];
+    Matrix& d = cache.derivatives[l];
+    a.noalias() = weight(l) * cache.activations[l];
+    a.colwise() += bias(l);
+    d.resize(a.rows(), a.cols());
+    apply_with_derivative(activation(l), a.array(), d.array());
+  }
+  return cache.activations.back();
+}
+
+Vector Mlp::backward(const MlpCache& cache, const Matrix& gy, Matrix* gx) const {
+  check_cache(*this, cache, gy);
+  Vector grad(num_parameters());
+  backpropagate(*this, cache, gy, [&](Index l, const Matrix& delta) {
+    const Index rows = widths_[l + 1];
+    const Index cols = widths_[l];
+    Eigen::Map<Matrix>(grad.data() + offsets_[l], rows, cols).noalias() =
+        delta * cache.activations[l].transpose();
+    grad.segment(offsets_[l] + rows * cols, rows) = delta.rowwise().sum();
+    if (l == 0 && gx != nullptr) *gx = weight(0).transpose() * delta;
+  });
+  return grad;
+}
+
+Matrix Mlp::per_sample_gradients(const MlpCache& cache, const Matrix& gy) const {
+  Matrix out(gy.cols(), num_parameters());
+  per_sample_gradients(cache, gy, out);
+  return out;
+}
+
+void Mlp::per_sample_gradients(const MlpCache& cache, const Matrix& gy,
+                               StridedMatrixRef out) const {
+  const Index batch = check_cache(*this, cache, gy);
+  if (out.rows() != batch || out.cols() != num_parameters()) {
+    throw Error(std::string("Mlp::per_sample_gradients: output block is ") +
+                shape(out.rows(), out.cols()) + ", expected " +
+                shape(batch, num_parameters()));
+  }
+  backpropagate(*this, cache, gy, [&](Index l, const Matrix& delta) {
+    // Sample-major copies: column j of delta_t is δ_l[j, :]ᵀ, column i of input_t a_{l−1}[i, :]ᵀ.
+    const Matrix delta_t = delta.transpose();
+    const Matrix input_t = cache.activations[l].transpose();
+    const Index rows = widths_[l + 1];
+    for (Index i = 0; i < widths_[l]; ++i) {  // ∂/∂W_l[:, i], all samples: δ_l ∘ a_{l−1}[i, :]
+      out.middleCols(offsets_[l] + i * rows, rows) =
+          delta_t.array().colwise() * input_t.col(i).array();
+    }
+    out.middleCols(offsets_[l] + widths_[l] * rows, rows) = delta_t;
+  });
+}
+
+}  // namespace physgrad
