@@ -27,7 +27,7 @@ build: deps
 
 demo: build
 	rm -rf $(DEMO_OUT)
-	$(BUILD_DIR)/physgrad run scaled-toy --out $(DEMO_OUT)
+	$(BUILD_DIR)/physgrad run hig-toy --lambda 0.01 --out $(DEMO_OUT)
 
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)

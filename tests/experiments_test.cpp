@@ -2,6 +2,8 @@
 // outcome each experiment exists to show.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "experiment.hpp"
 #include "physgrad/error.hpp"
 
@@ -75,6 +77,27 @@ TEST(ComparisonExperiment, PgEndsClosestToTheMinimumAndBothInversesAgree) {
   for (const auto& [label, d] : distance) {
     EXPECT_LE(distance["PG (analytic inverse)"], d + 1e-6) << label;
   }
+}
+
+// experiments.md §4 check 10, shortened: on λ = 0.01 HIG ends far below Adam and Gauss-Newton.
+TEST(HigToyExperiment, HalfInverseGradientsBeatAdamAndGaussNewtonWhenIllConditioned) {
+  const RunContext context =
+      run("hig-toy", {{"lambda", "0.01"}, {"seeds", "2"}, {"iters", "2000"}, {"eval-every", "500"}});
+  std::map<std::string, std::vector<double>> losses;
+  for (const nlohmann::json& entry : context.runs()) {
+    const double initial = entry["initial"]["test_loss"], final_loss = entry["final"]["test_loss"];
+    losses[entry["optimizer"]].push_back(final_loss);
+    if (entry["optimizer"] != "gn") {
+      EXPECT_LT(final_loss, initial) << entry["label"];
+    }
+  }
+  ASSERT_EQ(losses["hig"].size(), 2u);
+  const auto worst = [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); };
+  const auto best = [](const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); };
+  EXPECT_LT(worst(losses["hig"]), 0.1 * best(losses["adam"]));
+  EXPECT_LT(worst(losses["hig"]), 0.1 * worst(losses["gn"]));
+  // Tables: losses and saturation for the one λ, and the time split.
+  EXPECT_EQ(context.tables().size(), 3u);
 }
 
 TEST(ExperimentSettings, DefaultsResolveAndBadValuesNameTheOption) {

@@ -105,27 +105,29 @@ TEST(PowerPinvBackends, MatchFormulaWhenModeratelyConditioned) {
 constexpr double kSquaringConstant = 50;
 
 void expect_within_squaring_bound(const Vector& s, double rcond) {
+  const double squared_rcond = std::max(rcond, kMinGramRcond);
+  const Eigen::Array<bool, Eigen::Dynamic, 1> kept = s.array() > squared_rcond * s.maxCoeff();
+  const double sigma_min_kept = kept.select(s.array(), s.maxCoeff()).minCoeff();
+  const double bound = kSquaringConstant * kEps * std::pow(s.maxCoeff() / sigma_min_kept, 2);
   unsigned seed = 11;
   for (const auto& [rows, cols] : kShapes) {
     const Factored f = factored(rows, cols, s, seed);
     const Vector g = random_matrix(rows, 1, seed + 2);
     seed += 3;
-    const double squared_rcond = std::max(rcond, kMinGramRcond);
-    double sigma_min_kept = s.maxCoeff();
-    for (const double sigma : s) {
-      if (sigma > squared_rcond * s.maxCoeff()) sigma_min_kept = std::min(sigma_min_kept, sigma);
-    }
-    const double bound =
-        kSquaringConstant * kEps * std::pow(s.maxCoeff() / sigma_min_kept, 2);
     for (const double kappa : kKappas) {
       SCOPED_TRACE(std::to_string(rows) + "x" + std::to_string(cols) + " kappa " +
                    std::to_string(kappa));
-      EXPECT_LT(relative_error(apply(f.j, g, kappa, rcond, PinvBackend::kSvd),
+      PowerPinvInfo info;
+      EXPECT_LT(relative_error(apply(f.j, g, kappa, rcond, PinvBackend::kSvd, &info),
                                formula(f, g, kappa, rcond)),
                 1e-8);
+      EXPECT_EQ(info.rank, (s.array() > rcond * s.maxCoeff()).count());
       const Vector ref = formula(f, g, kappa, squared_rcond);
-      EXPECT_LT(relative_error(apply(f.j, g, kappa, rcond, PinvBackend::kGram), ref), bound);
-      EXPECT_LT(relative_error(apply(f.j, g, kappa, rcond, PinvBackend::kNormal), ref), bound);
+      for (const PinvBackend backend : {PinvBackend::kGram, PinvBackend::kNormal}) {
+        EXPECT_LT(relative_error(apply(f.j, g, kappa, rcond, backend, &info), ref), bound)
+            << to_string(backend);
+        EXPECT_EQ(info.rank, kept.count()) << to_string(backend);
+      }
     }
   }
 }
@@ -198,10 +200,10 @@ TEST(PowerPinvTruncation, StrictAndRelativeToSigmaMax) {
 }
 
 TEST(PowerPinvAuto, PicksBackendByShapeAndRcond) {
-  // σ = 10^{−k/10}; rcond = 10^{−1.95} keeps k = 0…19.
+  // σ = 10^{−k/10}, k = 0…39; rcond = 10^{−1.95} keeps k = 0…19.
   const double rcond = std::pow(10.0, -1.95);
   for (const auto& [rows, cols] : kShapes) {
-    const Factored f = factored(rows, cols, log_spaced(40, 1e-4), 31);
+    const Factored f = factored(rows, cols, log_spaced(40, std::pow(10.0, -3.9)), 31);
     const Vector g = random_matrix(rows, 1, 33);
     const PinvBackend squared = rows <= cols ? PinvBackend::kGram : PinvBackend::kNormal;
     PowerPinvInfo info;
@@ -284,7 +286,8 @@ TEST(PowerPinvValidation, RejectsBadInputAndNamesBackends) {
     EXPECT_EQ(parse_pinv_backend(to_string(backend)), backend);
   }
   EXPECT_EQ(to_string(PinvBackend::kGram), "gram");
-  expect_error([] { parse_pinv_backend("cholesky"); }, "'cholesky' (known: auto, svd, gram, normal)");
+  expect_error([] { parse_pinv_backend("cholesky"); },
+               "'cholesky' (known: auto, svd, gram, normal)");
 }
 
 }  // namespace

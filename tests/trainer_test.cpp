@@ -103,6 +103,56 @@ TEST(LearningUpdates, JacobianInverseRulesApplyTheirPowerOfJ) {
   EXPECT_THROW(make_learning_update("lbfgs"), Error);
 }
 
+// On an invertible linear simulator, x̃ = P⁻¹(y + η(y* − y)) = x + η(P⁻¹y* − x) in closed form,
+// so one SIP step is Adam on the gradient of mean ½‖f(in; θ) − x̃‖² with that x̃.
+TEST(SipUpdate, OneStepOnALinearSimulatorIsAdamOnTheClosedFormProxyGradient) {
+  const DiagonalScale physics(Vector{{2.0, -0.5}});
+  const L2Loss loss;
+  Mlp network({2, 4, 2}, Activation::kTanh);
+  network.initialize(5);
+  Dataset data{Matrix(2, 3), Matrix(2, 3), Matrix()};
+  data.inputs << 0.1, -0.4, 0.8, 0.3, 0.5, -0.2;
+  data.targets << 1.0, -2.0, 0.5, 0.25, 0.0, -1.0;
+  for (const double eta : {1.0, 0.5}) {
+    const Matrix x = network.forward(data.inputs);
+    const Matrix x_tilde =
+        x + eta * (physics.scales().cwiseInverse().asDiagonal() * data.targets - x);
+    const auto proxy = [&](const Vector& theta) {
+      Mlp copy = network;
+      copy.set_parameters(theta);
+      return Vector::Constant(1, 0.5 * (copy.forward(data.inputs) - x_tilde).squaredNorm() / 3);
+    };
+    const Vector gradient =
+        finite_difference_jacobian(proxy, network.parameters()).row(0).transpose();
+    AdamState adam({0.01});
+    const Vector expected = adam.update(gradient);
+
+    MlpCache cache;
+    const BatchState state = evaluate_batch(network, {&physics, &loss}, data,
+                                            UpdateNeed::kNetworkOutputs, cache);
+    SipOptions options;
+    options.adam.lr = 0.01;
+    options.y_step = eta;
+    SipUpdate sip(options);
+    const Vector delta = sip.step(state).delta;
+    // Adam's first step is lr·g/(|g| + ε) per component, insensitive to the FD error in g.
+    EXPECT_LT((delta - expected).cwiseAbs().maxCoeff(), 1e-6) << "eta " << eta;
+  }
+}
+
+TEST(SipUpdate, NumericalLocalInverseGivesTheAnalyticStep) {
+  NetworkThroughPhysics s;  // ComparisonToy's analytic inverse against L-BFGS on ½‖P(x) − y‖²
+  MlpCache cache;
+  const BatchState state =
+      evaluate_batch(s.network, s.problem, s.data, UpdateNeed::kNetworkOutputs, cache);
+  LearningUpdateSettings analytic, numeric;
+  analytic.inverse = InverseMethod::kAnalytic;
+  numeric.inverse = InverseMethod::kLbfgs;
+  const Vector a = make_learning_update("sip", analytic)->step(state).delta;
+  const Vector b = make_learning_update("sip", numeric)->step(state).delta;
+  EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-6);
+}
+
 TrainerOptions limits(long long iterations) {
   TrainerOptions options;
   options.batch_size = 4;

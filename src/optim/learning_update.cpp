@@ -37,8 +37,38 @@ UpdateStep JacobianInverseUpdate::step(const BatchState& batch) {
   return {-lr_ * direction, seconds};
 }
 
+SipUpdate::SipUpdate(SipOptions options) : options_(options), adam_(options.adam) {
+  require_positive("sip: y_step", options.y_step);
+}
+
+nlohmann::json SipUpdate::params() const {
+  return {{"lr", options_.adam.lr},
+          {"y_step", options_.y_step},
+          {"inverse", to_string(options_.inverse.method)}};
+}
+
+UpdateStep SipUpdate::step(const BatchState& batch) {
+  if (batch.physics == nullptr || batch.loss_function == nullptr || !batch.backprop) {
+    throw Error("sip: the batch lacks the network outputs and backprop it needs");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const Index count = batch.x.cols();
+  Matrix cotangent(batch.x.rows(), count);
+  for (Index i = 0; i < count; ++i) {
+    const Vector y = batch.y.col(i), target = batch.targets.col(i), x = batch.x.col(i);
+    const Vector context = batch.context.size() == 0 ? Vector() : Vector(batch.context.col(i));
+    const Vector y_target = y + options_.y_step * batch.loss_function->newton_step(y, target);
+    const Vector x_tilde =
+        local_inverse(*batch.physics, y_target, x, context, options_.inverse).x;
+    cotangent.col(i) = (x - x_tilde) / static_cast<double>(count);
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return {adam_.update(batch.backprop(cotangent)), seconds};
+}
+
 const std::vector<std::string>& learning_update_ids() {
-  static const std::vector<std::string> ids = {"sgd", "adam", "gn", "hig"};
+  static const std::vector<std::string> ids = {"sgd", "adam", "gn", "hig", "sip"};
   return ids;
 }
 
@@ -50,6 +80,13 @@ std::unique_ptr<LearningUpdate> make_learning_update(const std::string& id,
     AdamOptions options;
     options.lr = settings.lr.value_or(1e-3);
     return std::make_unique<AdamUpdate>(options);
+  }
+  if (id == "sip") {
+    SipOptions options;
+    options.adam.lr = settings.lr.value_or(1e-3);
+    options.y_step = settings.sip_y_step;
+    options.inverse.method = settings.inverse;
+    return std::make_unique<SipUpdate>(options);
   }
   if (id == "gn" || id == "hig") {
     const double kappa = id == "gn" ? 1.0 : 0.5;

@@ -85,6 +85,14 @@ BatchState evaluate_batch(const Mlp& network, const LearningProblem& problem,
 
   if (need == UpdateNeed::kGradient) {
     state.gradient = network.backward(cache, physics.vjp_batch(x, batch.context, gradient_y));
+  } else if (need == UpdateNeed::kNetworkOutputs) {
+    state.physics = &physics;
+    state.loss_function = problem.loss;
+    state.x = x;
+    state.y = y;
+    state.targets = batch.targets;
+    state.context = batch.context;
+    state.backprop = [&network, &cache](const Matrix& gx) { return network.backward(cache, gx); };
   } else {
     // Row k·B + i of J is ∂y_ik/∂θ (output-major: each output's B rows are one contiguous
     // block, which per_sample_gradients() fills directly).

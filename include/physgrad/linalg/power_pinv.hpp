@@ -8,8 +8,9 @@
 
 namespace physgrad {
 
-// How J^{−κ} g is computed (r = rows, c = cols of J). All give the same result up to rounding;
-// the Gram and normal paths square the spectrum and so resolve σ only down to ~√ε·σ_max.
+// How J^{−κ} g is computed (r = rows, c = cols of J). The SVD is accurate to ~ε·σ_max/σ_min,kept
+// relative; the Gram and normal paths square the spectrum, so theirs is ~ε·(σ_max/σ_min,kept)²
+// and they resolve σ only down to ~√ε·σ_max.
 //   kSvd:    thin SVD of J (LAPACK dgesdd), O(r·c·min(r, c)); any rcond.
 //   kGram:   G = J Jᵀ = U Σ² Uᵀ (dsyrk + dsyevd), result Jᵀ U Σ^{−1−κ} Uᵀ g;
 //            O(r²·c + r³) — the fast choice for wide J (r ≤ c).
@@ -22,8 +23,9 @@ PinvBackend parse_pinv_backend(const std::string& name);  // throws Error on an 
 
 // Smallest relative cutoff the Gram and normal paths use. Forming Σ² and its eigensolve leave
 // an absolute error of a few ε·σ_max² on every eigenvalue σᵢ², so σᵢ below √ε·σ_max ≈ 1.5e-8·σ_max
-// are noise; at 1e-7 the smallest kept σᵢ² is ~45 ε·σ_max², clear of that noise. A smaller
-// rcond is raised to this value there (and makes kAuto choose the SVD).
+// are noise; at 1e-7 the smallest kept σᵢ² is ~45 ε·σ_max², clear of that noise (a result made
+// mostly of directions near this floor can still be off by ~1–20 %). A smaller rcond is raised to
+// this value there, and makes kAuto choose the SVD.
 inline constexpr double kMinGramRcond = 1e-7;
 
 struct PowerPinvOptions {

@@ -2,6 +2,7 @@
 // given what it declares it needs for a mini-batch (∇θ, or the stacked Jacobian), it returns Δθ.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -9,13 +10,18 @@
 #include <vector>
 
 #include "physgrad/linalg/power_pinv.hpp"
+#include "physgrad/loss/loss.hpp"
 #include "physgrad/optim/adam.hpp"
+#include "physgrad/optim/local_inverse.hpp"
 
 namespace physgrad {
 
 enum class UpdateNeed {
   kGradient,         // ∇θ of the batch-mean loss
   kStackedJacobian,  // J = ∂(y₁…y_B)/∂θ stacked over samples and outputs, and ∂(mean L)/∂y
+  kNetworkOutputs,   // x = f(in; θ), y = P(x), the batch's targets and context, and a backprop
+                     // that maps a cotangent at x to ∇θ (for updates that build their own
+                     // loss in x, such as SIP)
 };
 
 // What the trainer computed for one mini-batch; only the fields the update needs are filled.
@@ -27,6 +33,11 @@ struct BatchState {
   Vector gradient;          // ∇θ (mean loss)                          [kGradient]
   Matrix jacobian;          // B·m × |θ|, row k·B + i = ∂y_ik/∂θ      [kStackedJacobian]
   Vector loss_gradient_y;   // B·m, entry k·B + i = ∂(mean L)/∂y_ik    [kStackedJacobian]
+  // [kNetworkOutputs]
+  const Simulator* physics = nullptr;
+  const Loss* loss_function = nullptr;
+  Matrix x, y, targets, context;           // one sample per column
+  std::function<Vector(const Matrix&)> backprop;  // cotangent at x (n × B) ↦ ∇θ
 };
 
 struct UpdateStep {
@@ -37,7 +48,7 @@ struct UpdateStep {
 class LearningUpdate {
  public:
   virtual ~LearningUpdate() = default;
-  virtual std::string id() const = 0;  // sgd, adam, gn, hig
+  virtual std::string id() const = 0;  // sgd, adam, gn, hig, sip
   virtual nlohmann::json params() const = 0;
   virtual UpdateNeed need() const = 0;
   virtual void reset() {}
@@ -90,13 +101,38 @@ class JacobianInverseUpdate final : public LearningUpdate {
   PowerPinvInfo info_{};
 };
 
-// Learning-rule ids, in display order: sgd, adam, gn, hig.
+// Scale-invariant physics (SIP) training: per sample, x̃ᵢ = P⁻¹(yᵢ + η Δyᵢ; xᵢ) with Δy the
+// Newton step of the loss in y (y* − y for L2), then Adam on the proxy loss mean ½‖xᵢ − x̃ᵢ‖²
+// with x̃ held constant, i.e. on the cotangent (xᵢ − x̃ᵢ)/B backpropagated through the network.
+struct SipOptions {
+  AdamOptions adam;     // the first-order rule on the proxy loss (lr = η_NN)
+  double y_step = 1.0;  // η > 0: fraction of the Newton step in y
+  LocalInverseOptions inverse;  // the simulator's own inverse when it has one (auto)
+};
+
+class SipUpdate final : public LearningUpdate {
+ public:
+  explicit SipUpdate(SipOptions options);
+  std::string id() const override { return "sip"; }
+  nlohmann::json params() const override;
+  UpdateNeed need() const override { return UpdateNeed::kNetworkOutputs; }
+  void reset() override { adam_.reset(); }
+  UpdateStep step(const BatchState& batch) override;
+
+ private:
+  SipOptions options_;
+  AdamState adam_;
+};
+
+// Learning-rule ids, in display order: sgd, adam, gn, hig, sip.
 const std::vector<std::string>& learning_update_ids();
 
 struct LearningUpdateSettings {
-  std::optional<double> lr = std::nullopt;     // default: sgd 1e-2, adam 1e-3, gn 1, hig 1
+  std::optional<double> lr = std::nullopt;     // default: sgd 1e-2, adam and sip 1e-3, gn/hig 1
   std::optional<double> rcond = std::nullopt;  // truncation τ of gn/hig (default 1e-6)
   PinvBackend backend = PinvBackend::kAuto;
+  double sip_y_step = 1.0;                     // η of sip
+  InverseMethod inverse = InverseMethod::kAuto;  // local inverse of sip
 };
 
 // Throws Error naming an unknown id (and the known ones) or an out-of-range setting.

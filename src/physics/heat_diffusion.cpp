@@ -1,0 +1,163 @@
+#include "physgrad/physics/heat_diffusion.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <sstream>
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wshadow"
+#include <unsupported/Eigen/FFT>
+#pragma GCC diagnostic pop
+
+#include "physgrad/error.hpp"
+
+namespace physgrad {
+
+namespace {
+
+using Complex = std::complex<double>;
+using ComplexMatrix = Eigen::Matrix<Complex, Eigen::Dynamic, Eigen::Dynamic>;
+using Fft = Eigen::FFT<double>;
+
+// 1-D DFT (forward, or inverse with the 1/n factor) of every column of `a`.
+ComplexMatrix transform_columns(Fft& fft, const ComplexMatrix& a, bool inverse) {
+  ComplexMatrix out(a.rows(), a.cols());
+  for (Index j = 0; j < a.cols(); ++j) {
+    if (inverse) {
+      fft.inv(out.col(j).data(), a.col(j).data(), a.rows());
+    } else {
+      fft.fwd(out.col(j).data(), a.col(j).data(), a.rows());
+    }
+  }
+  return out;
+}
+
+// DFT of one field held as n×1 (1-D) or n×n (2-D, entry (i, j) = cell i + n·j).
+ComplexMatrix transform(Fft& fft, const ComplexMatrix& field, bool inverse) {
+  const ComplexMatrix along_i = transform_columns(fft, field, inverse);
+  if (field.cols() == 1) return along_i;
+  return transform_columns(fft, along_i.transpose(), inverse).transpose();
+}
+
+// numpy fftfreq(n)[i]: i/n for i < (n+1)/2, else (i − n)/n.
+double fftfreq(Index i, Index n) {
+  return static_cast<double>(2 * i < n ? i : i - n) / static_cast<double>(n);
+}
+
+// ½·exp(−½(a/scale)²), with a non-finite value (0/0) counted as 0.
+double likelihood(double a, double scale) {
+  const double ratio = a / scale;
+  const double value = 0.5 * std::exp(-0.5 * ratio * ratio);
+  return std::isfinite(value) ? value : 0.0;
+}
+
+constexpr double kMaxLogGain = 88;  // ⌊ln(largest float)⌋
+
+}  // namespace
+
+HeatDiffusion::HeatDiffusion(HeatConfig config) : config_(config) {
+  std::ostringstream msg;
+  if (config.n < 1) msg << "heat_diffusion: n must be ≥ 1, got " << config.n;
+  if (config.dims != 1 && config.dims != 2) {
+    msg << "heat_diffusion: dims must be 1 or 2, got " << config.dims;
+  }
+  if (!std::isfinite(config.amount) || config.amount < 0) {
+    msg << "heat_diffusion: amount must be finite and ≥ 0, got " << config.amount;
+  }
+  if (!msg.str().empty()) throw Error(msg.str());
+
+  const Index n = config.n, cols = config.dims == 2 ? n : 1;
+  size_ = n * cols;
+  log_kernel_.resize(size_);
+  for (Index j = 0; j < cols; ++j) {
+    for (Index i = 0; i < n; ++i) {
+      const double ki = fftfreq(i, n), kj = cols == 1 ? 0.0 : fftfreq(j, n);
+      log_kernel_(i + n * j) = 4 * std::numbers::pi * std::numbers::pi * (ki * ki + kj * kj) *
+                               config.amount;
+    }
+  }
+  kernel_ = (-log_kernel_).array().exp();
+}
+
+Matrix HeatDiffusion::filter(const Matrix& fields, const Vector& gain) const {
+  const Index n = config_.n, cols = size_ / n;
+  const Eigen::Map<const Matrix> gain_grid(gain.data(), n, cols);
+  Fft fft;
+  Matrix out(size_, fields.cols());
+  for (Index b = 0; b < fields.cols(); ++b) {
+    const Eigen::Map<const Matrix> field(fields.col(b).data(), n, cols);
+    const ComplexMatrix spectrum =
+        transform(fft, field.cast<Complex>(), false).cwiseProduct(gain_grid.cast<Complex>());
+    Eigen::Map<Matrix>(out.col(b).data(), n, cols) = transform(fft, spectrum, true).real();
+  }
+  return out;
+}
+
+Matrix HeatDiffusion::forward_batch(const Matrix& x, const Matrix& context) const {
+  check_batch(x, context, "forward");
+  return filter(x, kernel_);
+}
+
+Matrix HeatDiffusion::vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const {
+  check_batch(x, context, "vjp");
+  if (gy.rows() != size_ || gy.cols() != x.cols()) {
+    std::ostringstream msg;
+    msg << "heat_diffusion.vjp: gy is " << gy.rows() << "×" << gy.cols() << ", expected "
+        << size_ << "×" << x.cols();
+    throw Error(msg.str());
+  }
+  return filter(gy, kernel_);
+}
+
+Matrix HeatDiffusion::weighted_hessian(const Vector& x, const Vector& context,
+                                       const Vector& /*w*/) const {
+  check_batch(x, context, "weighted_hessian");
+  return Matrix::Zero(size_, size_);
+}
+
+Vector HeatDiffusion::inverse_diffusion(const Vector& dy, double uncertainty_scale,
+                                        double uncertainty_floor) const {
+  std::ostringstream msg;
+  if (dy.size() != size_) msg << "heat_diffusion.inverse_diffusion: dy has " << dy.size()
+                              << " values, expected " << size_;
+  if (!std::isfinite(uncertainty_scale) || uncertainty_scale < 0) {
+    msg << "heat_diffusion.inverse_diffusion: uncertainty_scale must be finite and ≥ 0, got "
+        << uncertainty_scale;
+  }
+  if (!std::isfinite(uncertainty_floor) || uncertainty_floor < 0) {
+    msg << "heat_diffusion.inverse_diffusion: uncertainty_floor must be finite and ≥ 0, got "
+        << uncertainty_floor;
+  }
+  if (!msg.str().empty()) throw Error(msg.str());
+
+  const double noise =
+      (dy.cwiseAbs() * uncertainty_scale).array().plus(uncertainty_floor).matrix().norm();
+  const Index n = config_.n, cols = size_ / n;
+  Fft fft;
+  const Eigen::Map<const Matrix> field(dy.data(), n, cols);
+  const ComplexMatrix amp = transform(fft, field.cast<Complex>(), false);
+  Vector gain(size_);
+  for (Index m = 0; m < size_; ++m) {
+    const double a = std::abs(amp(m));
+    const double signal = likelihood(a, static_cast<double>(n) * kernel_(m));
+    const double total = signal + likelihood(a, noise);
+    const double p = total > 0 ? signal / total : 0.0;
+    const double action = (p <= 0.5 || p >= 0.68) ? 2 * (p - 0.5) : 0.0;
+    gain(m) = std::exp(std::min(log_kernel_(m) * action, kMaxLogGain));
+  }
+  return filter(dy, gain);
+}
+
+Vector HeatDiffusion::inverse(const Vector& y, const Vector& x0, const Vector& context) const {
+  check_batch(x0, context, "inverse");
+  if (y.size() != size_) {
+    throw Error("heat_diffusion.inverse: y has " + std::to_string(y.size()) +
+                " values, expected " + std::to_string(size_));
+  }
+  return x0 + inverse_diffusion(y - forward(x0), 1e-6, 1e-8);
+}
+
+}  // namespace physgrad
