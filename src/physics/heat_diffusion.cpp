@@ -5,6 +5,7 @@
 #include <complex>
 #include <numbers>
 #include <sstream>
+#include <string>
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wconversion"
@@ -56,41 +57,42 @@ double likelihood(double a, double scale) {
 
 constexpr double kMaxLogGain = 88;  // ⌊ln(largest float)⌋
 
+void require(bool ok, const char* what, double value) {
+  if (ok) return;
+  std::ostringstream msg;
+  msg << "heat_diffusion: " << what << ", got " << value;
+  throw Error(msg.str());
+}
+
 }  // namespace
 
 HeatDiffusion::HeatDiffusion(HeatConfig config) : config_(config) {
-  std::ostringstream msg;
-  if (config.n < 1) msg << "heat_diffusion: n must be ≥ 1, got " << config.n;
-  if (config.dims != 1 && config.dims != 2) {
-    msg << "heat_diffusion: dims must be 1 or 2, got " << config.dims;
-  }
-  if (!std::isfinite(config.amount) || config.amount < 0) {
-    msg << "heat_diffusion: amount must be finite and ≥ 0, got " << config.amount;
-  }
-  if (!msg.str().empty()) throw Error(msg.str());
-
+  require(config.n >= 1, "n must be ≥ 1", static_cast<double>(config.n));
+  require(config.dims == 1 || config.dims == 2, "dims must be 1 or 2", config.dims);
+  require(std::isfinite(config.amount) && config.amount >= 0, "amount must be finite and ≥ 0",
+          config.amount);
   const Index n = config.n, cols = config.dims == 2 ? n : 1;
   size_ = n * cols;
   log_kernel_.resize(size_);
   for (Index j = 0; j < cols; ++j) {
     for (Index i = 0; i < n; ++i) {
       const double ki = fftfreq(i, n), kj = cols == 1 ? 0.0 : fftfreq(j, n);
-      log_kernel_(i + n * j) = 4 * std::numbers::pi * std::numbers::pi * (ki * ki + kj * kj) *
-                               config.amount;
+      log_kernel_(i + n * j) =
+          4 * std::numbers::pi * std::numbers::pi * (ki * ki + kj * kj) * config.amount;
     }
   }
   kernel_ = (-log_kernel_).array().exp();
 }
 
-Matrix HeatDiffusion::filter(const Matrix& fields, const Vector& gain) const {
+Matrix HeatDiffusion::diffuse(const Matrix& fields) const {
   const Index n = config_.n, cols = size_ / n;
-  const Eigen::Map<const Matrix> gain_grid(gain.data(), n, cols);
+  const Eigen::Map<const Matrix> kernel_grid(kernel_.data(), n, cols);
   Fft fft;
   Matrix out(size_, fields.cols());
   for (Index b = 0; b < fields.cols(); ++b) {
     const Eigen::Map<const Matrix> field(fields.col(b).data(), n, cols);
     const ComplexMatrix spectrum =
-        transform(fft, field.cast<Complex>(), false).cwiseProduct(gain_grid.cast<Complex>());
+        transform(fft, field.cast<Complex>(), false).cwiseProduct(kernel_grid.cast<Complex>());
     Eigen::Map<Matrix>(out.col(b).data(), n, cols) = transform(fft, spectrum, true).real();
   }
   return out;
@@ -98,18 +100,18 @@ Matrix HeatDiffusion::filter(const Matrix& fields, const Vector& gain) const {
 
 Matrix HeatDiffusion::forward_batch(const Matrix& x, const Matrix& context) const {
   check_batch(x, context, "forward");
-  return filter(x, kernel_);
+  return diffuse(x);
 }
 
 Matrix HeatDiffusion::vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const {
   check_batch(x, context, "vjp");
   if (gy.rows() != size_ || gy.cols() != x.cols()) {
     std::ostringstream msg;
-    msg << "heat_diffusion.vjp: gy is " << gy.rows() << "×" << gy.cols() << ", expected "
-        << size_ << "×" << x.cols();
+    msg << "heat_diffusion.vjp: gy is " << gy.rows() << "×" << gy.cols() << ", expected " << size_
+        << "×" << x.cols();
     throw Error(msg.str());
   }
-  return filter(gy, kernel_);
+  return diffuse(gy);
 }
 
 Matrix HeatDiffusion::weighted_hessian(const Vector& x, const Vector& context,
@@ -120,41 +122,37 @@ Matrix HeatDiffusion::weighted_hessian(const Vector& x, const Vector& context,
 
 Vector HeatDiffusion::inverse_diffusion(const Vector& dy, double uncertainty_scale,
                                         double uncertainty_floor) const {
-  std::ostringstream msg;
-  if (dy.size() != size_) msg << "heat_diffusion.inverse_diffusion: dy has " << dy.size()
-                              << " values, expected " << size_;
-  if (!std::isfinite(uncertainty_scale) || uncertainty_scale < 0) {
-    msg << "heat_diffusion.inverse_diffusion: uncertainty_scale must be finite and ≥ 0, got "
-        << uncertainty_scale;
+  if (dy.size() != size_) {
+    throw Error(std::string("heat_diffusion.inverse_diffusion: dy has ") +
+                std::to_string(dy.size()) + " values, expected " + std::to_string(size_));
   }
-  if (!std::isfinite(uncertainty_floor) || uncertainty_floor < 0) {
-    msg << "heat_diffusion.inverse_diffusion: uncertainty_floor must be finite and ≥ 0, got "
-        << uncertainty_floor;
-  }
-  if (!msg.str().empty()) throw Error(msg.str());
+  require(std::isfinite(uncertainty_scale) && uncertainty_scale >= 0,
+          "uncertainty_scale must be finite and ≥ 0", uncertainty_scale);
+  require(std::isfinite(uncertainty_floor) && uncertainty_floor >= 0,
+          "uncertainty_floor must be finite and ≥ 0", uncertainty_floor);
 
-  const double noise =
-      (dy.cwiseAbs() * uncertainty_scale).array().plus(uncertainty_floor).matrix().norm();
+  const double noise = (dy.array().abs() * uncertainty_scale + uncertainty_floor).matrix().norm();
   const Index n = config_.n, cols = size_ / n;
   Fft fft;
   const Eigen::Map<const Matrix> field(dy.data(), n, cols);
-  const ComplexMatrix amp = transform(fft, field.cast<Complex>(), false);
-  Vector gain(size_);
+  ComplexMatrix amp = transform(fft, field.cast<Complex>(), false);
   for (Index m = 0; m < size_; ++m) {
     const double a = std::abs(amp(m));
     const double signal = likelihood(a, static_cast<double>(n) * kernel_(m));
     const double total = signal + likelihood(a, noise);
     const double p = total > 0 ? signal / total : 0.0;
     const double action = (p <= 0.5 || p >= 0.68) ? 2 * (p - 0.5) : 0.0;
-    gain(m) = std::exp(std::min(log_kernel_(m) * action, kMaxLogGain));
+    amp(m) *= std::exp(std::min(log_kernel_(m) * action, kMaxLogGain));
   }
-  return filter(dy, gain);
+  Vector dx(size_);
+  Eigen::Map<Matrix>(dx.data(), n, cols) = transform(fft, amp, true).real();
+  return dx;
 }
 
 Vector HeatDiffusion::inverse(const Vector& y, const Vector& x0, const Vector& context) const {
   check_batch(x0, context, "inverse");
   if (y.size() != size_) {
-    throw Error("heat_diffusion.inverse: y has " + std::to_string(y.size()) +
+    throw Error(std::string("heat_diffusion.inverse: y has ") + std::to_string(y.size()) +
                 " values, expected " + std::to_string(size_));
   }
   return x0 + inverse_diffusion(y - forward(x0), 1e-6, 1e-8);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <string>
 
 #include "physgrad/error.hpp"
 
@@ -71,7 +72,8 @@ Matrix SinRotation::weighted_hessian(const Vector& x, const Vector& context,
 Vector SinRotation::inverse(const Vector& y, const Vector& x0, const Vector& context) const {
   check_batch(x0, context, "inverse");
   if (y.size() != 2) {
-    throw Error("sin_rotation.inverse: y must have 2 entries, got " + std::to_string(y.size()));
+    throw Error(std::string("sin_rotation.inverse: y must have 2 entries, got ") +
+                std::to_string(y.size()));
   }
   constexpr double kTwoPi = 2 * std::numbers::pi;
   const double guess = to_hat_.row(0).dot(x0);

@@ -51,8 +51,8 @@ class HeatDiffusion final : public Simulator {
   Vector inverse(const Vector& y, const Vector& x0, const Vector& context = {}) const override;
 
  private:
-  // Multiplies every column's spectrum by `gain` (flattened like a field).
-  Matrix filter(const Matrix& fields, const Vector& gain) const;
+  // IFFT(K ⊙ FFT(field)) for every column.
+  Matrix diffuse(const Matrix& fields) const;
 
   HeatConfig config_;
   Index size_ = 0;

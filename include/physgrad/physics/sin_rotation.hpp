@@ -11,10 +11,10 @@ namespace physgrad {
 struct SinRotationConfig {
   // kBook: the chapter's formula. kCode: the SIP repository's, with the overall factor s.
   enum class Form { kBook, kCode };
-  double xi = 1;              // ξ > 0: conditioning; the Jacobian's singular values differ by ξ²
-  double phi_degrees = 15;    // φ: coupling of the two components by a counter-clockwise rotation
+  double xi = 1;            // ξ > 0: conditioning; the Jacobian's singular values differ by ξ²
+  double phi_degrees = 15;  // φ: coupling of the two components by a counter-clockwise rotation
   Form form = Form::kBook;
-  double global_scale = 10;   // s > 0, code form only
+  double global_scale = 10;  // s > 0, code form only
 };
 
 // R_φ = [[cos φ, −sin φ], [sin φ, cos φ]] with φ converted to radians by the exact π (the
