@@ -7,7 +7,9 @@ DEMO_OUT    ?= runs/demo
 DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapacke-dev \
                libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
 
-.PHONY: all deps build demo test clean
+SANITIZE_DIR ?= build-sanitize
+
+.PHONY: all deps build demo test test-sanitize clean
 
 all: build
 
@@ -32,5 +34,12 @@ demo: build
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
+# The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (any report fails it).
+test-sanitize: deps
+	cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPHYSGRAD_SANITIZE=ON
+	cmake --build $(SANITIZE_DIR) -j $(JOBS)
+	cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+	  ctest --output-on-failure -j $(JOBS)
+
 clean:
-	rm -rf $(BUILD_DIR)
+	rm -rf $(BUILD_DIR) $(SANITIZE_DIR)

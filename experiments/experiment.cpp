@@ -219,7 +219,10 @@ std::vector<OptionSpec> common_options(const Experiment& experiment) {
   return {
       text_list_option("optimizers", defaults, "comma-separated update rules to run")
           .one_of(experiment.optimizer_choices()),
-      integer_option("iters", std::to_string(experiment.default_iterations()),
+      integer_option("iters",
+                     experiment.default_iterations() > 0
+                         ? std::to_string(experiment.default_iterations())
+                         : std::string(),
                      "iterations per run")
           .at_least(1)
           .at_most(1e9),

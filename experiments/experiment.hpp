@@ -120,6 +120,7 @@ class Experiment {
   // Ids accepted by --optimizers, and the default selection.
   virtual std::vector<std::string> optimizer_choices() const = 0;
   virtual std::vector<std::string> default_optimizers() const = 0;
+  // The default of --iters; 0 leaves it unset (for experiments limited by epochs or time).
   virtual long long default_iterations() const = 0;
   // Checks between options that one option alone cannot express; throws Error. Runs before
   // anything is written.

@@ -56,26 +56,27 @@ class HigToy final : public Experiment {
            "Adam vs Gauss-Newton vs HIG";
   }
   std::vector<OptionSpec> options() const override {
-    return {
+    std::vector<OptionSpec> options = {
         real_list_option("lambda", "1,0.01", "scale λ of the second output").above(0),
         integer_option("seeds", "5", "number of seeds per configuration (seed, seed+1, …)")
             .at_least(1)
             .at_most(1000),
-        integer_option("batch", "128", "mini-batch size B").at_least(1),
         integer_option("train-size", "512", "training samples").at_least(1),
         integer_option("test-size", "256", "test samples (also the activation statistics)")
             .at_least(1),
-        real_option("rcond", "1e-6", "relative truncation τ of gn and hig").at_least(0).at_most(0.5),
-        real_option("time", "", "wall-clock budget per run in seconds (training time)").above(0),
-        integer_option("eval-every", "200", "evaluate every N iterations").at_least(1),
     };
+    for (OptionSpec& spec : learning_options()) {
+      if (spec.name == "eval-every") spec.default_text = "200";
+      options.push_back(std::move(spec));
+    }
+    return options;
   }
   std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }
   std::vector<std::string> default_optimizers() const override { return {"adam", "gn", "hig"}; }
   long long default_iterations() const override { return 10000; }
 
   void run(const Settings& settings, RunContext& context) const override {
-    LearningSweep sweep(settings, context, kDefaultLr);
+    LearningSweep sweep(settings, context, kDefaults);
     for (const double lambda : settings.reals("lambda")) {
       const DiagonalScale physics(Vector{{1.0, lambda}});
       const L2Loss loss;
@@ -114,8 +115,9 @@ class HigToy final : public Experiment {
   // Step sizes chosen once on the well-conditioned case λ = 1 (5 seeds, 10 000 iterations) and
   // kept for every λ: Adam 1e-2 (1e-3 stays near 0.25), Gauss-Newton 0.1 (the best median of
   // 0.03, 0.1, 0.3, 1), HIG 1 as in the HIG paper. docs/results.md lists the sweep.
-  inline static const std::map<std::string, double> kDefaultLr = {
-      {"sgd", 0.1}, {"adam", 0.01}, {"gn", 0.1}, {"hig", 1.0}};
+  inline static const std::map<std::string, RuleDefaults> kDefaults = {
+      {"sgd", {0.1, 128}}, {"adam", {0.01, 128}}, {"gn", {0.1, 128}}, {"hig", {1.0, 128}},
+      {"sip", {0.01, 128}}};
 
   static void add_figures(RunContext& context, const LearningSweep& sweep, double lambda,
                           const std::string& tag, const DiagonalScale& physics) {

@@ -26,22 +26,36 @@ std::string milliseconds(double seconds, long long steps) {
 
 }  // namespace
 
+std::vector<OptionSpec> learning_options() {
+  return {
+      integer_option("batch", "", "mini-batch size for every rule (default: each rule's own)")
+          .at_least(1),
+      real_option("rcond", "", "relative truncation τ of gn and hig (default: each rule's own)")
+          .at_least(0)
+          .at_most(0.5),
+      integer_option("epochs", "", "epochs per run").at_least(1),
+      real_option("time", "", "training-time budget per run in seconds (evaluations excluded)")
+          .above(0),
+      integer_option("eval-every", "", "evaluate every N iterations (default: every epoch)")
+          .at_least(1),
+  };
+}
+
 LearningSweep::LearningSweep(const Settings& settings, RunContext& context,
-                             std::map<std::string, double> default_lr)
-    : settings_(settings), context_(context), default_lr_(std::move(default_lr)) {}
+                             std::map<std::string, RuleDefaults> defaults)
+    : settings_(settings), context_(context), defaults_(std::move(defaults)) {}
 
 const LearningResult& LearningSweep::run(const std::string& id, const std::string& tag,
                                          const nlohmann::json& params, Mlp& network,
                                          const LearningProblem& problem,
                                          const Dataset& train_set, const Dataset* test_set,
                                          std::function<void(const Mlp&, TrainingRecord&)> observe) {
+  const auto found = defaults_.find(id);
+  const RuleDefaults defaults = found == defaults_.end() ? RuleDefaults{} : found->second;
   LearningUpdateSettings update_settings;
-  if (settings_.has("lr")) {
-    update_settings.lr = settings_.real("lr");
-  } else if (const auto it = default_lr_.find(id); it != default_lr_.end()) {
-    update_settings.lr = it->second;
-  }
-  update_settings.rcond = settings_.real("rcond");
+  update_settings.lr = settings_.has("lr") ? settings_.real("lr") : defaults.lr;
+  update_settings.rcond = settings_.has("rcond") ? settings_.real("rcond") : defaults.rcond;
+  update_settings.sip_y_step = defaults.y_step;
   const std::unique_ptr<LearningUpdate> update = make_learning_update(id, update_settings);
 
   LearningResult result;
@@ -51,10 +65,11 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   result.seed = params.value("seed", 0LL);
 
   TrainerOptions options;
-  options.batch_size = settings_.integer("batch");
-  options.max_iterations = settings_.integer("iters");
+  options.batch_size = settings_.has("batch") ? settings_.integer("batch") : defaults.batch;
+  if (settings_.has("iters")) options.max_iterations = settings_.integer("iters");
+  if (settings_.has("epochs")) options.max_epochs = settings_.integer("epochs");
   if (settings_.has("time")) options.time_budget_seconds = settings_.real("time");
-  options.eval_every = settings_.integer("eval-every");
+  if (settings_.has("eval-every")) options.eval_every = settings_.integer("eval-every");
   options.seed = static_cast<std::uint64_t>(result.seed);
   options.on_evaluate = std::move(observe);
   options.on_progress = [&](const TrainingRecord& r) {

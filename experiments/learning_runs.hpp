@@ -22,12 +22,24 @@ struct LearningResult {
   TrainingSummary summary;
 };
 
-// Reads the options every learning experiment has: optimizers, lr, iters, seed, batch, rcond,
-// time (optional) and eval-every.
+// An experiment's default settings of one rule; --lr, --batch and --rcond override them for
+// every rule.
+struct RuleDefaults {
+  double lr = 1e-3;
+  Index batch = 32;
+  double rcond = 1e-6;  // truncation τ of gn and hig
+  double y_step = 1.0;  // η of sip
+};
+
+// The options every learning experiment has, after the common ones: batch, rcond, time,
+// eval-every (all optional, so each rule keeps its own defaults unless one is given).
+std::vector<OptionSpec> learning_options();
+
+// Reads the common and learning options; trains, records and tabulates the runs.
 class LearningSweep {
  public:
   LearningSweep(const Settings& settings, RunContext& context,
-                std::map<std::string, double> default_lr);
+                std::map<std::string, RuleDefaults> defaults);
 
   // Trains `network` with rule `id` and records it; `params` (e.g. {"lambda", "seed"}) are
   // added to the summary entry and to every metrics row.
@@ -49,7 +61,7 @@ class LearningSweep {
  private:
   const Settings& settings_;
   RunContext& context_;
-  std::map<std::string, double> default_lr_;
+  std::map<std::string, RuleDefaults> defaults_;
   std::deque<LearningResult> results_;  // stable addresses
 };
 
