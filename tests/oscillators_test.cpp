@@ -26,8 +26,9 @@ Matrix uniform(std::mt19937_64& rng, Index rows, Index cols, double lo = 0, doub
 
 TEST(Oscillators, DerivativesMatchFiniteDifferences) {
   std::mt19937_64 rng(7);
-  OscillatorConfig chain{3, 40, 0.1, 0.3, 0.5, 2.0};  // exercises inner oscillators
-  for (const OscillatorConfig& config : {OscillatorConfig::paper(), OscillatorConfig::book(), chain}) {
+  const OscillatorConfig chain{3, 40, 0.1, 0.3, 0.5, 2.0};  // exercises inner oscillators
+  for (const OscillatorConfig& config :
+       {OscillatorConfig::paper(), OscillatorConfig::book(), chain}) {
     const CoupledOscillators physics(config);
     for (int trial = 0; trial < 2; ++trial) {
       const Vector u = uniform(rng, physics.input_dim(), 1, -1, 1);
@@ -76,7 +77,8 @@ TEST(Oscillators, ZeroControlLossMatchesTheReference) {
     OscillatorConfig config;
     double expected;
   };
-  for (const Case& c : {Case{OscillatorConfig::book(), 0.726}, Case{OscillatorConfig::paper(), 0.796}}) {
+  for (const Case& c :
+       {Case{OscillatorConfig::book(), 0.726}, Case{OscillatorConfig::paper(), 0.796}}) {
     const CoupledOscillators physics(c.config);
     std::mt19937_64 rng(2024);
     const Matrix s0 = uniform(rng, 4, 20000);

@@ -67,8 +67,10 @@ TEST(QuantumDipole, EigenstatesOnlyRotateTheirPhase) {
   for (const Index n : {1, 2, 5}) {
     const Vector psi_n = dipole_eigenstate(n);
     const Vector psi = physics.forward(u, psi_n);
-    const double energy = (2 - 2 * std::cos(std::numbers::pi * static_cast<double>(n) / 15)) / (dx * dx);
-    const std::complex<double> rho(1, -dt * energy / 2), phase = std::pow(rho / std::conj(rho), 384);
+    const double k = std::numbers::pi * static_cast<double>(n) / 15;
+    const double energy = (2 - 2 * std::cos(k)) / (dx * dx);
+    const std::complex<double> rho(1, -dt * energy / 2);
+    const std::complex<double> phase = std::pow(rho / std::conj(rho), 384);
     EXPECT_NEAR(std::abs(inner(psi_n, psi)), 1.0, 1e-12) << "n " << n;
     EXPECT_NEAR(std::abs(inner(psi_n, psi) - phase), 0.0, 1e-11) << "n " << n;
   }
@@ -126,7 +128,9 @@ TEST(Fidelity, ZeroForTheTargetTimesAPhase) {
       y(14 + j) = v.imag();
     }
     EXPECT_NEAR(loss.value(y, target), 0.0, 1e-14) << "phi " << phi;
-    EXPECT_LT(loss.gradient(y, target).norm(), 1e-13) << "phi " << phi;
+    // L is not bounded below in R^2M: only the norm-preserving directions are stationary,
+    // the gradient points along −y (growing |ψ| beyond 1 lowers L further).
+    EXPECT_LT((loss.gradient(y, target) + 2 * y).norm(), 1e-14) << "phi " << phi;
   }
   EXPECT_NEAR(loss.value(target, Vector::Zero(28)), 1.0, 1e-15);
 }

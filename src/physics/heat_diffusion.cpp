@@ -9,7 +9,6 @@
 
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wconversion"
-#pragma GCC diagnostic ignored "-Wshadow"
 #include <unsupported/Eigen/FFT>
 #pragma GCC diagnostic pop
 

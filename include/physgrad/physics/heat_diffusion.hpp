@@ -38,7 +38,7 @@ class HeatDiffusion final : public Simulator {
   // α = 2(p − ½) if p ≤ ½ or p ≥ 0.68, else 0, and the gain exp(α·4π²|k|²·amount):
   // α = 1 inverts the mode exactly (1/K), α = 0 leaves it, α < 0 damps it (α = −1: K).
   // n is the cells per axis in 1-D and 2-D alike. The exponent is capped at 88 (⌊ln of the
-  // largest float⌋), a bound the reference reaches only with gains above 1e38.
+  // largest float⌋); the reference applies no cap, so the two differ only above gain e⁸⁸.
   // Training-time form: scale 1e-6, floor 0 (uncertainty |y* − y|·1e-6).
   Vector inverse_diffusion(const Vector& dy, double uncertainty_scale,
                            double uncertainty_floor = 0) const;
