@@ -229,6 +229,11 @@ std::vector<OptionSpec> common_options(const Experiment& experiment) {
       real_option("lr", "",
                   "step size η for every selected rule (default: each rule's own, see the report)")
           .above(0),
+      integer_option("threads", "",
+                     "BLAS threads (default: OPENBLAS_NUM_THREADS or OMP_NUM_THREADS if set, "
+                     "else 1)")
+          .at_least(1)
+          .at_most(256),
       integer_option("seed", "0", "random seed of stochastic parts (data, initialisation)").at_least(0).at_most(4294967295.0),
       text_option("out", "", "run folder (default: runs/NAME-<timestamp>)"),
   };

@@ -3,7 +3,6 @@
 // conditioned: Adam and Gauss-Newton stall, half-inverse gradients do not.
 #include <algorithm>
 #include <cmath>
-#include <random>
 
 #include "experiment_list.hpp"
 #include "learning_runs.hpp"
@@ -11,6 +10,7 @@
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
 #include "physgrad/report/svg_plot.hpp"
+#include "sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {
@@ -19,10 +19,10 @@ constexpr double kTrackedInput = 0.354;  // the validation sample whose y-path i
 constexpr Index kHidden = 7;
 
 Dataset make_data(Index n, std::uint64_t seed) {
-  std::mt19937_64 engine(seed);
+  Sampler sampler(seed);
   Dataset data{Matrix(1, n), Matrix(2, n), Matrix()};
   for (Index i = 0; i < n; ++i) {
-    const double x = -1.0 + 2.0 * static_cast<double>(engine() >> 11) * 0x1.0p-53;
+    const double x = sampler.uniform(-1.0, 1.0);
     data.inputs(0, i) = x;
     data.targets.col(i) << std::sin(6 * x), std::cos(9 * x);
   }

@@ -127,24 +127,28 @@ std::vector<const LearningResult*> LearningSweep::first_seed_runs(const std::str
 
 void LearningSweep::add_loss_figures(RunContext& context,
                                      const std::vector<const LearningResult*>& runs,
-                                     const std::string& tag, const std::string& file_tag) const {
+                                     const std::string& tag, const std::string& file_tag,
+                                     bool by_epoch) const {
+  const std::string progress = by_epoch ? "epoch" : "iteration";
   for (const bool by_time : {false, true}) {
     std::vector<Series> series;
     for (const LearningResult* run : runs) {
       Series s{run->label, {}, {}, color_for(run->id)};
       for (const TrainingRecord& r : run->summary.history) {
-        s.x.push_back(by_time ? r.train_seconds : static_cast<double>(r.iteration));
+        s.x.push_back(by_time    ? r.train_seconds
+                      : by_epoch ? r.epoch
+                                 : static_cast<double>(r.iteration));
         s.y.push_back(r.test_loss);
       }
       series.push_back(std::move(s));
     }
+    const std::string axis = by_time ? "training time" : progress;
     LinePlotOptions options;
-    options.title = std::string("Test loss vs ") + (by_time ? "training time" : "iteration") +
-                    " (" + tag + ", first seed)";
-    options.x_label = by_time ? "training seconds" : "iteration";
+    options.title = "Test loss vs " + axis + " (" + tag + ", first seed)";
+    options.x_label = by_time ? "training seconds" : progress;
     options.y_label = "mean test loss";
     options.log_y = true;
-    context.add_figure({std::string(by_time ? "loss_vs_time_" : "loss_vs_iteration_") +
+    context.add_figure({std::string("loss_vs_") + (by_time ? "time" : progress) + "_" +
                             file_tag + ".svg",
                         options.title + ".", line_plot_svg(series, options)});
   }

@@ -51,9 +51,10 @@ class LearningSweep {
 
   // The first-seed run of every rule for `tag`, in the order they ran.
   std::vector<const LearningResult*> first_seed_runs(const std::string& tag) const;
-  // Test loss vs iteration and vs training time (log y) of `runs`.
+  // Test loss vs iteration (or epoch) and vs training time (log y) of `runs`.
   void add_loss_figures(RunContext& context, const std::vector<const LearningResult*>& runs,
-                        const std::string& tag, const std::string& file_tag) const;
+                        const std::string& tag, const std::string& file_tag,
+                        bool by_epoch = false) const;
   // Per setting: final test loss per seed with median and worst; the saturated-neuron
   // fraction when recorded; the time split per step of every rule.
   void add_tables() const;

@@ -2,6 +2,7 @@
 // Every error is one line on stderr and exit code 2; a run writes its folder only on success.
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cstdlib>
 #include <ctime>
 #include <iomanip>
 #include <iostream>
@@ -10,6 +11,7 @@
 
 #include "experiment.hpp"
 #include "physgrad/error.hpp"
+#include "physgrad/threads.hpp"
 #include "run_folder.hpp"
 
 namespace {
@@ -75,6 +77,14 @@ int run_experiment(const ex::Experiment& experiment,
                    const std::vector<std::pair<std::string, std::string>>& given,
                    const std::string& command_line) {
   const ex::Settings settings = ex::resolve_settings(experiment, given);
+  // One BLAS thread unless asked: the matrices of most runs are small, and a multithreaded
+  // BLAS on busy cores costs more than it saves.
+  if (settings.has("threads")) {
+    physgrad::set_blas_threads(static_cast<int>(settings.integer("threads")));
+  } else if (std::getenv("OPENBLAS_NUM_THREADS") == nullptr &&
+             std::getenv("OMP_NUM_THREADS") == nullptr) {
+    physgrad::set_blas_threads(1);
+  }
   const fs::path out = settings.has("out") && !settings.text("out").empty()
                            ? fs::path(settings.text("out"))
                            : fs::path("runs") / (experiment.name() + "-" + timestamp());

@@ -1,0 +1,12 @@
+#include <gtest/gtest.h>
+
+#include "physgrad/error.hpp"
+#include "physgrad/threads.hpp"
+
+TEST(BlasThreads, SetAndReadBackWhenTheBlasSupportsIt) {
+  EXPECT_THROW(physgrad::set_blas_threads(0), physgrad::Error);
+  if (!physgrad::set_blas_threads(2)) GTEST_SKIP() << "the BLAS in use has no thread control";
+  EXPECT_EQ(physgrad::blas_threads(), 2);
+  EXPECT_TRUE(physgrad::set_blas_threads(1));
+  EXPECT_EQ(physgrad::blas_threads(), 1);
+}
