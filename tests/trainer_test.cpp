@@ -51,8 +51,24 @@ TEST(EvaluateBatch, StackedJacobianMatchesFiniteDifferences) {
       evaluate_batch(s.network, s.problem, s.data, UpdateNeed::kStackedJacobian, cache);
   const Matrix expected = finite_difference_jacobian(
       [&](const Vector& theta) { return s.stacked_outputs(theta); }, s.network.parameters());
-  ASSERT_EQ(state.jacobian.rows(), 2 * s.data.size());
-  EXPECT_LT((state.jacobian - expected).cwiseAbs().maxCoeff(), 1e-7);
+  const Matrix j = state.jacobian->materialize();
+  ASSERT_EQ(j.rows(), 2 * s.data.size());
+  EXPECT_LT((j - expected).cwiseAbs().maxCoeff(), 1e-7);
+}
+
+// The factored forms agree with the formed J: J Jᵀ from the layer factors, Jᵀc by one backward.
+TEST(EvaluateBatch, FactoredGramAndTransposeProductMatchTheFormedJacobian) {
+  NetworkThroughPhysics s(7);
+  MlpCache cache;
+  const BatchState state =
+      evaluate_batch(s.network, s.problem, s.data, UpdateNeed::kStackedJacobian, cache);
+  const Matrix j = state.jacobian->materialize();
+  const Matrix expected = j * j.transpose();
+  EXPECT_LT((state.jacobian->gram() - expected).cwiseAbs().maxCoeff(),
+            1e-13 * expected.cwiseAbs().maxCoeff());
+  const Vector c = Vector::LinSpaced(j.rows(), -1.0, 2.0);
+  EXPECT_LT((state.jacobian->apply_transpose(c) - j.transpose() * c).norm(),
+            1e-13 * (j.transpose() * c).norm());
 }
 
 TEST(EvaluateBatch, GradientMatchesFiniteDifferencesAndTheJacobianPath) {
@@ -72,7 +88,7 @@ TEST(EvaluateBatch, GradientMatchesFiniteDifferencesAndTheJacobianPath) {
   // Jᵀ ∂(mean L)/∂y is the same gradient.
   const BatchState with_jacobian =
       evaluate_batch(s.network, s.problem, s.data, UpdateNeed::kStackedJacobian, cache);
-  EXPECT_LT((with_jacobian.jacobian.transpose() * with_jacobian.loss_gradient_y -
+  EXPECT_LT((with_jacobian.jacobian->materialize().transpose() * with_jacobian.loss_gradient_y -
              with_gradient.gradient)
                 .norm(),
             1e-12);
@@ -84,7 +100,8 @@ TEST(LearningUpdates, JacobianInverseRulesApplyTheirPowerOfJ) {
   const BatchState state =
       evaluate_batch(s.network, s.problem, s.data, UpdateNeed::kStackedJacobian, cache);
   // κ = 1 (gn) is −η J⁺ g; κ = ½ (hig) is −η V Σ^{−½} Uᵀ g from an independent SVD.
-  const Eigen::JacobiSVD<Matrix> svd(state.jacobian, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::JacobiSVD<Matrix> svd(state.jacobian->materialize(),
+                                     Eigen::ComputeThinU | Eigen::ComputeThinV);
   const Vector& sigma = svd.singularValues();
   const auto expected = [&](double kappa) {
     Vector c = svd.matrixU().transpose() * state.loss_gradient_y;
@@ -100,6 +117,11 @@ TEST(LearningUpdates, JacobianInverseRulesApplyTheirPowerOfJ) {
     settings.backend = PinvBackend::kSvd;  // the Gram paths square the spectrum (power_pinv_test)
     const Vector delta = make_learning_update(id, settings)->step(state).delta;
     EXPECT_LT((delta - expected(kappa)).norm(), 1e-9 * expected(kappa).norm()) << id;
+    // The factored Gram path (J never formed) gives the same update within what squaring the
+    // spectrum costs: ε·(σ_max/σ_min,kept)², here well below 1e-6.
+    settings.backend = PinvBackend::kGram;
+    const Vector factored = make_learning_update(id, settings)->step(state).delta;
+    EXPECT_LT((factored - expected(kappa)).norm(), 1e-6 * expected(kappa).norm()) << id;
   }
   EXPECT_THROW(make_learning_update("lbfgs"), Error);
 }

@@ -1,5 +1,7 @@
 #include "physgrad/linalg/power_pinv.hpp"
 
+#include <functional>
+
 #include <cblas.h>
 #include <lapacke.h>
 
@@ -76,15 +78,10 @@ Vector svd_apply(const Matrix& j, const Vector& g, double kappa, PowerPinvInfo& 
   return vt.topRows(info.rank).transpose() * c;
 }
 
-// Eigen-decomposition W Σ² Wᵀ of J Jᵀ (gram = true; W = U) or Jᵀ J (W = V) by dsyrk and dsyevd,
-// then W Σ^{−1−κ} Wᵀ x over the kept σ, which are the trailing ones (dsyevd sorts ascending).
-Vector squared_apply(const Matrix& j, bool gram, const Vector& x, double kappa,
-                     PowerPinvInfo& info) {
-  const lapack_int n = lapack_dim(gram ? j.rows() : j.cols());
-  const lapack_int k = lapack_dim(gram ? j.cols() : j.rows());
-  Matrix w(n, n);
-  cblas_dsyrk(CblasColMajor, CblasLower, gram ? CblasNoTrans : CblasTrans, n, k, 1.0, j.data(),
-              lapack_dim(j.rows()), 0.0, w.data(), n);
+// W Σ^{−1−κ} Wᵀ x for the symmetric w = W Σ² Wᵀ (lower triangle used, overwritten by dsyevd)
+// over the kept σ, which are the trailing ones (dsyevd sorts ascending).
+Vector eigen_apply(Matrix& w, const Vector& x, double kappa, PowerPinvInfo& info) {
+  const lapack_int n = lapack_dim(w.rows());
   Vector lambda(n);
   check_lapack(LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', n, w.data(), n, lambda.data()),
                "dsyevd");
@@ -94,6 +91,24 @@ Vector squared_apply(const Matrix& j, bool gram, const Vector& x, double kappa,
   Vector c = w.rightCols(info.rank).transpose() * x;
   c.array() *= sigma.tail(info.rank).array().pow(-1 - kappa);
   return w.rightCols(info.rank) * c;
+}
+
+// J Jᵀ (gram = true) or Jᵀ J by dsyrk, lower triangle.
+Matrix squared(const Matrix& j, bool gram) {
+  const lapack_int n = lapack_dim(gram ? j.rows() : j.cols());
+  const lapack_int k = lapack_dim(gram ? j.cols() : j.rows());
+  Matrix w(n, n);
+  cblas_dsyrk(CblasColMajor, CblasLower, gram ? CblasNoTrans : CblasTrans, n, k, 1.0, j.data(),
+              lapack_dim(j.rows()), 0.0, w.data(), n);
+  return w;
+}
+
+void check_kappa(double kappa) {
+  if (!std::isfinite(kappa)) {
+    std::ostringstream msg;
+    msg << "power_pinv_apply: kappa must be finite, got " << kappa;
+    throw Error(msg.str());
+  }
 }
 
 }  // namespace
@@ -120,11 +135,7 @@ Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions
                         PowerPinvInfo* info) {
   check_operands(j, g, "power_pinv_apply");
   check_rcond(options.rcond);
-  if (!std::isfinite(options.kappa)) {
-    std::ostringstream msg;
-    msg << "power_pinv_apply: kappa must be finite, got " << options.kappa;
-    throw Error(msg.str());
-  }
+  check_kappa(options.kappa);
 
   PowerPinvInfo local;
   PowerPinvInfo& out = info != nullptr ? *info : local;
@@ -140,12 +151,30 @@ Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions
   if (j.size() == 0) return Vector::Zero(j.cols());
 
   if (out.backend == PinvBackend::kGram) {
-    return j.transpose() * squared_apply(j, true, g, options.kappa, out);
+    Matrix w = squared(j, true);
+    return j.transpose() * eigen_apply(w, g, options.kappa, out);
   }
   if (out.backend == PinvBackend::kNormal) {
-    return squared_apply(j, false, j.transpose() * g, options.kappa, out);
+    Matrix w = squared(j, false);
+    return eigen_apply(w, j.transpose() * g, options.kappa, out);
   }
   return svd_apply(j, g, options.kappa, out);
+}
+
+Vector power_pinv_apply_gram(Matrix gram, const Vector& g,
+                             const std::function<Vector(const Vector&)>& apply_transpose,
+                             const PowerPinvOptions& options, PowerPinvInfo* info) {
+  if (gram.rows() != gram.cols()) throw Error("power_pinv_apply_gram: the Gram matrix is not square");
+  check_operands(gram, g, "power_pinv_apply_gram");
+  check_rcond(options.rcond);
+  check_kappa(options.kappa);
+  PowerPinvInfo local;
+  PowerPinvInfo& out = info != nullptr ? *info : local;
+  out = {};
+  out.backend = PinvBackend::kGram;
+  out.rcond_used = std::max(options.rcond, kMinGramRcond);
+  if (gram.size() == 0) return apply_transpose(Vector::Zero(0));
+  return apply_transpose(eigen_apply(gram, g, options.kappa, out));
 }
 
 Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, double rcond) {

@@ -209,6 +209,14 @@ Vector Mlp::backward(const MlpCache& cache, const Matrix& gy, Matrix* gx) const 
   return grad;
 }
 
+std::vector<Matrix> Mlp::layer_deltas(const MlpCache& cache, const Matrix& gy) const {
+  check_cache(*this, cache, gy);
+  std::vector<Matrix> deltas(static_cast<std::size_t>(num_layers()));
+  backpropagate(*this, cache, gy,
+                [&](Index l, const Matrix& delta) { deltas[static_cast<std::size_t>(l)] = delta; });
+  return deltas;
+}
+
 Matrix Mlp::per_sample_gradients(const MlpCache& cache, const Matrix& gy) const {
   Matrix out(gy.cols(), num_parameters());
   per_sample_gradients(cache, gy, out);

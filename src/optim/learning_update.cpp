@@ -1,6 +1,7 @@
 #include "physgrad/optim/learning_update.hpp"
 
 #include <chrono>
+#include <cmath>
 
 #include "physgrad/error.hpp"
 #include "physgrad/optim/optimizer.hpp"
@@ -30,11 +31,29 @@ nlohmann::json JacobianInverseUpdate::params() const {
 }
 
 UpdateStep JacobianInverseUpdate::step(const BatchState& batch) {
-  const auto start = std::chrono::steady_clock::now();
-  Vector direction = power_pinv_apply(batch.jacobian, batch.loss_gradient_y, pinv_, &info_);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return {-lr_ * direction, seconds};
+  if (batch.jacobian == nullptr) throw Error(id_ + ": the batch has no stacked Jacobian");
+  using Clock = std::chrono::steady_clock;
+  const StackedJacobian& j = *batch.jacobian;
+  const bool factored = pinv_.backend == PinvBackend::kGram ||
+                        (pinv_.backend == PinvBackend::kAuto && j.rows() <= j.cols() &&
+                         pinv_.rcond >= kMinGramRcond);
+  UpdateStep step;
+  const auto start = Clock::now();
+  Matrix formed = factored ? j.gram() : j.materialize();
+  const auto formed_at = Clock::now();
+  step.jacobian_seconds = std::chrono::duration<double>(formed_at - start).count();
+  if (!all_finite(formed)) {
+    step.delta = Vector::Constant(j.cols(), NAN);
+    return step;
+  }
+  const Vector direction =
+      factored ? power_pinv_apply_gram(std::move(formed), batch.loss_gradient_y,
+                                       [&j](const Vector& c) { return j.apply_transpose(c); },
+                                       pinv_, &info_)
+               : power_pinv_apply(formed, batch.loss_gradient_y, pinv_, &info_);
+  step.inversion_seconds = std::chrono::duration<double>(Clock::now() - formed_at).count();
+  step.delta = -lr_ * direction;
+  return step;
 }
 
 SipUpdate::SipUpdate(SipOptions options) : options_(options), adam_(options.adam) {

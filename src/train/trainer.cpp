@@ -94,18 +94,7 @@ BatchState evaluate_batch(const Mlp& network, const LearningProblem& problem,
     state.context = batch.context;
     state.backprop = [&network, &cache](const Matrix& gx) { return network.backward(cache, gx); };
   } else {
-    // Row k·B + i of J is ∂y_ik/∂θ (output-major: each output's B rows are one contiguous
-    // block, which per_sample_gradients() fills directly).
-    const Index m = physics.output_dim(), count = batch.size();
-    Matrix& j = state.jacobian;
-    j.resize(count * m, network.num_parameters());
-    Matrix unit(m, count);
-    for (Index k = 0; k < m; ++k) {
-      unit.setZero();
-      unit.row(k).setOnes();
-      network.per_sample_gradients(cache, physics.vjp_batch(x, batch.context, unit),
-                                   j.middleRows(k * count, count));
-    }
+    state.jacobian = std::make_shared<const StackedJacobian>(network, cache, physics, x, batch.context);
     state.loss_gradient_y = gradient_y.transpose().reshaped();  // entry k·B + i
   }
   lap(&BatchTiming::derivatives, timing);
@@ -190,15 +179,16 @@ TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProble
           evaluate_batch(network, problem, train_set.select(indices), update.need(), cache, &timing);
       summary.forward_seconds += timing.forward;
       summary.derivative_seconds += timing.derivatives;
-      const char* failure = !std::isfinite(batch.loss) ? "loss"
-                            : !all_finite(batch.gradient) || !all_finite(batch.jacobian)
-                                ? "derivative"
-                                : nullptr;
+      const char* failure = !std::isfinite(batch.loss)                 ? "loss"
+                            : !all_finite(batch.gradient)                ? "gradient"
+                            : !all_finite(batch.loss_gradient_y)         ? "loss gradient"
+                                                                         : nullptr;
       const auto update_start = Clock::now();
       UpdateStep step;
       if (failure == nullptr) {
         step = update.step(batch);
         summary.inversion_seconds += step.inversion_seconds;
+        summary.derivative_seconds += step.jacobian_seconds;
         if (!all_finite(step.delta)) failure = "update";
       }
       if (failure != nullptr) {
@@ -209,7 +199,8 @@ TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProble
         break;
       }
       network.parameters() += step.delta;
-      summary.update_seconds += seconds_since(update_start) - step.inversion_seconds;
+      summary.update_seconds +=
+          seconds_since(update_start) - step.inversion_seconds - step.jacobian_seconds;
       summary.train_seconds += seconds_since(step_start);
       ++summary.iterations;
       if (options.eval_every && summary.iterations % *options.eval_every == 0) evaluate();

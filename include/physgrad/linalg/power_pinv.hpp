@@ -2,6 +2,7 @@
 // singular values σᵢ > rcond·σ_max of J = U Σ Vᵀ; the others contribute nothing (κ = 1: J⁺ g).
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include "physgrad/types.hpp"
@@ -46,6 +47,13 @@ struct PowerPinvInfo {
 // Throws Error on mismatched sizes, non-finite entries, rcond outside [0, 1) or non-finite κ.
 Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions& options = {},
                         PowerPinvInfo* info = nullptr);
+
+// J^{−κ} g from the Gram matrix G = J Jᵀ (lower triangle read) and a routine c ↦ Jᵀ c, for
+// callers that form G without forming J (e.g. a network's factored per-sample Jacobian): the
+// kGram path with its cutoff floor, result Jᵀ U Σ^{−1−κ} Uᵀ g. Throws like power_pinv_apply.
+Vector power_pinv_apply_gram(Matrix gram, const Vector& g,
+                             const std::function<Vector(const Vector&)>& apply_transpose,
+                             const PowerPinvOptions& options = {}, PowerPinvInfo* info = nullptr);
 
 // Truncated pseudo-inverse of a symmetric positive semi-definite matrix applied to g:
 // A⁺ g over the eigenvalues λᵢ > rcond·λ_max (the normal-equation solve of Gauss-Newton).

@@ -65,6 +65,11 @@ class Mlp {
   // output_dim × B. If gx is given it receives the input cotangents (input_dim × B).
   Vector backward(const MlpCache& cache, const Matrix& gy, Matrix* gx = nullptr) const;
 
+  // δ_l = ∂(Σ_b gy_bᵀ f(x_b))/∂z_l for every layer l (width[l+1] × B), from one batched backward
+  // sweep. With the cached inputs a_{l−1} they factor each per-sample gradient: ∂/∂W_l is
+  // δ_l[:, b] a_{l−1}[:, b]ᵀ and ∂/∂b_l is δ_l[:, b].
+  std::vector<Matrix> layer_deltas(const MlpCache& cache, const Matrix& gy) const;
+
   // B × num_parameters(): row b is ∇θ (gy_bᵀ f(x_b)) for sample b alone, from one batched
   // backward sweep (per-sample outer products δ_l[:, b] a_{l−1}[:, b]ᵀ).
   Matrix per_sample_gradients(const MlpCache& cache, const Matrix& gy) const;

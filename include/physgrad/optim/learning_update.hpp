@@ -13,6 +13,7 @@
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/optim/adam.hpp"
 #include "physgrad/optim/local_inverse.hpp"
+#include "physgrad/optim/stacked_jacobian.hpp"
 
 namespace physgrad {
 
@@ -31,7 +32,7 @@ struct BatchState {
   Index batch_size = 0;
   double loss = 0;          // mean per-sample loss over the batch
   Vector gradient;          // ∇θ (mean loss)                          [kGradient]
-  Matrix jacobian;          // B·m × |θ|, row k·B + i = ∂y_ik/∂θ      [kStackedJacobian]
+  std::shared_ptr<const StackedJacobian> jacobian;  // B·m × |θ|, row k·B + i [kStackedJacobian]
   Vector loss_gradient_y;   // B·m, entry k·B + i = ∂(mean L)/∂y_ik    [kStackedJacobian]
   // [kNetworkOutputs]
   const Simulator* physics = nullptr;
@@ -43,6 +44,7 @@ struct BatchState {
 struct UpdateStep {
   Vector delta;                   // Δθ
   double inversion_seconds = 0;   // time spent in the (pseudo-)inversion, if any
+  double jacobian_seconds = 0;    // time spent forming J or J Jᵀ, if any
 };
 
 class LearningUpdate {
@@ -83,7 +85,10 @@ class AdamUpdate final : public LearningUpdate {
 };
 
 // Δθ = −η J^{−κ} ∂(mean L)/∂y with the truncated power-pseudo-inverse of the stacked Jacobian:
-// κ = 1 is Gauss-Newton ("gn"), κ = ½ the half-inverse gradient ("hig").
+// κ = 1 is Gauss-Newton ("gn"), κ = ½ the half-inverse gradient ("hig"). On the Gram path
+// (kAuto with B·m ≤ |θ| and rcond ≥ kMinGramRcond, or kGram) J Jᵀ is built from the network's
+// layer factors and J is never formed; otherwise J is formed and passed to power_pinv_apply.
+// A non-finite J or J Jᵀ gives a non-finite Δθ, which the trainer rejects.
 class JacobianInverseUpdate final : public LearningUpdate {
  public:
   JacobianInverseUpdate(std::string id, double lr, PowerPinvOptions pinv);

@@ -71,9 +71,10 @@ struct BatchTiming {
 };
 
 // Computes for one mini-batch exactly what `need` asks for: the mean loss and ∇θ by one
-// backward pass through physics and network, or the stacked Jacobian J (row k·B + i =
-// ∂y_ik/∂θ) by one batched VJP per physics output k and one batched per-sample backward sweep
-// each, with ∂(mean L)/∂y in the same order. `cache` is reused between calls.
+// backward pass through physics and network; or the stacked Jacobian (row k·B + i =
+// ∂y_ik/∂θ) as a StackedJacobian after one batched VJP per physics output k, with
+// ∂(mean L)/∂y in the same order (the update forms J or J Jᵀ as it needs); or the network
+// outputs and a backprop. `cache` is reused between calls and must outlive the returned state.
 BatchState evaluate_batch(const Mlp& network, const LearningProblem& problem,
                           const Dataset& batch, UpdateNeed need, MlpCache& cache,
                           BatchTiming* timing = nullptr);
