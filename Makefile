@@ -9,7 +9,7 @@ DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapack
 
 SANITIZE_DIR ?= build-sanitize
 
-.PHONY: all deps build demo test test-sanitize clean
+.PHONY: all deps build demo test test-sanitize bench clean
 
 all: build
 
@@ -33,6 +33,10 @@ demo: build
 
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+
+# Micro-benchmarks of the learning step; results also in bench/results.json.
+bench: build
+	$(BUILD_DIR)/bench/physgrad_bench --benchmark_out=bench/results.json --benchmark_out_format=json
 
 # The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (any report fails it).
 test-sanitize: deps

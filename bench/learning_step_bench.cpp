@@ -1,0 +1,144 @@
+// Micro-benchmarks of the learning step: stacked-Jacobian assembly (formed J vs the factored
+// Gram matrix), the power-pseudo-inverse backends, the reference eigendecomposition, and whole
+// steps of HIG / Gauss-Newton / Adam on the reference configurations.
+#include <benchmark/benchmark.h>
+
+#include <lapacke.h>
+
+#include "physgrad/linalg/power_pinv.hpp"
+#include "physgrad/loss/loss.hpp"
+#include "physgrad/physics/coupled_oscillators.hpp"
+#include "physgrad/physics/diagonal_scale.hpp"
+#include "physgrad/physics/poisson.hpp"
+#include "physgrad/threads.hpp"
+#include "physgrad/train/trainer.hpp"
+
+namespace {
+
+using namespace physgrad;
+
+// One reference configuration: network, physics, loss and one batch.
+struct Case {
+  std::unique_ptr<Simulator> physics;
+  L2Loss loss{2.0};
+  Mlp network;
+  Dataset batch;
+
+  Case(std::unique_ptr<Simulator> p, std::vector<Index> widths, Activation activation, Index b,
+       bool context)
+      : physics(std::move(p)), network(std::move(widths), activation) {
+    network.initialize(1);
+    const Index n_in = network.input_dim();
+    batch.inputs = Matrix::Random(n_in, b).cwiseAbs();
+    batch.targets = Matrix::Random(physics->output_dim(), b);
+    if (context) batch.context = batch.inputs;
+  }
+  LearningProblem problem() const { return {physics.get(), &loss}; }
+};
+
+// 0: hig-toy (B 128), 1: oscillators paper (B 128), 2: poisson 8×8 (B 16).
+Case make_case(int which) {
+  switch (which) {
+    case 0:
+      return Case(std::make_unique<DiagonalScale>(Vector{{1.0, 0.01}}), {1, 7, 2},
+                  Activation::kTanh, 128, false);
+    case 1:
+      return Case(std::make_unique<CoupledOscillators>(OscillatorConfig::paper()),
+                  {4, 20, 20, 20, 96}, Activation::kRelu, 128, true);
+    default:
+      return Case(std::make_unique<Poisson>(8), {64, 64, 128, 64, 64}, Activation::kTanh, 16,
+                  false);
+  }
+}
+
+const char* case_name(int which) {
+  return which == 0 ? "hig_toy" : which == 1 ? "oscillators" : "poisson";
+}
+
+void jacobian_formed(benchmark::State& state) {
+  Case c = make_case(static_cast<int>(state.range(0)));
+  MlpCache cache;
+  const BatchState batch = evaluate_batch(c.network, c.problem(), c.batch,
+                                          UpdateNeed::kStackedJacobian, cache);
+  for (auto _ : state) {
+    const Matrix j = batch.jacobian->materialize();
+    Matrix gram(j.rows(), j.rows());
+    gram.setZero();
+    gram.selfadjointView<Eigen::Lower>().rankUpdate(j);
+    benchmark::DoNotOptimize(gram.data());
+  }
+  state.SetLabel(std::string(case_name(static_cast<int>(state.range(0)))) + " J J^T formed");
+}
+
+void jacobian_factored(benchmark::State& state) {
+  Case c = make_case(static_cast<int>(state.range(0)));
+  MlpCache cache;
+  const BatchState batch = evaluate_batch(c.network, c.problem(), c.batch,
+                                          UpdateNeed::kStackedJacobian, cache);
+  for (auto _ : state) {
+    const Matrix gram = batch.jacobian->gram();
+    benchmark::DoNotOptimize(gram.data());
+  }
+  state.SetLabel(std::string(case_name(static_cast<int>(state.range(0)))) + " J J^T factored");
+}
+
+// The symmetric eigendecomposition of a B·m × B·m matrix alone: the step's irreducible part.
+void reference_eigendecomposition(benchmark::State& state) {
+  const auto n = static_cast<Index>(state.range(0));
+  const Matrix a = Matrix::Random(n, n);
+  const Matrix sym = a * a.transpose();
+  Vector lambda(n);
+  for (auto _ : state) {
+    Matrix w = sym;
+    LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', static_cast<lapack_int>(n), w.data(),
+                   static_cast<lapack_int>(n), lambda.data());
+    benchmark::DoNotOptimize(w.data());
+  }
+}
+
+void power_pinv_backend(benchmark::State& state) {
+  const auto rows = static_cast<Index>(state.range(0)), cols = static_cast<Index>(state.range(1));
+  const auto backend = static_cast<PinvBackend>(state.range(2));
+  const Matrix j = Matrix::Random(rows, cols);
+  const Vector g = Vector::Random(rows);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(power_pinv_apply(j, g, {0.5, 1e-6, backend}).data());
+  }
+  state.SetLabel(to_string(backend));
+}
+
+void learning_step(benchmark::State& state) {
+  Case c = make_case(static_cast<int>(state.range(0)));
+  const std::string id = state.range(1) == 0 ? "adam" : state.range(1) == 1 ? "gn" : "hig";
+  const auto update = make_learning_update(id);
+  MlpCache cache;
+  for (auto _ : state) {
+    const BatchState batch = evaluate_batch(c.network, c.problem(), c.batch, update->need(), cache);
+    const UpdateStep step = update->step(batch);
+    benchmark::DoNotOptimize(step.delta.data());
+  }
+  state.SetLabel(std::string(case_name(static_cast<int>(state.range(0)))) + " " + id);
+}
+
+}  // namespace
+
+BENCHMARK(jacobian_formed)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+BENCHMARK(jacobian_factored)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+BENCHMARK(reference_eigendecomposition)->Arg(256)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond);
+BENCHMARK(power_pinv_backend)
+    ->Args({512, 2956, static_cast<int>(PinvBackend::kSvd)})
+    ->Args({512, 2956, static_cast<int>(PinvBackend::kGram)})
+    ->Args({1024, 24896, static_cast<int>(PinvBackend::kGram)})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(learning_step)
+    ->ArgsProduct({{0, 1, 2}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond);
+
+int main(int argc, char** argv) {
+  physgrad::set_blas_threads(1);
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
