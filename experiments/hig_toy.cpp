@@ -65,10 +65,7 @@ class HigToy final : public Experiment {
         integer_option("test-size", "256", "test samples (also the activation statistics)")
             .at_least(1),
     };
-    for (OptionSpec& spec : learning_options()) {
-      if (spec.name == "eval-every") spec.default_text = "200";
-      options.push_back(std::move(spec));
-    }
+    for (OptionSpec& spec : learning_options("", "200")) options.push_back(std::move(spec));
     return options;
   }
   std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "direct_runs.hpp"
+#include "physgrad/error.hpp"
 #include "physgrad/report/svg_plot.hpp"
 
 namespace physgrad::experiments {
@@ -26,7 +27,14 @@ std::string milliseconds(double seconds, long long steps) {
 
 }  // namespace
 
-std::vector<OptionSpec> learning_options() {
+void require_training_limit(const Settings& settings, const std::string& experiment) {
+  if (!settings.has("iters") && !settings.has("epochs") && !settings.has("time")) {
+    throw Error(experiment + ": give at least one of --iters, --epochs, --time");
+  }
+}
+
+std::vector<OptionSpec> learning_options(const std::string& default_time,
+                                         const std::string& default_eval_every) {
   return {
       integer_option("batch", "", "mini-batch size for every rule (default: each rule's own)")
           .at_least(1),
@@ -34,9 +42,11 @@ std::vector<OptionSpec> learning_options() {
           .at_least(0)
           .at_most(0.5),
       integer_option("epochs", "", "epochs per run").at_least(1),
-      real_option("time", "", "training-time budget per run in seconds (evaluations excluded)")
+      real_option("time", default_time,
+                  "training-time budget per run in seconds (evaluations excluded)")
           .above(0),
-      integer_option("eval-every", "", "evaluate every N iterations (default: every epoch)")
+      integer_option("eval-every", default_eval_every,
+                     "evaluate every N iterations (default: every epoch)")
           .at_least(1),
   };
 }

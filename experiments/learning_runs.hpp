@@ -31,9 +31,13 @@ struct RuleDefaults {
   double y_step = 1.0;  // η of sip
 };
 
-// The options every learning experiment has, after the common ones: batch, rcond, time,
-// eval-every (all optional, so each rule keeps its own defaults unless one is given).
-std::vector<OptionSpec> learning_options();
+// The options every learning experiment has, after the common ones: batch, rcond, epochs, time,
+// eval-every (optional, so each rule keeps its own defaults unless one is given; an experiment
+// may give time and eval-every defaults).
+std::vector<OptionSpec> learning_options(const std::string& default_time = "",
+                                         const std::string& default_eval_every = "");
+// Throws Error unless --iters, --epochs or --time limits the training.
+void require_training_limit(const Settings& settings, const std::string& experiment);
 
 // Reads the common and learning options; trains, records and tabulates the runs.
 class LearningSweep {

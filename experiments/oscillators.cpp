@@ -64,10 +64,7 @@ class Oscillators final : public Experiment {
         integer_option("train-size", "4096", "training states").at_least(1),
         integer_option("test-size", "4096", "test states").at_least(1),
     };
-    for (OptionSpec& spec : learning_options()) {
-      if (spec.name == "time") spec.default_text = "20";
-      options.push_back(std::move(spec));
-    }
+    for (OptionSpec& spec : learning_options("20")) options.push_back(std::move(spec));
     return options;
   }
   std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }
@@ -76,9 +73,7 @@ class Oscillators final : public Experiment {
   long long default_iterations() const override { return 0; }
 
   void validate(const Settings& settings) const override {
-    if (!settings.has("iters") && !settings.has("epochs") && !settings.has("time")) {
-      throw Error("oscillators: give at least one of --iters, --epochs, --time");
-    }
+    require_training_limit(settings, "oscillators");
   }
 
   void run(const Settings& settings, RunContext& context) const override {

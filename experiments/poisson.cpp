@@ -51,10 +51,7 @@ class PoissonExperiment final : public Experiment {
         integer_option("train-size", "2048", "training samples").at_least(1),
         integer_option("test-size", "256", "test samples").at_least(1),
     };
-    for (OptionSpec& spec : learning_options()) {
-      if (spec.name == "time") spec.default_text = "30";
-      options.push_back(std::move(spec));
-    }
+    for (OptionSpec& spec : learning_options("30")) options.push_back(std::move(spec));
     return options;
   }
   std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }
@@ -62,9 +59,7 @@ class PoissonExperiment final : public Experiment {
   long long default_iterations() const override { return 0; }
 
   void validate(const Settings& settings) const override {
-    if (!settings.has("iters") && !settings.has("epochs") && !settings.has("time")) {
-      throw Error("poisson: give at least one of --iters, --epochs, --time");
-    }
+    require_training_limit(settings, "poisson");
   }
 
   void run(const Settings& settings, RunContext& context) const override {

@@ -40,10 +40,7 @@ class QuantumDipoleExperiment final : public Experiment {
         integer_option("test-size", "1024", "test targets").at_least(1),
         integer_option("steps", "384", "Crank-Nicolson steps Nt (dt = 0.05)").at_least(1),
     };
-    for (OptionSpec& spec : learning_options()) {
-      if (spec.name == "time") spec.default_text = "30";
-      options.push_back(std::move(spec));
-    }
+    for (OptionSpec& spec : learning_options("30")) options.push_back(std::move(spec));
     return options;
   }
   std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }
@@ -51,9 +48,7 @@ class QuantumDipoleExperiment final : public Experiment {
   long long default_iterations() const override { return 0; }
 
   void validate(const Settings& settings) const override {
-    if (!settings.has("iters") && !settings.has("epochs") && !settings.has("time")) {
-      throw Error("quantum-dipole: give at least one of --iters, --epochs, --time");
-    }
+    require_training_limit(settings, "quantum-dipole");
     for (const std::string& id : settings.texts("optimizers")) {
       if (id == "sip") throw Error("quantum-dipole: --optimizers sip needs an inverse simulator; "
                                    "this one has none");

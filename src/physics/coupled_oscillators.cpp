@@ -26,17 +26,6 @@ CoupledOscillators::CoupledOscillators(OscillatorConfig config) : config_(config
   throw Error(msg.str());
 }
 
-void CoupledOscillators::check_inputs(const Matrix& x, const Matrix& context,
-                                      const char* where) const {
-  check_batch(x, context, where);
-  if (context.size() == 0) {
-    std::ostringstream msg;
-    msg << name() << "." << where << ": the initial state (context, " << context_dim()
-        << " rows) is required";
-    throw Error(msg.str());
-  }
-}
-
 void CoupledOscillators::rhs(const Array& z, const Matrix& x, Index n, Array& k) const {
   const Index N = config_.oscillators;
   k.topRows(N) = z.bottomRows(N);
@@ -96,13 +85,13 @@ CoupledOscillators::Array CoupledOscillators::integrate(const Matrix& x, const M
 }
 
 Matrix CoupledOscillators::forward_batch(const Matrix& x, const Matrix& context) const {
-  check_inputs(x, context, "forward");
+  check_batch(x, context, "forward", true);
   return integrate(x, context, nullptr).matrix();
 }
 
 Matrix CoupledOscillators::vjp_batch(const Matrix& x, const Matrix& context,
                                      const Matrix& gy) const {
-  check_inputs(x, context, "vjp");
+  check_batch(x, context, "vjp", true);
   const Index N = config_.oscillators, B = x.cols(), last = 2 * N - 1;
   if (gy.rows() != output_dim() || gy.cols() != B) {
     std::ostringstream msg;

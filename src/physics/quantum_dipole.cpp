@@ -56,17 +56,6 @@ QuantumDipole::QuantumDipole(QuantumDipoleConfig config) : config_(config) {
   throw Error(msg.str());
 }
 
-void QuantumDipole::check_inputs(const Matrix& x, const Matrix& context,
-                                 const char* where) const {
-  check_batch(x, context, where);
-  if (context.size() == 0) {
-    std::ostringstream msg;
-    msg << name() << "." << where << ": the initial state (context, " << context_dim()
-        << " rows) is required";
-    throw Error(msg.str());
-  }
-}
-
 void QuantumDipole::step_diagonal(const Matrix& x, Index n, CArray& diag) const {
   // A_jj = 1 + i dt/2 (2/dx² + u x_j) with x_j = j·dx.
   const double dt = config_.dt;
@@ -98,7 +87,7 @@ QuantumDipole::CArray QuantumDipole::integrate(const Matrix& x, const Matrix& co
 }
 
 Matrix QuantumDipole::forward_batch(const Matrix& x, const Matrix& context) const {
-  check_inputs(x, context, "forward");
+  check_batch(x, context, "forward", true);
   const CArray psi = integrate(x, context, nullptr);
   Matrix y(output_dim(), x.cols());
   y.topRows(interior()) = psi.real().matrix();
@@ -107,7 +96,7 @@ Matrix QuantumDipole::forward_batch(const Matrix& x, const Matrix& context) cons
 }
 
 Matrix QuantumDipole::vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const {
-  check_inputs(x, context, "vjp");
+  check_batch(x, context, "vjp", true);
   const Index M = interior(), B = x.cols();
   if (gy.rows() != output_dim() || gy.cols() != B) {
     std::ostringstream msg;

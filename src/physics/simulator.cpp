@@ -8,11 +8,18 @@
 
 namespace physgrad {
 
-void Simulator::check_batch(const Matrix& x, const Matrix& context, const char* where) const {
+void Simulator::check_batch(const Matrix& x, const Matrix& context, const char* where,
+                            bool context_required) const {
   if (x.rows() != input_dim()) {
     std::ostringstream msg;
     msg << name() << "." << where << ": x has " << x.rows() << " rows, expected input_dim "
         << input_dim();
+    throw Error(msg.str());
+  }
+  if (context_required && context.size() == 0) {
+    std::ostringstream msg;
+    msg << name() << "." << where << ": the context (" << context_dim()
+        << " rows, one column per sample) is required";
     throw Error(msg.str());
   }
   const bool context_ok = context.size() == 0 ||

@@ -41,7 +41,6 @@ class CoupledOscillators final : public Simulator {
 
  private:
   using Array = Eigen::ArrayXXd;
-  void check_inputs(const Matrix& x, const Matrix& context, const char* where) const;
   // s(T) for every column; stores the positions of the four RK4 stage states of step n in
   // columns [4n·B, (4n + 4)·B) of `stage_positions` (N × 4·Nt·B) when it is given.
   Array integrate(const Matrix& x, const Matrix& context, Array* stage_positions) const;

@@ -39,7 +39,6 @@ class QuantumDipole final : public Simulator {
 
  private:
   using CArray = Eigen::ArrayXXcd;
-  void check_inputs(const Matrix& x, const Matrix& context, const char* where) const;
   // Diagonal of A = I + i dt/2 H(u_n) for every column (M×B).
   void step_diagonal(const Matrix& x, Index n, CArray& diag) const;
   // ψ(T); keeps ψⁿ in columns [n·B, (n + 1)·B) of `trajectory` (M × (Nt + 1)·B) when given.

@@ -40,8 +40,10 @@ class Simulator {
   Vector vjp(const Vector& x, const Vector& context, const Vector& gy) const;
 
  protected:
-  // Throws Error unless x has input_dim() rows and context fits (empty or context_dim() rows).
-  void check_batch(const Matrix& x, const Matrix& context, const char* where) const;
+  // Throws Error unless x has input_dim() rows and the context fits: context_dim() rows and one
+  // column per sample, or empty unless `context_required`.
+  void check_batch(const Matrix& x, const Matrix& context, const char* where,
+                   bool context_required = false) const;
 };
 
 }  // namespace physgrad
