@@ -1,0 +1,40 @@
+# The installed package from an outside project: installs BUILD_DIR into a fresh prefix under
+# WORK_DIR, then configures, builds and runs PROJECT_DIR against it. Any failing step fails.
+# Set by the test: BUILD_DIR, PROJECT_DIR, WORK_DIR, CXX_COMPILER, CXX_FLAGS (may be empty).
+cmake_minimum_required(VERSION 3.25)
+file(REMOVE_RECURSE "${WORK_DIR}")
+set(prefix "${WORK_DIR}/prefix")
+
+# Runs the command after `what`; on success its output is in step_output.
+function(run_step what)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE status OUTPUT_VARIABLE output
+                  ERROR_VARIABLE output)
+  if(NOT status EQUAL 0)
+    message(FATAL_ERROR "${what} failed (${status}):\n${output}")
+  endif()
+  set(step_output "${output}" PARENT_SCOPE)
+endfunction()
+
+run_step("install" "${CMAKE_COMMAND}" --install "${BUILD_DIR}" --prefix "${prefix}")
+if(NOT EXISTS "${prefix}/include/physgrad/physics/simulator.hpp")
+  message(FATAL_ERROR "install: the headers are missing from ${prefix}/include")
+endif()
+foreach(file libphysgrad.a physgradConfig.cmake physgradConfigVersion.cmake physgradTargets.cmake)
+  file(GLOB_RECURSE found "${prefix}/*/${file}")
+  if(NOT found)
+    message(FATAL_ERROR "install: ${file} is missing from ${prefix}")
+  endif()
+endforeach()
+
+run_step("configure" "${CMAKE_COMMAND}" -S "${PROJECT_DIR}" -B "${WORK_DIR}/build"
+         "-DCMAKE_PREFIX_PATH=${prefix}" "-DCMAKE_CXX_COMPILER=${CXX_COMPILER}"
+         "-DCMAKE_CXX_FLAGS=${CXX_FLAGS}" -DCMAKE_BUILD_TYPE=Release)
+if(NOT step_output MATCHES "physgrad 0\\.1\\.0 from ${prefix}/")
+  message(FATAL_ERROR "configure: physgrad was not found in ${prefix}:\n${step_output}")
+endif()
+run_step("build" "${CMAKE_COMMAND}" --build "${WORK_DIR}/build")
+run_step("run" "${WORK_DIR}/build/physgrad_outside")
+message("${step_output}")
+if(NOT step_output MATCHES "pg converged in 26 iterations")
+  message(FATAL_ERROR "run: unexpected output")
+endif()
