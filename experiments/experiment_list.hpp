@@ -11,6 +11,8 @@ std::unique_ptr<Experiment> make_scaled_toy();
 std::unique_ptr<Experiment> make_sensitivity();
 std::unique_ptr<Experiment> make_comparison();
 std::unique_ptr<Experiment> make_hig_toy();
+std::unique_ptr<Experiment> make_sin_rotation();
+std::unique_ptr<Experiment> make_heat_inverse();
 std::unique_ptr<Experiment> make_oscillators();
 std::unique_ptr<Experiment> make_quantum_dipole();
 std::unique_ptr<Experiment> make_poisson();

@@ -16,6 +16,7 @@ std::string rule_label(const std::string& id) {
   if (id == "adam") return "Adam";
   if (id == "gn") return "Gauss-Newton";
   if (id == "hig") return "HIG";
+  if (id == "sip") return "SIP";
   return id;
 }
 

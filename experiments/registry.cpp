@@ -9,6 +9,8 @@ const std::vector<std::unique_ptr<Experiment>>& registry() {
     list.push_back(make_sensitivity());
     list.push_back(make_comparison());
     list.push_back(make_hig_toy());
+    list.push_back(make_sin_rotation());
+    list.push_back(make_heat_inverse());
     list.push_back(make_oscillators());
     list.push_back(make_quantum_dipole());
     list.push_back(make_poisson());

@@ -1,0 +1,279 @@
+// sin-rotation: the sine characterisation of the SIP paper (experiments.md E5). A 2-32-64-32-2
+// ReLU network maps targets y* to x through the rotated, ill-conditioned sine map
+// P = SinRotation(ξ, φ) with L = ½‖P(x) − y*‖². SIP (Adam on the proxy loss towards the exact
+// local inverse) keeps its accuracy as ξ grows; Adam and SGD on L lose it.
+#include <algorithm>
+#include <cmath>
+
+#include "experiment_list.hpp"
+#include "learning_runs.hpp"
+#include "physgrad/loss/loss.hpp"
+#include "physgrad/physics/sin_rotation.hpp"
+#include "physgrad/report/svg_plot.hpp"
+#include "sampling.hpp"
+
+namespace physgrad::experiments {
+namespace {
+
+// The landscape figure's target and view, as in the SIP paper's figure (E5).
+const Vector kTrackedTarget{{0.3, -0.5}};
+constexpr double kViewX = 1.2, kViewY = 0.6;
+
+SinRotation make_physics(double xi, double phi, const std::string& form) {
+  SinRotationConfig config;
+  config.xi = xi;
+  config.phi_degrees = phi;
+  config.form = form == "code" ? SinRotationConfig::Form::kCode : SinRotationConfig::Form::kBook;
+  return SinRotation(config);
+}
+
+// y* = (a·u₁, u₂) with u ~ U(−1, 1)² and a the largest |P₁|: 1 in the code form (the SIP
+// repository's U(−1, 1)²), 1/ξ in the book form, where P₁ = sin(x̂₁)/ξ cannot exceed 1/ξ.
+// Every target is reachable.
+Dataset make_data(Index n, double xi, const std::string& form, std::uint64_t seed) {
+  Sampler sampler(seed);
+  const double reach = form == "code" ? 1.0 : 1.0 / xi;
+  Dataset data{Matrix(2, n), Matrix(2, n), Matrix()};
+  for (Index i = 0; i < n; ++i) {
+    data.inputs(0, i) = reach * sampler.uniform(-1.0, 1.0);
+    data.inputs(1, i) = sampler.uniform(-1.0, 1.0);
+  }
+  data.targets = data.inputs;
+  return data;
+}
+
+// Mean over the samples of |x − x_closest|, x_closest the exact preimage of y* nearest x.
+double x_distance(const SinRotation& physics, const Matrix& x, const Matrix& targets) {
+  double sum = 0;
+  for (Index i = 0; i < x.cols(); ++i) {
+    const Vector xi = x.col(i);
+    sum += (xi - physics.closest_preimage(targets.col(i), xi)).norm();
+  }
+  return sum / static_cast<double>(x.cols());
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+class SinRotationExperiment final : public Experiment {
+ public:
+  std::string name() const override { return "sin-rotation"; }
+  std::string description() const override {
+    return "2-32-64-32-2 ReLU net inverts the rotated sine map P(x) = SinRotation(xi, phi): "
+           "SIP vs Adam vs SGD, x-distance to the nearest exact solution";
+  }
+  std::vector<OptionSpec> options() const override {
+    std::vector<OptionSpec> options = {
+        real_list_option("xi", "1,32", "conditioning ξ (Jacobian singular values differ by ξ²)")
+            .above(0),
+        real_option("phi", "15", "coupling angle φ in degrees"),
+        text_option("form", "book",
+                    "book: P = (sin(x̂₁)/ξ, ξx̂₂), x̂ = R_φx; code: the SIP "
+                    "repository's x̂ = diag(10/ξ, 10ξ)R_φx, P = (sin x̂₁, x̂₂)")
+            .one_of({"book", "code"}),
+        integer_option("seeds", "1", "number of seeds per configuration (seed, seed+1, …)")
+            .at_least(1)
+            .at_most(1000),
+        integer_option("train-size", "10000", "training samples").at_least(1),
+        integer_option("test-size", "1000", "test samples (also the x-distance)").at_least(1),
+    };
+    for (OptionSpec& spec : learning_options()) {
+      if (spec.name == "time") {
+        spec.default_text = "8";
+        spec.help += "; applies together with --iters and --epochs";
+      }
+      if (spec.name == "eval-every") spec.default_text = "1000";
+      options.push_back(std::move(spec));
+    }
+    return options;
+  }
+  std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }
+  std::vector<std::string> default_optimizers() const override { return {"sip", "adam", "sgd"}; }
+  long long default_iterations() const override { return 0; }
+
+  void run(const Settings& settings, RunContext& context) const override {
+    const double phi = settings.real("phi");
+    const std::string form = settings.text("form");
+    struct Row {
+      double xi;
+      std::string id;
+      double lr, loss, distance, seconds;
+      long long iterations;
+    };
+    std::vector<Row> rows;
+    const std::vector<double> xis = settings.reals("xi");
+    for (const double xi : xis) {
+      const SinRotation physics = make_physics(xi, phi, form);
+      const L2Loss loss(1.0);
+      const LearningProblem problem{&physics, &loss};
+      const std::string tag = "ξ=" + format_value(xi);
+      const std::map<std::string, RuleDefaults> defaults = rule_defaults(xi, form);
+      LearningSweep sweep(settings, context, defaults);
+      for (long long s = 0; s < settings.integer("seeds"); ++s) {
+        const auto seed = static_cast<std::uint64_t>(settings.integer("seed") + s);
+        const Dataset train_set = make_data(settings.integer("train-size"), xi, form, 2 * seed);
+        const Dataset test_set = make_data(settings.integer("test-size"), xi, form, 2 * seed + 1);
+        const auto observe = [&](const Mlp& network, TrainingRecord& record) {
+          record.extras["x_distance"] =
+              x_distance(physics, network.forward(test_set.inputs), test_set.targets);
+          if (xi != 1.0) return;  // the landscape figure's path
+          const Vector x = network.forward(kTrackedTarget).col(0);
+          record.extras["tracked_x1"] = x(0);
+          record.extras["tracked_x2"] = x(1);
+        };
+        for (const std::string& id : settings.texts("optimizers")) {
+          Mlp network({2, 32, 64, 32, 2}, Activation::kRelu);
+          network.initialize(seed, Init::kHeUniform);  // the same start for every rule
+          const LearningResult& r = sweep.run(id, tag, {{"xi", xi}, {"phi", phi}, {"seed", seed}},
+                                              network, problem, train_set, &test_set, observe);
+          const TrainingRecord& last = r.summary.history.back();
+          rows.push_back({xi, id, settings.has("lr") ? settings.real("lr") : defaults.at(id).lr,
+                          last.test_loss, last.extras["x_distance"].get<double>(),
+                          r.summary.train_seconds, r.summary.iterations});
+        }
+      }
+      const std::vector<const LearningResult*> runs = sweep.first_seed_runs(tag);
+      sweep.add_loss_figures(context, runs, tag, "xi_" + format_value(xi));
+      add_distance_figure(context, runs, tag, "xi_" + format_value(xi));
+      if (xi == 1.0) add_landscape(context, phi, form, runs);
+      sweep.add_tables();
+    }
+    if (std::find(xis.begin(), xis.end(), 1.0) == xis.end()) {
+      add_landscape(context, phi, form, {});
+    }
+
+    RunContext::Table table{
+        "Final test loss and x-distance (median over seeds)",
+        {"ξ", "rule", "lr", "iterations", "training s", "test loss", "x-distance"},
+        {}};
+    for (const double xi : xis) {
+      for (const std::string& id : settings.texts("optimizers")) {
+        std::vector<double> loss, distance, seconds, iterations;
+        double lr = 0;
+        for (const Row& row : rows) {
+          if (row.xi != xi || row.id != id) continue;
+          lr = row.lr;
+          loss.push_back(row.loss);
+          distance.push_back(row.distance);
+          seconds.push_back(row.seconds);
+          iterations.push_back(static_cast<double>(row.iterations));
+        }
+        table.rows.push_back({format_value(xi), id, format_value(lr),
+                              std::to_string(std::llround(median(iterations))),
+                              format_value(median(seconds)), format_value(median(loss)),
+                              format_value(median(distance))});
+      }
+    }
+    context.add_table(std::move(table));
+    context.add_note(
+        "experiments.md E5 (code form, φ = 45°, 600 s per method on a GPU): at ξ = 32 SIP "
+        "reaches an x-distance of ~1e-2 and Adam ~0.2–0.5, SGD ~1.5–2; at ξ = 1 all methods "
+        "end below ~2e-3 with Adam best. This run: " + form + " form, φ = " + format_value(phi) +
+        "°, at most " + format_value(settings.real("time")) + " s of training per run on the "
+        "CPU, so compare the ordering rather than the values. P reacts ξ² times more strongly "
+        "to x along the second rotated axis than along the first, so at large ξ a low loss can "
+        "go with a large x-distance. The SIP rule here is the book's (L2 proxy towards the "
+        "exact local inverse, η = 1); the SIP repository used an L1 proxy with a step-limited "
+        "Newton step (experiments.md 1.7, 1.8).");
+    context.add_note(
+        "Step sizes: Adam and SIP 1e-3 as in the SIP repository. SGD keeps its 1/ξ² scaling (the "
+        "stiff curvature of L grows with ξ²): the repository's 1e-2/ξ² diverges within 5 steps "
+        "here (He-uniform weights start larger than PyTorch's default), so the code form uses "
+        "3e-3/ξ², and the book form, whose curvature lacks the code form's factor 10² = 100, "
+        "0.1/ξ² (1/ξ² diverges). HIG (optional): lr 1, τ = 1e-6 as in the HIG paper, batch 32.");
+  }
+
+ private:
+  static constexpr Index kBatch = 100;  // the SIP repository's batch
+
+  // SGD's rate depends on ξ (see the note in run()); the rest as in E5 or the HIG paper.
+  static std::map<std::string, RuleDefaults> rule_defaults(double xi, const std::string& form) {
+    const double sgd = (form == "code" ? 3e-3 : 0.1) / (xi * xi);
+    return {{"sgd", {sgd, kBatch}},
+            {"adam", {1e-3, kBatch}},
+            {"gn", {0.1, 32, 1e-6}},
+            {"hig", {1.0, 32, 1e-6}},
+            {"sip", {1e-3, kBatch, 1e-6, 1.0}}};
+  }
+
+  static void add_distance_figure(RunContext& context,
+                                  const std::vector<const LearningResult*>& runs,
+                                  const std::string& tag, const std::string& file_tag) {
+    std::vector<Series> series;
+    for (const LearningResult* run : runs) {
+      Series s{run->label, {}, {}, color_for(run->id)};
+      for (const TrainingRecord& r : run->summary.history) {
+        s.x.push_back(r.train_seconds);
+        s.y.push_back(r.extras["x_distance"]);
+      }
+      series.push_back(std::move(s));
+    }
+    LinePlotOptions options;
+    options.title = "x-distance to the nearest exact solution vs time (" + tag + ")";
+    options.x_label = "training seconds";
+    options.y_label = "mean |f(y*) − x_closest| on the test set";
+    options.log_y = true;
+    context.add_figure({"x_distance_vs_time_" + file_tag + ".svg", options.title + ", first seed.",
+                        line_plot_svg(series, options)});
+  }
+
+  // L^0.2 for y* = (0.3, −0.5) at ξ = 1 over the paper's view, the exact preimages in view, and
+  // where each rule's network maps that y* during training (when ξ = 1 was run).
+  static void add_landscape(RunContext& context, double phi, const std::string& form,
+                            const std::vector<const LearningResult*>& runs) {
+    const SinRotation physics = make_physics(1.0, phi, form);
+    Grid2D grid{-kViewX, kViewX, -kViewY, kViewY, 241, 121, {}};
+    for (int j = 0; j < grid.ny; ++j) {
+      for (int i = 0; i < grid.nx; ++i) {
+        const Vector x{{grid.x_min + 2 * kViewX * i / (grid.nx - 1),
+                        grid.y_min + 2 * kViewY * j / (grid.ny - 1)}};
+        grid.values.push_back(
+            std::pow(0.5 * (physics.forward(x) - kTrackedTarget).squaredNorm(), 0.2));
+      }
+    }
+    LandscapeOptions options;
+    options.title =
+        "L^0.2 for y* = (0.3, −0.5), ξ = 1, φ = " + format_value(phi) + "° (" + form + " form)";
+    options.x_label = "x₁";
+    options.y_label = "x₂";
+    options.log_levels = false;
+    // Preimages nearest a lattice of guesses over the view (and a bit beyond), deduplicated.
+    for (double gx = -2 * kViewX; gx <= 2 * kViewX; gx += 0.1) {
+      for (double gy = -2 * kViewY; gy <= 2 * kViewY; gy += 0.1) {
+        const Vector p = physics.closest_preimage(kTrackedTarget, Vector{{gx, gy}});
+        const bool in_view = std::abs(p(0)) <= kViewX && std::abs(p(1)) <= kViewY;
+        const bool seen =
+            std::any_of(options.markers.begin(), options.markers.end(),
+                        [&](const Marker& m) { return std::hypot(m.x - p(0), m.y - p(1)) < 1e-9; });
+        if (in_view && !seen) options.markers.push_back({p(0), p(1), ""});
+      }
+    }
+    std::vector<Trajectory> trajectories;
+    for (const LearningResult* run : runs) {
+      Trajectory t{run->label, {}, {}, color_for(run->id)};
+      for (const TrainingRecord& r : run->summary.history) {
+        t.x.push_back(r.extras["tracked_x1"]);
+        t.y.push_back(r.extras["tracked_x2"]);
+      }
+      trajectories.push_back(std::move(t));
+    }
+    context.add_figure(
+        {"landscape_xi_1.svg",
+         options.title + ". Stars: the exact solutions P(x) = y* in view." +
+             (runs.empty() ? std::string()
+                           : std::string(" Paths: the network's output f(y*) at each evaluation "
+                                         "(circle: start, square: end, first seed)")),
+         landscape_svg(grid, trajectories, options)});
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Experiment> make_sin_rotation() {
+  return std::make_unique<SinRotationExperiment>();
+}
+
+}  // namespace physgrad::experiments

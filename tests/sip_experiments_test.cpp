@@ -1,0 +1,82 @@
+// The SIP learning experiments sin-rotation and heat-inverse through the experiment API: short
+// runs limited by iterations (not time, so they are deterministic) that must show the outcome
+// each experiment exists for.
+#include <gtest/gtest.h>
+
+#include "experiment.hpp"
+#include "physgrad/error.hpp"
+
+namespace physgrad::experiments {
+namespace {
+
+RunContext run(const std::string& name,
+               const std::vector<std::pair<std::string, std::string>>& given) {
+  const Experiment& experiment = find_experiment(name);
+  RunContext context;
+  context.set_quiet(true);
+  experiment.run(resolve_settings(experiment, given), context);
+  return context;
+}
+
+// The first and last metrics rows of one rule.
+std::pair<nlohmann::json, nlohmann::json> first_and_last(const RunContext& context,
+                                                         const std::string& optimizer) {
+  std::vector<nlohmann::json> rows;
+  for (const nlohmann::json& row : context.metrics()) {
+    if (row["optimizer"] == optimizer) rows.push_back(row);
+  }
+  if (rows.empty()) throw Error("no metrics for " + optimizer);
+  return {rows.front(), rows.back()};
+}
+
+// experiments.md §4 check 11, shortened: at ξ = 32 SIP ends far nearer the exact solutions.
+TEST(SinRotationExperiment, SipEndsNearerTheExactSolutionsThanAdamWhenIllConditioned) {
+  const RunContext context = run("sin-rotation", {{"xi", "32"},
+                                                  {"optimizers", "sip,adam"},
+                                                  {"iters", "300"},
+                                                  {"time", "1e6"},
+                                                  {"eval-every", "100"},
+                                                  {"train-size", "2000"},
+                                                  {"test-size", "200"}});
+  const auto [sip_start, sip_end] = first_and_last(context, "sip");
+  const auto [adam_start, adam_end] = first_and_last(context, "adam");
+  EXPECT_EQ(sip_end["iteration"], 300);
+  EXPECT_EQ(adam_end["iteration"], 300);
+  const double sip = sip_end["x_distance"], adam = adam_end["x_distance"];
+  EXPECT_LT(sip, 0.25 * adam);
+  EXPECT_LT(sip, sip_start["x_distance"].get<double>());
+  EXPECT_LT(adam, adam_start["x_distance"].get<double>());
+  // Figures for ξ = 32: loss vs iteration and time, x-distance; the landscape at ξ = 1.
+  EXPECT_EQ(context.figures().size(), 4u);
+}
+
+// experiments.md §4 check 12, shortened: after the same iterations SIP reconstructs x* better.
+TEST(HeatExperiment, SipReconstructsTheInitialStateBetterThanAdam) {
+  const RunContext context = run("heat-inverse", {{"iters", "300"},
+                                                  {"time", "1e6"},
+                                                  {"eval-every", "100"},
+                                                  {"train-size", "512"},
+                                                  {"test-size", "64"}});
+  for (const std::string id : {"sip", "adam"}) {
+    const auto [start, end] = first_and_last(context, id);
+    EXPECT_EQ(end["iteration"], 300) << id;
+    EXPECT_LT(end["test_loss"].get<double>(), start["test_loss"].get<double>()) << id;
+    EXPECT_LT(end["x_loss"].get<double>(), start["x_loss"].get<double>()) << id;
+  }
+  const double sip = first_and_last(context, "sip").second["x_loss"];
+  const double adam = first_and_last(context, "adam").second["x_loss"];
+  EXPECT_LT(sip, 0.9 * adam);
+}
+
+TEST(HeatExperiment, RejectsTwoDimensionalGridsTooLargeForTheNetwork) {
+  const Experiment& experiment = find_experiment("heat-inverse");
+  try {
+    resolve_settings(experiment, {{"dims", "2"}, {"n", "40"}});
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("got 40"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace physgrad::experiments
