@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -24,12 +25,16 @@ std::string trim(const std::string& text) {
   return text.substr(first, text.find_last_not_of(" \t") - first + 1);
 }
 
+// Comma-separated items; an empty item (",1", "1,,2", "1,") stays in the list as "".
 std::vector<std::string> split_list(const std::string& text) {
   std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) items.push_back(trim(item));
-  return items;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', start);
+    items.push_back(trim(text.substr(start, comma == std::string::npos ? comma : comma - start)));
+    if (comma == std::string::npos) return items;
+    start = comma + 1;
+  }
 }
 
 std::string join(const std::vector<std::string>& items) {
@@ -51,6 +56,8 @@ double parse_real(const OptionSpec& spec, const std::string& text) {
   std::size_t used = 0;
   try {
     value = std::stod(item, &used);
+  } catch (const std::out_of_range&) {
+    throw Error(flag(spec) + ": '" + text + "' is out of the range of a double");
   } catch (const std::exception&) {
     used = 0;
   }
@@ -150,6 +157,7 @@ nlohmann::json parse_option(const OptionSpec& spec, const std::string& text) {
     case Kind::kText: return parse_text(spec, text);
     case Kind::kRealList:
     case Kind::kTextList: {
+      if (trim(text).empty()) throw Error(flag(spec) + ": needs at least one value");
       nlohmann::json items = nlohmann::json::array();
       for (const std::string& item : split_list(text)) {
         if (item.empty()) throw Error(flag(spec) + ": empty entry in list '" + text + "'");
@@ -163,7 +171,6 @@ nlohmann::json parse_option(const OptionSpec& spec, const std::string& text) {
           items.push_back(value);
         }
       }
-      if (items.empty()) throw Error(flag(spec) + ": needs at least one value");
       return items;
     }
   }

@@ -57,7 +57,7 @@ class Oscillators final : public Experiment {
   }
   std::vector<OptionSpec> options() const override {
     std::vector<OptionSpec> options = {
-        text_option("config", "paper",
+        text_option("variant", "paper",
                     "paper: cubic coupling, Nt 96, dt 0.125, relu net; book: linear coupling, "
                     "Nt 24, dt 0.5, tanh net")
             .one_of({"paper", "book"}),
@@ -77,7 +77,7 @@ class Oscillators final : public Experiment {
   }
 
   void run(const Settings& settings, RunContext& context) const override {
-    const std::string config_name = settings.text("config");
+    const std::string config_name = settings.text("variant");
     const Configuration config = configuration(config_name);
     const CoupledOscillators physics(config.physics);
     const L2Loss squares(2.0);  // L = Σ (y − y*)², gradients of the batch mean
@@ -93,7 +93,7 @@ class Oscillators final : public Experiment {
     for (const std::string& id : rules) {
       Mlp network({dim, 20, 20, 20, physics.input_dim()}, config.activation);
       network.initialize(seed);
-      sweep.run(id, config_name, {{"config", config_name}, {"seed", seed}}, network, problem,
+      sweep.run(id, config_name, {{"variant", config_name}, {"seed", seed}}, network, problem,
                 train_set, &test_set);
     }
     sweep.add_loss_figures(context, sweep.first_seed_runs(config_name), config_name,

@@ -1,5 +1,6 @@
-// The command-line tool end to end: bad input gives one line on stderr naming the bad value,
-// exit code 2 and no output; a good run writes the whole run folder.
+// The command-line tool end to end: bad input (flags or config file) gives one line on stderr
+// naming the bad value, exit code 2 and no output; a good run writes the whole run folder; a
+// saved config.json reproduces its run; describe shows the options.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -32,10 +33,23 @@ class Cli : public ::testing::Test {
     dir_ = fs::temp_directory_path() /
            ("physgrad_cli_" + std::to_string(::getpid()) + "_" +
             ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    configs_ = dir_.string() + "_configs";
+    for (const fs::path& path : {dir_, configs_}) {
+      fs::remove_all(path);
+      fs::create_directories(path);
+    }
   }
-  void TearDown() override { fs::remove_all(dir_); }
+  void TearDown() override {
+    fs::remove_all(dir_);
+    fs::remove_all(configs_);
+  }
+
+  // A config file outside the run's working folder, so that folder stays empty on errors.
+  std::string write_config(const std::string& name, const std::string& text) const {
+    const fs::path path = configs_ / name;
+    std::ofstream(path) << text;
+    return path.string();
+  }
 
   Outcome run(const std::string& args) const {
     const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
@@ -62,6 +76,7 @@ class Cli : public ::testing::Test {
   }
 
   fs::path dir_;
+  fs::path configs_;
 };
 
 TEST_F(Cli, BadInputIsOneLineExitTwoAndWritesNothing) {
@@ -145,6 +160,115 @@ TEST_F(Cli, RunWritesTheWholeRunFolder) {
   for (const auto& entry : fs::directory_iterator(dir_)) {
     EXPECT_EQ(entry.path().filename().string().find(".result.partial"), std::string::npos);
   }
+}
+
+TEST_F(Cli, BadConfigFileIsOneLineExitTwoAndWritesNothing) {
+  // {file content, text the error line must contain}
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"({"learning-rate": 0.1})", "has no option 'learning-rate' (allowed: optimizers, "},
+      {R"({"lr": true})", "--lr: expected a number, got true"},
+      {R"({"iters": 0})", "--iters: must be in [1, 1000000000], got '0'"},
+      {R"({"iters": 2.5})", "--iters: '2.5' is not a whole number"},
+      {R"({"lr": "nan"})", "--lr: must be finite, got 'nan'"},
+      {R"({"lr": 1e999})", "invalid JSON at line 1, column 12: number overflow"},
+      {R"({"optimizers": []})", "--optimizers: needs at least one value"},
+      {R"({"optimizers": ["gd", "gd"]})", "--optimizers: 'gd' is listed twice"},
+      {R"({"pg-inverse": ["magic"]})", "--pg-inverse: unknown value 'magic'"},
+      {R"({"experiment": "scaled-toy", "command": "", "settings": {}})",
+       "saved for experiment 'scaled-toy', not 'comparison'"},
+      {"{\"lr\": 0.1,\n", "invalid JSON at line 2, column 0: "},
+      {"[1, 2]", "expected a JSON object of option values, got [1,2]"},
+      {R"({"lr": "1\n2"})", "--lr: '1\\x0a2' is not a number"},  // one line even so
+  };
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const std::string path = write_config("bad" + std::to_string(i) + ".json", cases[i].first);
+    expect_rejected("run comparison --config " + path, "config file '" + path + "': ");
+    expect_rejected("run comparison --config " + path, cases[i].second);
+  }
+  expect_rejected("run comparison --config missing.json",
+                  "config file 'missing.json': cannot open: No such file or directory");
+  expect_rejected("run comparison --config " + configs_.string(), "is a directory");
+  expect_rejected("run oscillators --config missing.json", "config file 'missing.json'");
+}
+
+TEST_F(Cli, FlagsOverrideTheConfigFile) {
+  const std::string config =
+      write_config("c.json", R"({"iters": 3, "lr": 0.05, "pg-inverse": ["gn"], "threads": null})");
+  const Outcome outcome = run("run comparison --config " + config + " --iters 2 --out result");
+  ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+  const auto settings = nlohmann::json::parse(read_file(dir_ / "result" / "config.json"))["settings"];
+  EXPECT_EQ(settings["iters"], 2);
+  EXPECT_EQ(settings["lr"], 0.05);
+  EXPECT_EQ(settings["pg-inverse"], nlohmann::json::array({"gn"}));
+  EXPECT_TRUE(settings["threads"].is_null());
+  const auto summary = nlohmann::json::parse(read_file(dir_ / "result" / "summary.json"));
+  for (const auto& entry : summary["runs"]) EXPECT_EQ(entry["iterations"], 2) << entry["label"];
+}
+
+TEST_F(Cli, SavedConfigReproducesTheRun) {
+  ASSERT_EQ(run("run comparison --iters 7 --start 2,-1.5 --lr 0.03 --out first").exit_code, 0);
+  const Outcome again = run("run comparison --config first/config.json --out second");
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  auto first_config = nlohmann::json::parse(read_file(dir_ / "first" / "config.json"));
+  auto second_config = nlohmann::json::parse(read_file(dir_ / "second" / "config.json"));
+  EXPECT_EQ(second_config["settings"]["out"], "second");
+  first_config["settings"].erase("out");
+  second_config["settings"].erase("out");
+  EXPECT_EQ(second_config["settings"], first_config["settings"]);
+
+  const auto first = nlohmann::json::parse(read_file(dir_ / "first" / "summary.json"))["runs"];
+  const auto second = nlohmann::json::parse(read_file(dir_ / "second" / "summary.json"))["runs"];
+  ASSERT_EQ(first.size(), 6u);
+  ASSERT_EQ(second.size(), first.size());
+  for (std::size_t i = 0; i < first.size(); ++i) {
+    EXPECT_EQ(second[i]["label"], first[i]["label"]);
+    EXPECT_EQ(second[i]["iterations"], 7);
+    EXPECT_EQ(second[i]["final"]["loss"].get<double>(), first[i]["final"]["loss"].get<double>())
+        << first[i]["label"];
+    EXPECT_EQ(second[i]["final"]["x"], first[i]["final"]["x"]) << first[i]["label"];
+  }
+  // The saved folder is a setting too: rerunning into it is refused, and nothing is touched.
+  const Outcome into_first = run("run comparison --config first/config.json");
+  EXPECT_EQ(into_first.exit_code, 2);
+  EXPECT_NE(into_first.err.find("'first' already exists and is not empty"), std::string::npos)
+      << into_first.err;
+}
+
+TEST_F(Cli, DescribeShowsEveryOptionAndRejectsUnknownExperiments) {
+  const Outcome outcome = run("describe scaled-toy");
+  ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+  EXPECT_NE(outcome.out.find("scaled-toy — P(x) = (x1, alpha*x2)"), std::string::npos)
+      << outcome.out;
+  // One line per option: name, kind, default, range, help.
+  const auto line_of = [&](const std::string& name) {
+    std::istringstream lines(outcome.out);
+    for (std::string line; std::getline(lines, line);) {
+      if (line.starts_with(name + "  ")) return line;
+    }
+    return std::string();
+  };
+  const std::vector<std::vector<std::string>> expected = {
+      {"lr", "real", "unset", "> 0", "step size"},
+      {"iters", "integer", "1000", "in [1, 1000000000]", "iterations per run"},
+      {"alpha", "real list", "1,10,100,1000", "> 0", "scales α"},
+      {"tol-mode", "text", "relative", "one of: relative, absolute", "relative: stop"},
+      {"out", "text", "unset", "any", "run folder"},
+      {"optimizers", "text list", "gd,momentum,", "one of: gd, momentum,", "comma-separated"}};
+  for (const auto& fields : expected) {
+    const std::string line = line_of(fields[0]);
+    std::size_t at = 0;
+    for (const std::string& field : fields) {
+      at = line.find(field, at);
+      ASSERT_NE(at, std::string::npos) << field << " in: " << line << "\n" << outcome.out;
+    }
+  }
+  const Outcome unknown = run("describe no-such-experiment");
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_EQ(unknown.err, run("run no-such-experiment").err);
+  EXPECT_EQ(std::count(unknown.err.begin(), unknown.err.end(), '\n'), 1) << unknown.err;
+  EXPECT_NE(unknown.err.find("unknown experiment 'no-such-experiment'"), std::string::npos);
+  const Outcome help = run("run scaled-toy --help");
+  EXPECT_NE(help.out.find("--config FILE.json"), std::string::npos) << help.out;
 }
 
 }  // namespace

@@ -115,7 +115,9 @@ TEST(ExperimentSettings, DefaultsResolveAndBadValuesNameTheOption) {
     return std::string("no error");
   };
   EXPECT_EQ(message("lr", "-1"), "--lr: must be > 0, got '-1'");
-  EXPECT_EQ(message("lr", "1e400"), "--lr: '1e400' is not a number");
+  EXPECT_EQ(message("lr", "1e400"), "--lr: '1e400' is out of the range of a double");
+  EXPECT_EQ(message("alpha", "1,2,"), "--alpha: empty entry in list '1,2,'");
+  EXPECT_EQ(message("alpha", " "), "--alpha: needs at least one value");
   EXPECT_EQ(message("iters", "ten"), "--iters: 'ten' is not a whole number");
   EXPECT_EQ(message("optimizers", "gd,gd"), "--optimizers: 'gd' is listed twice");
   EXPECT_EQ(message("alpha", "1,,2"), "--alpha: empty entry in list '1,,2'");

@@ -1,6 +1,8 @@
-// physgrad — command-line front end: `physgrad list`, `physgrad run NAME [options]`.
+// physgrad — command-line front end: `physgrad list`, `physgrad describe NAME`,
+// `physgrad run NAME [--config FILE.json] [options]`.
 // Every error is one line on stderr and exit code 2; a run writes its folder only on success.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <ctime>
@@ -9,6 +11,7 @@
 #include <map>
 #include <sstream>
 
+#include "config_file.hpp"
 #include "experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/threads.hpp"
@@ -48,6 +51,27 @@ std::string option_help(const ex::OptionSpec& spec) {
   return help;
 }
 
+// An error message on one line: control characters (a newline inside a bad value) as \xNN.
+std::string one_line(const std::string& message) {
+  std::string line;
+  for (const char c : message) {
+    if (static_cast<unsigned char>(c) >= 0x20 && c != 0x7F) {
+      line += c;
+      continue;
+    }
+    static const char* const digits = "0123456789abcdef";
+    line += "\\x";
+    line += digits[(c >> 4) & 0xF];
+    line += digits[c & 0xF];
+  }
+  return line;
+}
+
+int usage_error(const std::string& message) {
+  std::cerr << "physgrad: error: " << one_line(message) << '\n';
+  return kUsageError;
+}
+
 void print_table(const ex::RunContext::Table& table) {
   std::vector<std::size_t> widths(table.header.size(), 0);
   const auto width = [](const std::string& text) {
@@ -62,8 +86,10 @@ void print_table(const ex::RunContext::Table& table) {
     }
   }
   const auto print_row = [&](const std::vector<std::string>& row) {
-    for (std::size_t c = 0; c < row.size() && c < widths.size(); ++c) {
-      std::cout << row[c] << std::string(widths[c] - width(row[c]) + 2, ' ');
+    const std::size_t cells = std::min(row.size(), widths.size());
+    for (std::size_t c = 0; c < cells; ++c) {
+      std::cout << row[c];
+      if (c + 1 < cells) std::cout << std::string(widths[c] - width(row[c]) + 2, ' ');
     }
     std::cout << '\n';
   };
@@ -113,15 +139,26 @@ int main(int argc, char** argv) {
   CLI::App app{"physgrad — inversion-based optimization for physics-based deep learning"};
   app.require_subcommand(1);
   CLI::App* list = app.add_subcommand("list", "list the experiments");
-  CLI::App* run = app.add_subcommand("run", "run an experiment: physgrad run NAME [options]");
+  CLI::App* describe =
+      app.add_subcommand("describe", "show an experiment's options: kind, default, range");
+  std::string describe_name;
+  describe->add_option("NAME", describe_name, "experiment name (see list)")->required();
+  CLI::App* run = app.add_subcommand(
+      "run", "run an experiment: physgrad run NAME [--config FILE.json] [options]");
   run->require_subcommand(1);
 
   // Each experiment is a subcommand of `run` with its own options, all read as text and
   // validated by the experiment framework so every bad value gets the same kind of message.
   std::map<std::string, std::map<std::string, std::string>> texts;
   std::map<std::string, std::vector<CLI::Option*>> cli_options;
+  std::map<std::string, std::string> config_files;
+  std::map<std::string, CLI::Option*> config_file_options;
   for (const auto& experiment : ex::registry()) {
     CLI::App* sub = run->add_subcommand(experiment->name(), experiment->description());
+    config_file_options[experiment->name()] =
+        sub->add_option("--config", config_files[experiment->name()],
+                        "read option values from a JSON file (keys: option names; flags win)")
+            ->type_name("FILE.json");
     for (const ex::OptionSpec& spec : ex::all_options(*experiment)) {
       CLI::Option* option =
           sub->add_option("--" + spec.name, texts[experiment->name()][spec.name], option_help(spec));
@@ -140,26 +177,32 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
     return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::cerr << "physgrad: error: " << e.what() << '\n';
-    return kUsageError;
   } catch (const std::exception& e) {
-    std::cerr << "physgrad: error: " << e.what() << '\n';
-    return kUsageError;
+    return usage_error(e.what());
   }
 
   try {
     if (list->parsed()) {
+      std::size_t width = 0;
+      for (const auto& experiment : ex::registry()) width = std::max(width, experiment->name().size());
       for (const auto& experiment : ex::registry()) {
-        std::cout << std::left << std::setw(14) << experiment->name() << experiment->description()
-                  << '\n';
+        std::cout << std::left << std::setw(static_cast<int>(width + 2)) << experiment->name()
+                  << experiment->description() << '\n';
       }
+      return 0;
+    }
+    if (describe->parsed()) {
+      print_table(ex::options_table(ex::find_experiment(describe_name)));
       return 0;
     }
     for (const auto& experiment : ex::registry()) {
       CLI::App* sub = run->get_subcommand(experiment->name());
       if (!sub->parsed()) continue;
-      std::vector<std::pair<std::string, std::string>> given;
+      // File values first, so that flags given on the command line override them.
+      ex::OptionTexts given;
+      if (config_file_options[experiment->name()]->count() > 0) {
+        given = ex::read_config_file(*experiment, config_files[experiment->name()]);
+      }
       for (CLI::Option* option : cli_options[experiment->name()]) {
         if (option->count() == 0) continue;
         const std::string name = option->get_name().substr(2);  // drop "--"
@@ -168,8 +211,7 @@ int main(int argc, char** argv) {
       return run_experiment(*experiment, given, command_line);
     }
   } catch (const std::exception& e) {
-    std::cerr << "physgrad: error: " << e.what() << '\n';
-    return kUsageError;
+    return usage_error(e.what());
   }
   return 0;
 }
