@@ -86,11 +86,7 @@ class HeatInverse final : public Experiment {
         integer_option("train-size", "4096", "training samples").at_least(1),
         integer_option("test-size", "256", "test samples (also the x losses)").at_least(1),
     };
-    for (OptionSpec& spec : learning_options()) {
-      if (spec.name == "time") {
-        spec.default_text = "20";
-        spec.help += "; applies together with --iters and --epochs";
-      }
+    for (OptionSpec& spec : learning_options("20")) {
       if (spec.name == "eval-every") {
         spec.help = "evaluate every N iterations (default: 250 in 1-D, 40 in 2-D)";
       }
@@ -152,7 +148,10 @@ class HeatInverse final : public Experiment {
     std::vector<const LearningResult*> runs;
     for (const auto& entry : trained) runs.push_back(entry.first);
     sweep.add_loss_figures(context, runs, tag, std::to_string(dims) + "d");
-    add_x_loss_figure(context, runs, tag, std::to_string(dims) + "d");
+    LearningSweep::add_metric_figure(
+        context, runs, "x_loss_vs_time_" + std::to_string(dims) + "d.svg",
+        "Reconstruction error ½‖x − x*‖² vs time (" + tag + ")", "mean x loss on the test set",
+        [](const TrainingRecord& r) { return r.extras["x_loss"].get<double>(); });
     if (dims == 1) {
       add_line_reconstructions(context, test, trained);
     } else {
@@ -183,26 +182,6 @@ class HeatInverse final : public Experiment {
       {"gn", {1.0, 4}},
       {"hig", {1.0, 4}},
       {"sip", {1e-3, 128, 1e-6, 1.0}}};
-
-  static void add_x_loss_figure(RunContext& context, const std::vector<const LearningResult*>& runs,
-                                const std::string& tag, const std::string& file_tag) {
-    std::vector<Series> series;
-    for (const LearningResult* run : runs) {
-      Series s{run->label, {}, {}, color_for(run->id)};
-      for (const TrainingRecord& r : run->summary.history) {
-        s.x.push_back(r.train_seconds);
-        s.y.push_back(r.extras["x_loss"]);
-      }
-      series.push_back(std::move(s));
-    }
-    LinePlotOptions options;
-    options.title = "Reconstruction error ½‖x − x*‖² vs time (" + tag + ")";
-    options.x_label = "training seconds";
-    options.y_label = "mean x loss on the test set";
-    options.log_y = true;
-    context.add_figure({"x_loss_vs_time_" + file_tag + ".svg", options.title + ".",
-                        line_plot_svg(series, options)});
-  }
 
   static void add_line_reconstructions(
       RunContext& context, const HeatData& test,

@@ -44,7 +44,8 @@ std::vector<OptionSpec> learning_options(const std::string& default_time,
           .at_most(0.5),
       integer_option("epochs", "", "epochs per run").at_least(1),
       real_option("time", default_time,
-                  "training-time budget per run in seconds (evaluations excluded)")
+                  "training-time budget per run in seconds, evaluations excluded (the first of "
+                  "--iters, --epochs, --time reached ends a run)")
           .above(0),
       integer_option("eval-every", default_eval_every,
                      "evaluate every N iterations (default: every epoch)")
@@ -136,32 +137,43 @@ std::vector<const LearningResult*> LearningSweep::first_seed_runs(const std::str
   return runs;
 }
 
+void LearningSweep::add_metric_figure(RunContext& context,
+                                      const std::vector<const LearningResult*>& runs,
+                                      const std::string& file, const std::string& title,
+                                      const std::string& y_label,
+                                      const std::function<double(const TrainingRecord&)>& value,
+                                      bool by_time, bool by_epoch) {
+  std::vector<Series> series;
+  for (const LearningResult* run : runs) {
+    Series s{run->label, {}, {}, color_for(run->id)};
+    for (const TrainingRecord& r : run->summary.history) {
+      s.x.push_back(by_time    ? r.train_seconds
+                    : by_epoch ? r.epoch
+                               : static_cast<double>(r.iteration));
+      s.y.push_back(value(r));
+    }
+    series.push_back(std::move(s));
+  }
+  LinePlotOptions options;
+  options.title = title;
+  options.x_label = by_time ? "training seconds" : by_epoch ? "epoch" : "iteration";
+  options.y_label = y_label;
+  options.log_y = true;
+  context.add_figure({file, title + ".", line_plot_svg(series, options)});
+}
+
 void LearningSweep::add_loss_figures(RunContext& context,
                                      const std::vector<const LearningResult*>& runs,
                                      const std::string& tag, const std::string& file_tag,
                                      bool by_epoch) const {
   const std::string progress = by_epoch ? "epoch" : "iteration";
+  const auto test_loss = [](const TrainingRecord& r) { return r.test_loss; };
   for (const bool by_time : {false, true}) {
-    std::vector<Series> series;
-    for (const LearningResult* run : runs) {
-      Series s{run->label, {}, {}, color_for(run->id)};
-      for (const TrainingRecord& r : run->summary.history) {
-        s.x.push_back(by_time    ? r.train_seconds
-                      : by_epoch ? r.epoch
-                                 : static_cast<double>(r.iteration));
-        s.y.push_back(r.test_loss);
-      }
-      series.push_back(std::move(s));
-    }
-    const std::string axis = by_time ? "training time" : progress;
-    LinePlotOptions options;
-    options.title = "Test loss vs " + axis + " (" + tag + ", first seed)";
-    options.x_label = by_time ? "training seconds" : progress;
-    options.y_label = "mean test loss";
-    options.log_y = true;
-    context.add_figure({std::string("loss_vs_") + (by_time ? "time" : progress) + "_" +
-                            file_tag + ".svg",
-                        options.title + ".", line_plot_svg(series, options)});
+    const std::string axis = by_time ? "time" : progress;
+    add_metric_figure(context, runs, "loss_vs_" + axis + "_" + file_tag + ".svg",
+                      "Test loss vs " + std::string(by_time ? "training time" : progress) +
+                          " (" + tag + ", first seed)",
+                      "mean test loss", test_loss, by_time, by_epoch);
   }
 }
 

@@ -55,6 +55,14 @@ class LearningSweep {
 
   // The first-seed run of every rule for `tag`, in the order they ran.
   std::vector<const LearningResult*> first_seed_runs(const std::string& tag) const;
+  // A per-evaluation value of `runs` (log y) against training time, or against the iteration
+  // (epoch with `by_epoch`) when `by_time` is false.
+  static void add_metric_figure(RunContext& context,
+                                const std::vector<const LearningResult*>& runs,
+                                const std::string& file, const std::string& title,
+                                const std::string& y_label,
+                                const std::function<double(const TrainingRecord&)>& value,
+                                bool by_time = true, bool by_epoch = false);
   // Test loss vs iteration (or epoch) and vs training time (log y) of `runs`.
   void add_loss_figures(RunContext& context, const std::vector<const LearningResult*>& runs,
                         const std::string& tag, const std::string& file_tag,

@@ -80,14 +80,7 @@ class SinRotationExperiment final : public Experiment {
         integer_option("train-size", "10000", "training samples").at_least(1),
         integer_option("test-size", "1000", "test samples (also the x-distance)").at_least(1),
     };
-    for (OptionSpec& spec : learning_options()) {
-      if (spec.name == "time") {
-        spec.default_text = "8";
-        spec.help += "; applies together with --iters and --epochs";
-      }
-      if (spec.name == "eval-every") spec.default_text = "1000";
-      options.push_back(std::move(spec));
-    }
+    for (OptionSpec& spec : learning_options("8", "1000")) options.push_back(std::move(spec));
     return options;
   }
   std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }
@@ -137,7 +130,11 @@ class SinRotationExperiment final : public Experiment {
       }
       const std::vector<const LearningResult*> runs = sweep.first_seed_runs(tag);
       sweep.add_loss_figures(context, runs, tag, "xi_" + format_value(xi));
-      add_distance_figure(context, runs, tag, "xi_" + format_value(xi));
+      LearningSweep::add_metric_figure(
+          context, runs, "x_distance_vs_time_xi_" + format_value(xi) + ".svg",
+          "x-distance to the nearest exact solution vs time (" + tag + ", first seed)",
+          "mean |f(y*) − x_closest| on the test set",
+          [](const TrainingRecord& r) { return r.extras["x_distance"].get<double>(); });
       if (xi == 1.0) add_landscape(context, phi, form, runs);
       sweep.add_tables();
     }
@@ -199,26 +196,6 @@ class SinRotationExperiment final : public Experiment {
             {"sip", {1e-3, kBatch, 1e-6, 1.0}}};
   }
 
-  static void add_distance_figure(RunContext& context,
-                                  const std::vector<const LearningResult*>& runs,
-                                  const std::string& tag, const std::string& file_tag) {
-    std::vector<Series> series;
-    for (const LearningResult* run : runs) {
-      Series s{run->label, {}, {}, color_for(run->id)};
-      for (const TrainingRecord& r : run->summary.history) {
-        s.x.push_back(r.train_seconds);
-        s.y.push_back(r.extras["x_distance"]);
-      }
-      series.push_back(std::move(s));
-    }
-    LinePlotOptions options;
-    options.title = "x-distance to the nearest exact solution vs time (" + tag + ")";
-    options.x_label = "training seconds";
-    options.y_label = "mean |f(y*) − x_closest| on the test set";
-    options.log_y = true;
-    context.add_figure({"x_distance_vs_time_" + file_tag + ".svg", options.title + ", first seed.",
-                        line_plot_svg(series, options)});
-  }
 
   // L^0.2 for y* = (0.3, −0.5) at ξ = 1 over the paper's view, the exact preimages in view, and
   // where each rule's network maps that y* during training (when ξ = 1 was run).
