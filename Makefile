@@ -9,7 +9,11 @@ DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapack
 
 SANITIZE_DIR ?= build-sanitize
 
-.PHONY: all deps build demo test test-sanitize bench clean
+RESULTS_DIR ?= docs/results
+EXPERIMENTS  = scaled-toy sensitivity comparison hig-toy sin-rotation heat-inverse oscillators \
+               quantum-dipole poisson
+
+.PHONY: all deps build demo test test-sanitize bench results clean
 
 all: build
 
@@ -37,6 +41,16 @@ test: build
 # Micro-benchmarks of the learning step; results also in bench/results.json.
 bench: build
 	$(BUILD_DIR)/bench/physgrad_bench --benchmark_out=bench/results.json --benchmark_out_format=json
+
+# Every reference experiment with its defaults (about 7 minutes): figures, summaries and the
+# printed tables in $(RESULTS_DIR), indexed in $(RESULTS_DIR)/README.md.
+results: build
+	rm -rf $(RESULTS_DIR) && mkdir -p $(RESULTS_DIR)
+	for e in $(EXPERIMENTS); do \
+	  $(BUILD_DIR)/physgrad run $$e --out $(RESULTS_DIR)/$$e > $(RESULTS_DIR)/$$e.txt || exit 1; \
+	  rm -f $(RESULTS_DIR)/$$e/metrics.csv $(RESULTS_DIR)/$$e/report.html; \
+	done
+	scripts/results_index.sh $(RESULTS_DIR) $(EXPERIMENTS) > $(RESULTS_DIR)/README.md
 
 # The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (any report fails it).
 test-sanitize: deps
