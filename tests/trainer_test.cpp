@@ -241,8 +241,11 @@ TEST(Trainer, NonFiniteLossStopsTrainingWithFiniteParameters) {
       train(network, *update, {&physics, &loss}, data, nullptr, limits(1000));
   EXPECT_EQ(summary.termination, "numerical_failure");
   EXPECT_NE(summary.message.find("non-finite loss"), std::string::npos) << summary.message;
+  EXPECT_NE(summary.message.find("undone"), std::string::npos) << summary.message;
   EXPECT_LT(summary.iterations, 1000);
   EXPECT_TRUE(all_finite(network.parameters()));
+  // The final evaluation is of the restored parameters, whose loss is finite.
+  EXPECT_TRUE(std::isfinite(summary.history.back().train_loss));
 }
 
 TEST(Trainer, RejectsMismatchedDataAndMissingLimits) {

@@ -153,6 +153,8 @@ TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProble
 
   evaluate();
   MlpCache cache;
+  Vector before_last_step;  // θ before the last applied update
+  bool undone = false;      // that update was undone after a non-finite batch
   long long epoch = 0;
   while (summary.termination.empty()) {
     if (options.max_epochs && epoch >= *options.max_epochs) {
@@ -192,12 +194,19 @@ TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProble
         if (!all_finite(step.delta)) failure = "update";
       }
       if (failure != nullptr) {
+        // A non-finite step is never applied. A non-finite loss or derivative means the last
+        // applied step already broke θ: it is undone, back to the θ whose batch was finite.
+        undone = step.delta.size() == 0 && summary.iterations > 0;
+        if (undone) network.set_parameters(before_last_step);
         summary.termination = "numerical_failure";
         summary.message = std::string("non-finite ") + failure + " at iteration " +
                           std::to_string(summary.iterations + 1) +
-                          "; parameters kept at their last finite values";
+                          (undone ? "; update " + std::to_string(summary.iterations) +
+                                      " undone, parameters restored to those before it"
+                                : std::string("; the step was not applied"));
         break;
       }
+      before_last_step = network.parameters();
       network.parameters() += step.delta;
       summary.update_seconds +=
           seconds_since(update_start) - step.inversion_seconds - step.jacobian_seconds;
@@ -208,7 +217,7 @@ TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProble
     ++epoch;
     if (!options.eval_every && summary.termination.empty()) evaluate();
   }
-  if (summary.history.back().iteration != summary.iterations) evaluate();
+  if (undone || summary.history.back().iteration != summary.iterations) evaluate();
   return summary;
 }
 

@@ -80,8 +80,9 @@ BatchState evaluate_batch(const Mlp& network, const LearningProblem& problem,
                           BatchTiming* timing = nullptr);
 
 // Trains `network` in place. Throws Error on mismatched dimensions or invalid options. A NaN/Inf
-// loss or step stops training with termination "numerical_failure" and leaves θ at its last
-// finite value.
+// loss, derivative or step stops training with termination "numerical_failure": a non-finite
+// step is never applied, and when the loss or derivative of a batch is non-finite the update
+// that led there is undone, so θ ends where every batch so far evaluated finite.
 TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProblem& problem,
                       const Dataset& train_set, const Dataset* test_set,
                       const TrainerOptions& options);
