@@ -1,6 +1,7 @@
 // comparison: y = P(x) = (x₀, x₁²), L = ‖y‖² = x₀² + x₁⁴ from (3, 3), as in the book's simple
 // optimizer comparison: GD, Adam, Newton, IG and PG (analytic and numerical local inverse).
 #include <cmath>
+#include <functional>
 
 #include "direct_runs.hpp"
 #include "experiment_list.hpp"
@@ -100,19 +101,26 @@ class Comparison final : public Experiment {
       {"gd", 0.01}, {"momentum", 0.01}, {"adam", 0.3}, {"newton", 1.0 / 3.0},
       {"gn", 0.3},  {"ig", 0.3},        {"pg", 0.3}};
 
+  // Trajectories over the isolines of f on [−0.2, 1.15]·reach² with the minimum at 0 marked.
+  static void add_landscape(RunContext& context, const std::string& file,
+                            const std::string& caption, const std::string& title,
+                            const std::string& axis, const std::function<double(double, double)>& f,
+                            double reach, const std::vector<Trajectory>& paths) {
+    LandscapeOptions options;
+    options.title = title;
+    options.x_label = axis + "₀";
+    options.y_label = axis + "₁";
+    options.markers = {{0.0, 0.0, "minimum"}};
+    const Grid2D grid = sample_grid(f, -0.2 * reach, 1.15 * reach, -0.2 * reach, 1.15 * reach, 81);
+    context.add_figure({file, caption, landscape_svg(grid, paths, options)});
+  }
+
   static void add_figures(RunContext& context, const Vector& x0, const ComparisonToy& physics,
                           const std::vector<DirectResult>& results) {
-    const double reach = x0.cwiseAbs().maxCoeff();
-    LandscapeOptions x_options;
-    x_options.title = "x space: L = x₀² + x₁⁴";
-    x_options.x_label = "x₀";
-    x_options.y_label = "x₁";
-    x_options.markers = {{0.0, 0.0, "minimum"}};
-    const Grid2D x_grid =
-        sample_grid([](double a, double b) { return a * a + b * b * b * b; }, -0.2 * reach,
-                    1.15 * reach, -0.2 * reach, 1.15 * reach, 81);
-    context.add_figure({"trajectories_x.svg", "Trajectories in x space over the isolines of L.",
-                        landscape_svg(x_grid, trajectories(results), x_options)});
+    add_landscape(context, "trajectories_x.svg", "Trajectories in x space over the isolines of L.",
+                  "x space: L = x₀² + x₁⁴", "x",
+                  [](double a, double b) { return a * a + b * b * b * b; },
+                  x0.cwiseAbs().maxCoeff(), trajectories(results));
 
     // The same runs seen in y = P(x): PG moves along the straight line to the minimum.
     std::vector<Trajectory> in_y = trajectories(results);
@@ -123,18 +131,9 @@ class Comparison final : public Experiment {
         in_y[r].y[k] = y(1);
       }
     }
-    const Vector y0 = physics.forward(x0);
-    const double y_reach = y0.cwiseAbs().maxCoeff();
-    LandscapeOptions y_options;
-    y_options.title = "y space: L = y₀² + y₁²";
-    y_options.x_label = "y₀";
-    y_options.y_label = "y₁";
-    y_options.markers = {{0.0, 0.0, "minimum"}};
-    const Grid2D y_grid = sample_grid([](double a, double b) { return a * a + b * b; },
-                                      -0.2 * y_reach, 1.15 * y_reach, -0.2 * y_reach,
-                                      1.15 * y_reach, 81);
-    context.add_figure({"trajectories_y.svg", "The same trajectories mapped to y = P(x).",
-                        landscape_svg(y_grid, in_y, y_options)});
+    add_landscape(context, "trajectories_y.svg", "The same trajectories mapped to y = P(x).",
+                  "y space: L = y₀² + y₁²", "y", [](double a, double b) { return a * a + b * b; },
+                  physics.forward(x0).cwiseAbs().maxCoeff(), in_y);
     context.add_figure({"loss.svg", "Loss per iteration.",
                         loss_curves_svg(results, "Loss vs iteration")});
   }

@@ -5,19 +5,13 @@
 #include <algorithm>
 
 #include "experiment.hpp"
+#include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
 
 namespace physgrad::experiments {
 namespace {
 
-RunContext run(const std::string& name,
-               const std::vector<std::pair<std::string, std::string>>& given) {
-  const Experiment& experiment = find_experiment(name);
-  RunContext context;
-  context.set_quiet(true);
-  experiment.run(resolve_settings(experiment, given), context);
-  return context;
-}
+using testing::run_experiment;
 
 const nlohmann::json& find_run(const RunContext& context, const std::string& optimizer,
                                double alpha) {
@@ -28,7 +22,7 @@ const nlohmann::json& find_run(const RunContext& context, const std::string& opt
 }
 
 TEST(ScaledToyExperiment, InvertedRulesNeedTheSameIterationsForEveryAlphaAndGdDoesNot) {
-  const RunContext context = run("scaled-toy", {{"alpha", "1,10,100,1000"}});
+  const RunContext context = run_experiment("scaled-toy", {{"alpha", "1,10,100,1000"}});
   for (const std::string id : {"newton", "gn", "ig", "pg", "lm"}) {
     const nlohmann::json& reference = find_run(context, id, 1.0);
     EXPECT_EQ(reference["termination"], "converged") << id;
@@ -46,7 +40,7 @@ TEST(ScaledToyExperiment, InvertedRulesNeedTheSameIterationsForEveryAlphaAndGdDo
 }
 
 TEST(SensitivityExperiment, GdStepGrowsWithAlphaSquaredInvertedStepsDoNot) {
-  const RunContext context = run("sensitivity", {{"alpha", "0.1,1,10"}, {"iters", "1"}});
+  const RunContext context = run_experiment("sensitivity", {{"alpha", "0.1,1,10"}, {"iters", "1"}});
   const auto first_step = [&](const std::string& id, double alpha) {
     for (const nlohmann::json& row : context.metrics()) {
       if (row["optimizer"] == id && row["alpha"] == alpha && row["iteration"] == 1) {
@@ -63,7 +57,7 @@ TEST(SensitivityExperiment, GdStepGrowsWithAlphaSquaredInvertedStepsDoNot) {
 }
 
 TEST(ComparisonExperiment, PgEndsClosestToTheMinimumAndBothInversesAgree) {
-  const RunContext context = run("comparison", {});
+  const RunContext context = run_experiment("comparison", {});
   std::map<std::string, double> distance;
   for (const nlohmann::json& entry : context.runs()) {
     const std::vector<double> x = entry["final"]["x"];
@@ -82,7 +76,7 @@ TEST(ComparisonExperiment, PgEndsClosestToTheMinimumAndBothInversesAgree) {
 // experiments.md §4 check 10, shortened: on λ = 0.01 HIG ends far below Adam and Gauss-Newton.
 TEST(HigToyExperiment, HalfInverseGradientsBeatAdamAndGaussNewtonWhenIllConditioned) {
   const RunContext context =
-      run("hig-toy", {{"lambda", "0.01"}, {"seeds", "2"}, {"iters", "2000"}, {"eval-every", "500"}});
+      run_experiment("hig-toy", {{"lambda", "0.01"}, {"seeds", "2"}, {"iters", "2000"}, {"eval-every", "500"}});
   std::map<std::string, std::vector<double>> losses;
   for (const nlohmann::json& entry : context.runs()) {
     const double initial = entry["initial"]["test_loss"], final_loss = entry["final"]["test_loss"];

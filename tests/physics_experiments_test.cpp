@@ -2,20 +2,15 @@
 // method lowers the loss it starts from, except Gauss-Newton, whose failures are reported.
 #include <gtest/gtest.h>
 
-#include "experiment.hpp"
+#include "experiment_runs.hpp"
 
 namespace physgrad::experiments {
 namespace {
 
 RunContext run(const std::string& name,
-               const std::vector<std::pair<std::string, std::string>>& given) {
-  const Experiment& experiment = find_experiment(name);
-  auto settings = given;
-  settings.emplace_back("time", "1e6");  // stop on the iteration count only
-  RunContext context;
-  context.set_quiet(true);
-  experiment.run(resolve_settings(experiment, settings), context);
-  return context;
+               std::vector<std::pair<std::string, std::string>> given) {
+  given.emplace_back("time", "1e6");  // stop on the iteration count only
+  return testing::run_experiment(name, given);
 }
 
 // Each run's final test loss is below its initial one; returns the number of runs checked.

@@ -4,19 +4,13 @@
 #include <gtest/gtest.h>
 
 #include "experiment.hpp"
+#include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
 
 namespace physgrad::experiments {
 namespace {
 
-RunContext run(const std::string& name,
-               const std::vector<std::pair<std::string, std::string>>& given) {
-  const Experiment& experiment = find_experiment(name);
-  RunContext context;
-  context.set_quiet(true);
-  experiment.run(resolve_settings(experiment, given), context);
-  return context;
-}
+using testing::run_experiment;
 
 // The first and last metrics rows of one rule.
 std::pair<nlohmann::json, nlohmann::json> first_and_last(const RunContext& context,
@@ -31,7 +25,7 @@ std::pair<nlohmann::json, nlohmann::json> first_and_last(const RunContext& conte
 
 // experiments.md §4 check 11, shortened: at ξ = 32 SIP ends far nearer the exact solutions.
 TEST(SinRotationExperiment, SipEndsNearerTheExactSolutionsThanAdamWhenIllConditioned) {
-  const RunContext context = run("sin-rotation", {{"xi", "32"},
+  const RunContext context = run_experiment("sin-rotation", {{"xi", "32"},
                                                   {"optimizers", "sip,adam"},
                                                   {"iters", "300"},
                                                   {"time", "1e6"},
@@ -52,7 +46,7 @@ TEST(SinRotationExperiment, SipEndsNearerTheExactSolutionsThanAdamWhenIllConditi
 
 // experiments.md §4 check 12, shortened: after the same iterations SIP reconstructs x* better.
 TEST(HeatExperiment, SipReconstructsTheInitialStateBetterThanAdam) {
-  const RunContext context = run("heat-inverse", {{"iters", "300"},
+  const RunContext context = run_experiment("heat-inverse", {{"iters", "300"},
                                                   {"time", "1e6"},
                                                   {"eval-every", "100"},
                                                   {"train-size", "512"},

@@ -131,29 +131,33 @@ PinvBackend parse_pinv_backend(const std::string& name) {
   throw Error(std::string("unknown pinv backend '") + name + "' (known: " + known + ")");
 }
 
+PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions& options) {
+  if (options.backend != PinvBackend::kAuto) return options.backend;
+  return options.rcond < kMinGramRcond ? PinvBackend::kSvd
+         : rows <= cols                ? PinvBackend::kGram
+                                       : PinvBackend::kNormal;
+}
+
 Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions& options,
                         PowerPinvInfo* info) {
   check_operands(j, g, "power_pinv_apply");
   check_rcond(options.rcond);
   check_kappa(options.kappa);
+  const PinvBackend backend = resolve_pinv_backend(j.rows(), j.cols(), options);
+  if (backend == PinvBackend::kGram && j.size() != 0) {
+    return power_pinv_apply_gram(
+        squared(j, true), g, [&j](const Vector& c) { return Vector(j.transpose() * c); }, options,
+        info);
+  }
 
   PowerPinvInfo local;
   PowerPinvInfo& out = info != nullptr ? *info : local;
   out = {};
-  out.backend = options.backend;
-  if (out.backend == PinvBackend::kAuto) {
-    out.backend = options.rcond < kMinGramRcond ? PinvBackend::kSvd
-                  : j.rows() <= j.cols()        ? PinvBackend::kGram
-                                                : PinvBackend::kNormal;
-  }
+  out.backend = backend;
   out.rcond_used =
       out.backend == PinvBackend::kSvd ? options.rcond : std::max(options.rcond, kMinGramRcond);
   if (j.size() == 0) return Vector::Zero(j.cols());
 
-  if (out.backend == PinvBackend::kGram) {
-    Matrix w = squared(j, true);
-    return j.transpose() * eigen_apply(w, g, options.kappa, out);
-  }
   if (out.backend == PinvBackend::kNormal) {
     Matrix w = squared(j, false);
     return eigen_apply(w, j.transpose() * g, options.kappa, out);

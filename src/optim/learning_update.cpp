@@ -34,9 +34,7 @@ UpdateStep JacobianInverseUpdate::step(const BatchState& batch) {
   if (batch.jacobian == nullptr) throw Error(id_ + ": the batch has no stacked Jacobian");
   using Clock = std::chrono::steady_clock;
   const StackedJacobian& j = *batch.jacobian;
-  const bool factored = pinv_.backend == PinvBackend::kGram ||
-                        (pinv_.backend == PinvBackend::kAuto && j.rows() <= j.cols() &&
-                         pinv_.rcond >= kMinGramRcond);
+  const bool factored = resolve_pinv_backend(j.rows(), j.cols(), pinv_) == PinvBackend::kGram;
   UpdateStep step;
   const auto start = Clock::now();
   Matrix formed = factored ? j.gram() : j.materialize();

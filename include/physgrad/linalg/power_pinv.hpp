@@ -43,6 +43,9 @@ struct PowerPinvInfo {
   double rcond_used = 0;                     // the cutoff applied (rcond, or the Gram floor)
 };
 
+// The path `options.backend` stands for on an r × c matrix: kAuto resolved as described above.
+PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions& options);
+
 // J^{−κ} g for J with rows() == g.size(); an empty J gives the zero vector of size cols().
 // Throws Error on mismatched sizes, non-finite entries, rcond outside [0, 1) or non-finite κ.
 Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions& options = {},

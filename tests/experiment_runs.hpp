@@ -1,0 +1,22 @@
+// Test helper: runs a registered experiment through the experiment API (settings resolved as
+// the CLI does, progress silenced) and returns what it collected.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "experiment.hpp"
+
+namespace physgrad::experiments::testing {
+
+inline RunContext run_experiment(const std::string& name,
+                                 const std::vector<std::pair<std::string, std::string>>& given) {
+  const Experiment& experiment = find_experiment(name);
+  RunContext context;
+  context.set_quiet(true);
+  experiment.run(resolve_settings(experiment, given), context);
+  return context;
+}
+
+}  // namespace physgrad::experiments::testing
