@@ -3,7 +3,9 @@
 // limits, determinism and numerical guard.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
+#include <functional>
 
 #include "physgrad/autodiff/finite_difference.hpp"
 #include "physgrad/error.hpp"
@@ -218,7 +220,7 @@ TEST(Trainer, StopsAfterEpochsAndEvaluatesOncePerEpochByDefault) {
   EXPECT_DOUBLE_EQ(summary.history[2].train_loss, summary.history[2].test_loss);
 }
 
-// P(x) = x, except NaN once the first output exceeds 1e3.
+// P(x) = x, except NaN once the output exceeds a bound (1e3).
 class Fragile final : public Simulator {
  public:
   std::string name() const override { return "fragile"; }
@@ -246,6 +248,171 @@ TEST(Trainer, NonFiniteLossStopsTrainingWithFiniteParameters) {
   EXPECT_TRUE(all_finite(network.parameters()));
   // The final evaluation is of the restored parameters, whose loss is finite.
   EXPECT_TRUE(std::isfinite(summary.history.back().train_loss));
+}
+
+TEST(Trainer, InvertedStepsThatBreakTheNextBatchAreRetriedAtHalfLength) {
+  // Gauss-Newton at 4× its full step (η = 4B, as ∂(mean L)/∂y carries 1/B) overshoots the
+  // target 900 to 3600, past Fragile's bound; two halvings bring the step back to 900.
+  const Fragile physics;
+  const L2Loss loss;
+  Mlp network({1, 1}, Activation::kTanh);
+  network.initialize(0);
+  const Dataset data{Matrix::Ones(1, 8), Matrix::Constant(1, 8, 900.0), Matrix()};
+  const auto gn = make_learning_update("gn", {.lr = 16.0});
+  const TrainingSummary summary = train(network, *gn, {&physics, &loss}, data, nullptr, limits(20));
+  EXPECT_EQ(summary.termination, "max_iterations") << summary.message;
+  EXPECT_GE(summary.step_halvings, 2);
+  EXPECT_LT(summary.history.back().train_loss, 1e-12 * summary.history.front().train_loss);
+
+  // Without halvings allowed the same run stops at the first broken batch, undoing that step.
+  network.initialize(0);
+  TrainerOptions no_retry = limits(20);
+  no_retry.max_step_halvings = 0;
+  const TrainingSummary stopped = train(network, *gn, {&physics, &loss}, data, nullptr, no_retry);
+  EXPECT_EQ(stopped.termination, "numerical_failure");
+  EXPECT_EQ(stopped.iterations, 1);
+  EXPECT_NE(stopped.message.find("update 1 undone"), std::string::npos) << stopped.message;
+  EXPECT_TRUE(std::isfinite(stopped.history.back().train_loss));
+}
+
+TEST(Trainer, NonFiniteTestLossRestoresTheLastEvaluatedParameters) {
+  // Training on inputs 1 towards 50 drives the test outputs (inputs 100) past Fragile's bound
+  // while every training batch stays finite.
+  const Fragile physics;
+  const L2Loss loss;
+  Mlp network({1, 1}, Activation::kTanh);
+  network.initialize(0);
+  const Dataset train_set{Matrix::Ones(1, 8), Matrix::Constant(1, 8, 50.0), Matrix()};
+  const Dataset test_set{Matrix::Constant(1, 4, 100.0), Matrix::Constant(1, 4, 5e3), Matrix()};
+  const auto adam = make_learning_update("adam", {.lr = 0.5});
+  const TrainingSummary summary =
+      train(network, *adam, {&physics, &loss}, train_set, &test_set, limits(500));
+  EXPECT_EQ(summary.termination, "numerical_failure");
+  EXPECT_NE(summary.message.find("non-finite test loss"), std::string::npos) << summary.message;
+  ASSERT_GE(summary.history.size(), 2u);
+  for (const TrainingRecord& r : summary.history) {
+    EXPECT_TRUE(std::isfinite(r.train_loss) && std::isfinite(r.test_loss)) << r.iteration;
+  }
+  // θ is the one of the last record, whose test loss was finite.
+  EXPECT_DOUBLE_EQ(mean_loss(network, {&physics, &loss}, test_set),
+                   summary.history.back().test_loss);
+  EXPECT_GT(summary.iterations, summary.history.back().iteration);
+}
+
+TEST(Trainer, UntrainedNetworkWithNonFiniteLossIsAnError) {
+  const Fragile physics;
+  const L2Loss loss;
+  Mlp network({1, 1}, Activation::kTanh);
+  network.initialize(0);
+  network.bias(0)[0] = 2e3;
+  const Dataset data{Matrix::Ones(1, 4), Matrix::Zero(1, 4), Matrix()};
+  const auto adam = make_learning_update("adam");
+  EXPECT_THROW(train(network, *adam, {&physics, &loss}, data, nullptr, limits(5)), Error);
+}
+
+// Interrupts a run when the evaluation after `stop_after` iterations is recorded, continues
+// it from the JSON of its last checkpoint and returns the continuation's summary.
+TrainingSummary interrupt_and_resume(const std::string& id, const TrainerOptions& base,
+                                     long long stop_after, Vector& final_theta) {
+  NetworkThroughPhysics s(30);
+  LearningUpdateSettings settings;
+  if (id == "gn" || id == "hig") settings.lr = 0.1;
+  std::atomic<bool> stop{false};
+  std::string saved;
+  TrainerOptions options = base;
+  options.stop = &stop;
+  options.checkpoint_every = 3;
+  options.on_checkpoint = [&saved](const TrainerState& state) {
+    saved = trainer_state_to_json(state).dump();
+  };
+  options.on_progress = [&](const TrainingRecord& r) {
+    if (r.iteration >= stop_after) stop = true;
+  };
+  const auto first = make_learning_update(id, settings);
+  const TrainingSummary interrupted = train(s.network, *first, s.problem, s.data, &s.data, options);
+  EXPECT_EQ(interrupted.termination, "interrupted") << id;
+
+  // A new process: a fresh network and rule, the state read back from its text.
+  NetworkThroughPhysics t(30);
+  const TrainerState state =
+      trainer_state_from_json(nlohmann::json::parse(saved), t.network.num_parameters());
+  EXPECT_EQ(state.summary.iterations, interrupted.iterations) << id;
+  TrainerOptions resumed = base;
+  resumed.resume = &state;
+  const auto second = make_learning_update(id, settings);
+  const TrainingSummary summary = train(t.network, *second, t.problem, t.data, &t.data, resumed);
+  final_theta = t.network.parameters();
+  return summary;
+}
+
+TEST(Trainer, ResumedRunIsBitIdenticalToAnUninterruptedOne) {
+  TrainerOptions by_iterations;  // 30 samples in batches of 8: epochs end mid-way
+  by_iterations.batch_size = 8;
+  by_iterations.max_iterations = 25;
+  by_iterations.eval_every = 4;
+  TrainerOptions by_epochs;  // evaluated once per epoch
+  by_epochs.batch_size = 8;
+  by_epochs.max_epochs = 6;
+  for (const TrainerOptions& options : {by_iterations, by_epochs}) {
+    for (const std::string& id : learning_update_ids()) {
+      NetworkThroughPhysics s(30);
+      LearningUpdateSettings settings;
+      if (id == "gn" || id == "hig") settings.lr = 0.1;
+      const auto update = make_learning_update(id, settings);
+      const TrainingSummary whole = train(s.network, *update, s.problem, s.data, &s.data, options);
+      Vector theta;
+      const TrainingSummary resumed = interrupt_and_resume(id, options, 9, theta);
+      EXPECT_EQ(resumed.termination, whole.termination) << id;
+      EXPECT_EQ(resumed.iterations, whole.iterations) << id;
+      EXPECT_TRUE(theta == s.network.parameters()) << id;  // every bit
+      ASSERT_EQ(resumed.history.size(), whole.history.size()) << id;
+      for (std::size_t k = 0; k < whole.history.size(); ++k) {
+        EXPECT_EQ(resumed.history[k].iteration, whole.history[k].iteration) << id;
+        EXPECT_EQ(resumed.history[k].train_loss, whole.history[k].train_loss) << id << " " << k;
+        EXPECT_EQ(resumed.history[k].test_loss, whole.history[k].test_loss) << id << " " << k;
+      }
+    }
+  }
+}
+
+TEST(Trainer, StateFromJsonRejectsStatesThatDoNotFit) {
+  NetworkThroughPhysics s(12);
+  std::string saved;
+  TrainerOptions options = limits(6);
+  options.checkpoint_every = 4;
+  options.on_checkpoint = [&saved](const TrainerState& state) {
+    saved = trainer_state_to_json(state).dump();
+  };
+  const auto adam = make_learning_update("adam");
+  train(s.network, *adam, s.problem, s.data, nullptr, options);
+  const nlohmann::json good = nlohmann::json::parse(saved);
+  const Index count = s.network.num_parameters();
+  EXPECT_NO_THROW(trainer_state_from_json(good, count));
+  EXPECT_THROW(trainer_state_from_json(good, count + 1), Error);
+  const auto rejects = [&](const std::function<void(nlohmann::json&)>& change) {
+    nlohmann::json bad = good;
+    change(bad);
+    EXPECT_THROW(trainer_state_from_json(bad, count), Error) << bad.dump().substr(0, 200);
+  };
+  rejects([](nlohmann::json& d) { d.erase("parameters"); });
+  rejects([](nlohmann::json& d) { d["parameters"][0] = "x"; });
+  rejects([](nlohmann::json& d) { d["epoch"] = -1; });
+  rejects([](nlohmann::json& d) { d["epoch"] = 1.5; });
+  rejects([](nlohmann::json& d) { d["summary"]["history"] = nlohmann::json::array(); });
+  rejects([](nlohmann::json& d) { d["summary"]["train_seconds"] = -3; });
+  rejects([](nlohmann::json& d) { d["summary"]["history"][0]["train_loss"] = nullptr; });
+  rejects([](nlohmann::json& d) { d["last_step"].erase(0); });
+
+  // A state that parses but does not fit the run: batch start beyond the data.
+  TrainerState state = trainer_state_from_json(good, count);
+  state.batch_start = 400;
+  TrainerOptions resume = limits(6);
+  resume.resume = &state;
+  EXPECT_THROW(train(s.network, *adam, s.problem, s.data, nullptr, resume), Error);
+  // Adam moments of the wrong size.
+  state = trainer_state_from_json(good, count);
+  state.update_state["m"] = nlohmann::json::array({1.0});
+  EXPECT_THROW(train(s.network, *adam, s.problem, s.data, nullptr, resume), Error);
 }
 
 TEST(Trainer, RejectsMismatchedDataAndMissingLimits) {

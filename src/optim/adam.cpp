@@ -2,6 +2,9 @@
 
 #include <cmath>
 
+#include "physgrad/error.hpp"
+#include "physgrad/serialize.hpp"
+
 namespace physgrad {
 
 AdamState::AdamState(Options options) : options_(options) {
@@ -30,6 +33,21 @@ Vector AdamState::update(const Vector& gradient) {
   const double v_correction = 1 - std::pow(options_.beta2, static_cast<double>(t_));
   return -options_.lr * (m_ / m_correction).array() /
          ((v_ / v_correction).array().sqrt() + options_.epsilon);
+}
+
+nlohmann::json AdamState::state() const {
+  return {{"t", t_}, {"m", vector_to_json(m_)}, {"v", vector_to_json(v_)}};
+}
+
+void AdamState::restore(const nlohmann::json& state, Index size) {
+  const long long t = integer_from_json(state, "t");
+  // Before the first update the moments are empty; afterwards they have one entry per θ.
+  const Index moments = t == 0 ? 0 : size;
+  Vector m = vector_from_json(state, "m", moments), v = vector_from_json(state, "v", moments);
+  if ((v.array() < 0).any()) throw Error("checkpoint field 'v': negative second moment");
+  m_ = std::move(m);
+  v_ = std::move(v);
+  t_ = t;
 }
 
 nlohmann::json Adam::params() const {

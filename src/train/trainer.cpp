@@ -101,11 +101,9 @@ BatchState evaluate_batch(const Mlp& network, const LearningProblem& problem,
   return state;
 }
 
-TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProblem& problem,
-                      const Dataset& train_set, const Dataset* test_set,
-                      const TrainerOptions& options) {
-  check_problem(network, problem, train_set, "training set");
-  if (test_set != nullptr) check_problem(network, problem, *test_set, "test set");
+namespace {
+
+void check_options(const TrainerOptions& options) {
   if (options.batch_size < 1) {
     throw Error("batch size must be ≥ 1, got " + std::to_string(options.batch_size));
   }
@@ -124,101 +122,286 @@ TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProble
   if (options.eval_every && *options.eval_every < 1) {
     throw Error("eval_every must be ≥ 1, got " + std::to_string(*options.eval_every));
   }
+  if (options.checkpoint_every && *options.checkpoint_every < 1) {
+    throw Error("checkpoint_every must be ≥ 1, got " + std::to_string(*options.checkpoint_every));
+  }
+  if (options.checkpoint_seconds && !(*options.checkpoint_seconds >= 0)) {
+    throw Error("checkpoint_seconds must be ≥ 0");
+  }
+  if (options.max_step_halvings < 0) {
+    throw Error("max_step_halvings must be ≥ 0, got " + std::to_string(options.max_step_halvings));
+  }
+}
 
-  const Index n = train_set.size();
-  const Index batch_size = std::min(options.batch_size, n);
-  TrainingSummary summary;
-  update.reset();
+// One training run: the loop state between iterations (what a checkpoint holds) and the steps.
+class TrainingRun {
+ public:
+  TrainingRun(Mlp& network, LearningUpdate& update, const LearningProblem& problem,
+              const Dataset& train_set, const Dataset* test_set, const TrainerOptions& options)
+      : network_(network),
+        update_(update),
+        problem_(problem),
+        train_set_(train_set),
+        test_set_(test_set),
+        options_(options),
+        n_(train_set.size()),
+        batch_size_(std::min(options.batch_size, train_set.size())) {}
 
-  const auto evaluate = [&] {
-    TrainingRecord record;
-    record.iteration = summary.iterations;
-    record.epoch = static_cast<double>(summary.iterations * batch_size) / static_cast<double>(n);
-    record.train_seconds = summary.train_seconds;
-    record.train_loss = mean_loss(network, problem, train_set);
-    record.test_loss = test_set ? mean_loss(network, problem, *test_set) : NAN;
-    if (options.on_evaluate) options.on_evaluate(network, record);
-    summary.history.push_back(record);
-    if (options.on_progress) options.on_progress(record);
-  };
-  const auto out_of_budget = [&]() -> const char* {
-    if (options.max_iterations && summary.iterations >= *options.max_iterations) {
-      return "max_iterations";
-    }
-    if (options.time_budget_seconds && summary.train_seconds >= *options.time_budget_seconds) {
-      return "time_budget";
-    }
-    return nullptr;
-  };
+  TrainingSummary run();
 
-  evaluate();
-  MlpCache cache;
-  Vector before_last_step;  // θ before the last applied update
-  bool undone = false;      // that update was undone after a non-finite batch
-  long long epoch = 0;
-  while (summary.termination.empty()) {
-    if (options.max_epochs && epoch >= *options.max_epochs) {
-      summary.termination = "max_epochs";
+ private:
+  void restore(const TrainerState& state);
+  bool evaluate();
+  bool step(const Dataset& batch);
+  void stop_for_numbers(const std::string& message);
+  bool checkpoint_due() const;
+  void checkpoint();
+  const char* out_of_budget() const;
+
+  Mlp& network_;
+  LearningUpdate& update_;
+  const LearningProblem& problem_;
+  const Dataset& train_set_;
+  const Dataset* test_set_;
+  const TrainerOptions& options_;
+  const Index n_;
+  const Index batch_size_;
+
+  TrainingSummary summary_;
+  long long epoch_ = 0;
+  Index batch_start_ = 0;
+  Vector last_step_, before_last_step_, last_evaluated_;
+  bool evaluated_ = false;  // θ is the one of the last history record
+  MlpCache cache_;
+  Clock::time_point last_checkpoint_time_ = Clock::now();
+  long long last_checkpoint_iteration_ = 0;
+};
+
+TrainingSummary TrainingRun::run() {
+  update_.reset();
+  if (options_.resume != nullptr) {
+    restore(*options_.resume);
+  } else {
+    evaluate();
+  }
+  last_checkpoint_iteration_ = summary_.iterations;
+  while (summary_.termination.empty()) {
+    if (batch_start_ == 0 && options_.max_epochs && epoch_ >= *options_.max_epochs) {
+      summary_.termination = "max_epochs";
       break;
     }
-    std::vector<Index> order(static_cast<std::size_t>(n));
-    if (options.shuffle) {
-      order = shuffled_indices(n, options.seed + static_cast<std::uint64_t>(epoch));
+    std::vector<Index> order(static_cast<std::size_t>(n_));
+    if (options_.shuffle) {
+      order = shuffled_indices(n_, options_.seed + static_cast<std::uint64_t>(epoch_));
     } else {
       std::iota(order.begin(), order.end(), Index{0});
     }
-    for (Index start = 0; start < n && summary.termination.empty(); start += batch_size) {
+    while (batch_start_ < n_ && summary_.termination.empty()) {
+      if (options_.stop != nullptr && options_.stop->load()) {
+        checkpoint();
+        summary_.termination = "interrupted";
+        summary_.message = "stopped on request after iteration " +
+                           std::to_string(summary_.iterations) + "; its state was saved";
+        return summary_;
+      }
+      if (checkpoint_due()) checkpoint();
       if (const char* reason = out_of_budget()) {
-        summary.termination = reason;
+        summary_.termination = reason;
         break;
       }
-      const Index count = std::min(batch_size, n - start);
-      const std::vector<Index> indices(order.begin() + start, order.begin() + start + count);
-
-      const auto step_start = Clock::now();
-      BatchTiming timing;
-      const BatchState batch =
-          evaluate_batch(network, problem, train_set.select(indices), update.need(), cache, &timing);
-      summary.forward_seconds += timing.forward;
-      summary.derivative_seconds += timing.derivatives;
-      const char* failure = !std::isfinite(batch.loss)                 ? "loss"
-                            : !all_finite(batch.gradient)                ? "gradient"
-                            : !all_finite(batch.loss_gradient_y)         ? "loss gradient"
-                                                                         : nullptr;
-      const auto update_start = Clock::now();
-      UpdateStep step;
-      if (failure == nullptr) {
-        step = update.step(batch);
-        summary.inversion_seconds += step.inversion_seconds;
-        summary.derivative_seconds += step.jacobian_seconds;
-        if (!all_finite(step.delta)) failure = "update";
-      }
-      if (failure != nullptr) {
-        // A non-finite step is never applied. A non-finite loss or derivative means the last
-        // applied step already broke θ: it is undone, back to the θ whose batch was finite.
-        undone = step.delta.size() == 0 && summary.iterations > 0;
-        if (undone) network.set_parameters(before_last_step);
-        summary.termination = "numerical_failure";
-        summary.message = std::string("non-finite ") + failure + " at iteration " +
-                          std::to_string(summary.iterations + 1) +
-                          (undone ? "; update " + std::to_string(summary.iterations) +
-                                      " undone, parameters restored to those before it"
-                                : std::string("; the step was not applied"));
-        break;
-      }
-      before_last_step = network.parameters();
-      network.parameters() += step.delta;
-      summary.update_seconds +=
-          seconds_since(update_start) - step.inversion_seconds - step.jacobian_seconds;
-      summary.train_seconds += seconds_since(step_start);
-      ++summary.iterations;
-      if (options.eval_every && summary.iterations % *options.eval_every == 0) evaluate();
+      const Index count = std::min(batch_size_, n_ - batch_start_);
+      const auto first = order.begin() + batch_start_;
+      if (!step(train_set_.select(std::vector<Index>(first, first + count)))) break;
+      batch_start_ += batch_size_;
+      if (options_.eval_every && summary_.iterations % *options_.eval_every == 0) evaluate();
     }
-    ++epoch;
-    if (!options.eval_every && summary.termination.empty()) evaluate();
+    if (!summary_.termination.empty()) break;
+    ++epoch_;
+    batch_start_ = 0;
+    if (!options_.eval_every) evaluate();
   }
-  if (undone || summary.history.back().iteration != summary.iterations) evaluate();
-  return summary;
+  if (!evaluated_) evaluate();
+  return summary_;
+}
+
+void TrainingRun::restore(const TrainerState& state) {
+  const Index count = network_.num_parameters();
+  const auto fits = [count](const Vector& v, bool may_be_empty) {
+    return v.size() == count || (may_be_empty && v.size() == 0);
+  };
+  std::string problem;
+  if (!fits(state.parameters, false) || !fits(state.last_evaluated, false) ||
+      !fits(state.last_step, true) || state.before_last_step.size() != state.last_step.size()) {
+    problem = "its vectors do not have the network's " + std::to_string(count) + " weights";
+  } else if (state.epoch < 0 || state.batch_start < 0 || state.batch_start >= n_ ||
+             state.batch_start % batch_size_ != 0) {
+    problem = "epoch " + std::to_string(state.epoch) + ", batch start " +
+              std::to_string(state.batch_start) + " do not fit " + std::to_string(n_) +
+              " samples in batches of " + std::to_string(batch_size_);
+  } else if (state.summary.history.empty() || !state.summary.termination.empty()) {
+    problem = "it has no history or belongs to a finished run";
+  }
+  if (!problem.empty()) throw Error("cannot resume training from this state: " + problem);
+  network_.set_parameters(state.parameters);
+  update_.restore(state.update_state, count);
+  summary_ = state.summary;
+  epoch_ = state.epoch;
+  batch_start_ = state.batch_start;
+  last_step_ = state.last_step;
+  before_last_step_ = state.before_last_step;
+  last_evaluated_ = state.last_evaluated;
+  evaluated_ = summary_.history.back().iteration == summary_.iterations &&
+               network_.parameters() == last_evaluated_;
+}
+
+// Records the losses of the current θ. A non-finite loss stops training with θ restored to the
+// last evaluated parameters (the untrained network's is an Error: nothing to go back to).
+bool TrainingRun::evaluate() {
+  TrainingRecord record;
+  record.iteration = summary_.iterations;
+  record.epoch =
+      static_cast<double>(summary_.iterations * batch_size_) / static_cast<double>(n_);
+  record.train_seconds = summary_.train_seconds;
+  record.train_loss = mean_loss(network_, problem_, train_set_);
+  record.test_loss = test_set_ ? mean_loss(network_, problem_, *test_set_) : NAN;
+  const char* bad = !std::isfinite(record.train_loss)                       ? "train"
+                    : test_set_ != nullptr && !std::isfinite(record.test_loss) ? "test"
+                                                                               : nullptr;
+  if (bad != nullptr) {
+    if (summary_.history.empty()) {
+      throw Error(std::string("the untrained network's ") + bad +
+                  " loss is not finite; check the data and the simulator");
+    }
+    network_.set_parameters(last_evaluated_);
+    evaluated_ = true;
+    stop_for_numbers(std::string("non-finite ") + bad + " loss at the evaluation after iteration " +
+                     std::to_string(summary_.iterations) +
+                     "; parameters restored to those evaluated at iteration " +
+                     std::to_string(summary_.history.back().iteration));
+    return false;
+  }
+  if (options_.on_evaluate) options_.on_evaluate(network_, record);
+  summary_.history.push_back(record);
+  last_evaluated_ = network_.parameters();
+  evaluated_ = true;
+  if (options_.on_progress) options_.on_progress(record);
+  return true;
+}
+
+// One update on `batch` under the numerical guard; false when training must stop.
+bool TrainingRun::step(const Dataset& batch) {
+  const auto step_start = Clock::now();
+  UpdateStep step;
+  const char* failure = nullptr;
+  int halvings = 0;
+  for (;;) {
+    BatchTiming timing;
+    const BatchState state =
+        evaluate_batch(network_, problem_, batch, update_.need(), cache_, &timing);
+    summary_.forward_seconds += timing.forward;
+    summary_.derivative_seconds += timing.derivatives;
+    failure = !std::isfinite(state.loss)            ? "loss"
+              : !all_finite(state.gradient)         ? "gradient"
+              : !all_finite(state.loss_gradient_y)  ? "loss gradient"
+                                                    : nullptr;
+    const auto update_start = Clock::now();
+    if (failure == nullptr) {
+      step = update_.step(state);
+      summary_.inversion_seconds += step.inversion_seconds;
+      summary_.derivative_seconds += step.jacobian_seconds;
+      if (!all_finite(step.delta)) failure = "update";
+    }
+    if (failure == nullptr) {
+      summary_.update_seconds +=
+          seconds_since(update_start) - step.inversion_seconds - step.jacobian_seconds;
+      break;
+    }
+    // The batch at θ is broken. If θ came from a step that can be halved, try half of it.
+    if (!update_.steps_can_be_halved() || last_step_.size() == 0 ||
+        halvings == options_.max_step_halvings) {
+      break;
+    }
+    last_step_ *= 0.5;
+    network_.parameters() = before_last_step_ + last_step_;
+    ++halvings;
+    ++summary_.step_halvings;
+  }
+  if (failure != nullptr) {
+    // A non-finite step is never applied. A non-finite loss or derivative means the last
+    // applied step already broke θ: it is undone, back to the θ whose batch was finite.
+    const bool undo = last_step_.size() != 0 && (std::string(failure) != "update" || halvings > 0);
+    if (undo) {
+      network_.set_parameters(before_last_step_);
+      evaluated_ = false;
+    }
+    const std::string it = std::to_string(summary_.iterations);
+    stop_for_numbers(
+        std::string("non-finite ") + failure + " at iteration " +
+        std::to_string(summary_.iterations + 1) +
+        (halvings > 0 ? ", also after halving update " + it + " " + std::to_string(halvings) +
+                            " times"
+                      : std::string()) +
+        (undo ? "; update " + it + " undone, parameters restored to those before it"
+              : std::string("; the step was not applied")));
+    return false;
+  }
+  before_last_step_ = network_.parameters();
+  last_step_ = std::move(step.delta);
+  network_.parameters() += last_step_;
+  evaluated_ = false;
+  summary_.train_seconds += seconds_since(step_start);
+  ++summary_.iterations;
+  return true;
+}
+
+void TrainingRun::stop_for_numbers(const std::string& message) {
+  summary_.termination = "numerical_failure";
+  summary_.message += (summary_.message.empty() ? "" : "; then ") + message;
+}
+
+bool TrainingRun::checkpoint_due() const {
+  if (!options_.on_checkpoint || summary_.iterations == last_checkpoint_iteration_) return false;
+  return (options_.checkpoint_every && summary_.iterations % *options_.checkpoint_every == 0) ||
+         (options_.checkpoint_seconds &&
+          seconds_since(last_checkpoint_time_) >= *options_.checkpoint_seconds);
+}
+
+void TrainingRun::checkpoint() {
+  if (options_.on_checkpoint) {
+    TrainerState state;
+    state.epoch = epoch_;
+    state.batch_start = batch_start_;
+    state.parameters = network_.parameters();
+    state.last_step = last_step_;
+    state.before_last_step = before_last_step_;
+    state.last_evaluated = last_evaluated_;
+    state.update_state = update_.state();
+    state.summary = summary_;
+    options_.on_checkpoint(state);
+  }
+  last_checkpoint_time_ = Clock::now();
+  last_checkpoint_iteration_ = summary_.iterations;
+}
+
+const char* TrainingRun::out_of_budget() const {
+  if (options_.max_iterations && summary_.iterations >= *options_.max_iterations) {
+    return "max_iterations";
+  }
+  if (options_.time_budget_seconds && summary_.train_seconds >= *options_.time_budget_seconds) {
+    return "time_budget";
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProblem& problem,
+                      const Dataset& train_set, const Dataset* test_set,
+                      const TrainerOptions& options) {
+  check_problem(network, problem, train_set, "training set");
+  if (test_set != nullptr) check_problem(network, problem, *test_set, "test set");
+  check_options(options);
+  return TrainingRun(network, update, problem, train_set, test_set, options).run();
 }
 
 }  // namespace physgrad

@@ -2,6 +2,8 @@
 // m̂ = m/(1−β₁ᵗ), v̂ = v/(1−β₂ᵗ); a diagonal (per-component) rescaling of the gradient.
 #pragma once
 
+#include <nlohmann/json.hpp>
+
 #include "physgrad/optim/optimizer.hpp"
 
 namespace physgrad {
@@ -21,6 +23,10 @@ class AdamState {
   const Options& options() const { return options_; }
   void reset();
   Vector update(const Vector& gradient);  // returns Δ = −η m̂ / (√v̂ + ε)
+  // The moments and step count, and their restoration (throws Error on a malformed state or
+  // one of another size than `size`).
+  nlohmann::json state() const;
+  void restore(const nlohmann::json& state, Index size);
 
  private:
   Options options_;

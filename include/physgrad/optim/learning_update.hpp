@@ -55,6 +55,13 @@ class LearningUpdate {
   virtual UpdateNeed need() const = 0;
   virtual void reset() {}
   virtual UpdateStep step(const BatchState& batch) = 0;
+  // The state carried between steps (null for stateless rules), and its restoration for a
+  // network with `parameter_count` weights; throws Error on a malformed state.
+  virtual nlohmann::json state() const { return nullptr; }
+  virtual void restore(const nlohmann::json& /*state*/, Index /*parameter_count*/) {}
+  // True when a step may be scaled down after the fact without changing the rule's state, so a
+  // step that leads to a non-finite batch can be retried at half its length (gn, hig).
+  virtual bool steps_can_be_halved() const { return false; }
 };
 
 // Stochastic gradient descent: Δθ = −η ∇θ.
@@ -79,6 +86,10 @@ class AdamUpdate final : public LearningUpdate {
   UpdateNeed need() const override { return UpdateNeed::kGradient; }
   void reset() override { state_.reset(); }
   UpdateStep step(const BatchState& batch) override { return {state_.update(batch.gradient), 0}; }
+  nlohmann::json state() const override { return state_.state(); }
+  void restore(const nlohmann::json& state, Index parameter_count) override {
+    state_.restore(state, parameter_count);
+  }
 
  private:
   AdamState state_;
@@ -96,6 +107,7 @@ class JacobianInverseUpdate final : public LearningUpdate {
   nlohmann::json params() const override;
   UpdateNeed need() const override { return UpdateNeed::kStackedJacobian; }
   UpdateStep step(const BatchState& batch) override;
+  bool steps_can_be_halved() const override { return true; }
   // Backend and kept rank of the last step.
   const PowerPinvInfo& last_info() const { return info_; }
 
@@ -123,6 +135,10 @@ class SipUpdate final : public LearningUpdate {
   UpdateNeed need() const override { return UpdateNeed::kNetworkOutputs; }
   void reset() override { adam_.reset(); }
   UpdateStep step(const BatchState& batch) override;
+  nlohmann::json state() const override { return adam_.state(); }
+  void restore(const nlohmann::json& state, Index parameter_count) override {
+    adam_.restore(state, parameter_count);
+  }
 
  private:
   SipOptions options_;

@@ -2,6 +2,7 @@
 // computing exactly what the update needs (∇θ by backprop, or the stacked Jacobian by m VJPs).
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <optional>
 #include <string>
@@ -30,6 +31,36 @@ struct TrainingRecord {
   nlohmann::json extras = nlohmann::json::object();  // filled by TrainerOptions::on_evaluate
 };
 
+struct TrainingSummary {
+  std::vector<TrainingRecord> history;  // history[0] is the untrained network
+  std::string termination;              // "max_iterations", "max_epochs", "time_budget",
+                                        // "numerical_failure", "interrupted"
+  std::string message;
+  long long iterations = 0;             // updates made
+  double train_seconds = 0;
+  // Time per part of all steps: network+physics forward and loss, the stacked Jacobian or
+  // gradient, the inversion inside the update, and the rest of the update.
+  double forward_seconds = 0;
+  double derivative_seconds = 0;
+  double inversion_seconds = 0;
+  double update_seconds = 0;
+  long long step_halvings = 0;  // steps retried at half length after a non-finite batch
+};
+
+// Everything a run needs to continue exactly where it was, taken between two iterations. The
+// shuffling order of an epoch follows from the seed and the epoch, so (epoch, batch_start) is
+// the whole random state.
+struct TrainerState {
+  long long epoch = 0;       // the epoch in progress
+  Index batch_start = 0;     // where the next mini-batch starts in that epoch's order
+  Vector parameters;         // θ
+  Vector last_step;          // the last applied Δθ (empty before the first update)
+  Vector before_last_step;   // θ − last_step as it was before that update
+  Vector last_evaluated;     // θ at the last evaluation (whose losses were finite)
+  nlohmann::json update_state;  // LearningUpdate::state()
+  TrainingSummary summary;      // the history and timings so far
+};
+
 struct TrainerOptions {
   Index batch_size = 32;
   // Stop after any of these; at least one must be set.
@@ -44,21 +75,20 @@ struct TrainerOptions {
   std::function<void(const Mlp&, TrainingRecord&)> on_evaluate;
   // Progress line after each evaluation.
   std::function<void(const TrainingRecord&)> on_progress;
-};
 
-struct TrainingSummary {
-  std::vector<TrainingRecord> history;  // history[0] is the untrained network
-  std::string termination;              // "max_iterations", "max_epochs", "time_budget",
-                                        // "numerical_failure"
-  std::string message;
-  long long iterations = 0;
-  double train_seconds = 0;
-  // Time per part of all steps: network+physics forward and loss, the stacked Jacobian or
-  // gradient, the inversion inside the update, and the rest of the update.
-  double forward_seconds = 0;
-  double derivative_seconds = 0;
-  double inversion_seconds = 0;
-  double update_seconds = 0;
+  // Checkpoints: on_checkpoint receives the state every checkpoint_every iterations and/or
+  // every checkpoint_seconds of wall time, and when *stop becomes true; training then ends
+  // with termination "interrupted" (no final evaluation), to be continued with `resume`.
+  std::function<void(const TrainerState&)> on_checkpoint;
+  std::optional<long long> checkpoint_every;
+  std::optional<double> checkpoint_seconds;
+  const std::atomic<bool>* stop = nullptr;
+  // Continue from this state (same network shape, update rule, data and options) instead of
+  // starting afresh; the continuation is bit-identical to a run that was never interrupted.
+  const TrainerState* resume = nullptr;
+  // For rules whose steps can be halved (gn, hig): how often a step that led to a non-finite
+  // batch is retried at half its length before training stops.
+  int max_step_halvings = 10;
 };
 
 // Mean loss of the network over a data set.
@@ -79,12 +109,26 @@ BatchState evaluate_batch(const Mlp& network, const LearningProblem& problem,
                           const Dataset& batch, UpdateNeed need, MlpCache& cache,
                           BatchTiming* timing = nullptr);
 
-// Trains `network` in place. Throws Error on mismatched dimensions or invalid options. A NaN/Inf
-// loss, derivative or step stops training with termination "numerical_failure": a non-finite
-// step is never applied, and when the loss or derivative of a batch is non-finite the update
-// that led there is undone, so θ ends where every batch so far evaluated finite.
+// Trains `network` in place. Throws Error on mismatched dimensions, invalid options, a
+// resume state that does not fit, or an untrained network whose loss is not finite.
+// Numerical guard: a non-finite loss, derivative or step never reaches θ. When the batch after
+// an update is non-finite, a rule whose steps can be halved retries that update at half length
+// (up to max_step_halvings times); otherwise, or when that does not help, the update is undone
+// and training stops with termination "numerical_failure". An evaluation whose train or test
+// loss is not finite also stops training, with θ restored to the last evaluated parameters, so
+// neither θ nor the history ever holds a non-finite loss.
 TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProblem& problem,
                       const Dataset& train_set, const Dataset* test_set,
                       const TrainerOptions& options);
+
+// A summary as JSON and back (checked like the state below).
+nlohmann::json training_summary_to_json(const TrainingSummary& summary);
+TrainingSummary training_summary_from_json(const nlohmann::json& document);
+
+// The state as JSON for a checkpoint, and back; trainer_state_from_json checks every field
+// (θ and the step vectors of `parameter_count` entries, finite numbers, a consistent history)
+// and throws Error naming the first bad one.
+nlohmann::json trainer_state_to_json(const TrainerState& state);
+TrainerState trainer_state_from_json(const nlohmann::json& document, Index parameter_count);
 
 }  // namespace physgrad

@@ -1,0 +1,115 @@
+// TrainerState ↔ JSON for checkpoints.
+#include <cmath>
+
+#include "physgrad/error.hpp"
+#include "physgrad/serialize.hpp"
+#include "physgrad/train/trainer.hpp"
+
+namespace physgrad {
+
+namespace {
+
+// NaN (a test loss without a test set) is written as null.
+nlohmann::json number(double value) { return std::isfinite(value) ? nlohmann::json(value) : nullptr; }
+
+nlohmann::json record_to_json(const TrainingRecord& r) {
+  return {{"iteration", r.iteration},         {"epoch", r.epoch},
+          {"train_seconds", r.train_seconds}, {"train_loss", number(r.train_loss)},
+          {"test_loss", number(r.test_loss)}, {"extras", r.extras}};
+}
+
+TrainingRecord record_from_json(const nlohmann::json& document) {
+  TrainingRecord r;
+  r.iteration = integer_from_json(document, "iteration");
+  r.epoch = real_from_json(document, "epoch");
+  r.train_seconds = real_from_json(document, "train_seconds");
+  r.train_loss = real_from_json(document, "train_loss");
+  r.test_loss = real_from_json(document, "test_loss", true);
+  r.extras = object_from_json(document, "extras");
+  return r;
+}
+
+}  // namespace
+
+nlohmann::json training_summary_to_json(const TrainingSummary& s) {
+  nlohmann::json history = nlohmann::json::array();
+  for (const TrainingRecord& r : s.history) history.push_back(record_to_json(r));
+  return {{"history", history},
+          {"termination", s.termination},
+          {"message", s.message},
+          {"iterations", s.iterations},
+          {"train_seconds", s.train_seconds},
+          {"forward_seconds", s.forward_seconds},
+          {"derivative_seconds", s.derivative_seconds},
+          {"inversion_seconds", s.inversion_seconds},
+          {"update_seconds", s.update_seconds},
+          {"step_halvings", s.step_halvings}};
+}
+
+TrainingSummary training_summary_from_json(const nlohmann::json& document) {
+  TrainingSummary summary;
+  summary.termination = string_from_json(document, "termination");
+  summary.message = string_from_json(document, "message");
+  summary.iterations = integer_from_json(document, "iterations");
+  double* const times[] = {&summary.train_seconds, &summary.forward_seconds,
+                           &summary.derivative_seconds, &summary.inversion_seconds,
+                           &summary.update_seconds};
+  const char* const keys[] = {"train_seconds", "forward_seconds", "derivative_seconds",
+                              "inversion_seconds", "update_seconds"};
+  for (std::size_t k = 0; k < 5; ++k) {
+    *times[k] = real_from_json(document, keys[k]);
+    if (!(*times[k] >= 0) || !std::isfinite(*times[k])) {
+      throw Error(std::string("checkpoint field '") + keys[k] + "': must be a finite time ≥ 0");
+    }
+  }
+  summary.step_halvings = integer_from_json(document, "step_halvings");
+  if (!document.contains("history") || !document.at("history").is_array() ||
+      document.at("history").empty()) {
+    throw Error("checkpoint field 'history': expected a non-empty array of records");
+  }
+  long long previous = -1;
+  for (const nlohmann::json& entry : document.at("history")) {
+    TrainingRecord record = record_from_json(entry);
+    if (record.iteration < previous || record.iteration > summary.iterations ||
+        !std::isfinite(record.train_loss)) {
+      throw Error("checkpoint field 'history': record at iteration " +
+                  std::to_string(record.iteration) + " is out of order or not finite");
+    }
+    previous = record.iteration;
+    summary.history.push_back(std::move(record));
+  }
+  return summary;
+}
+
+nlohmann::json trainer_state_to_json(const TrainerState& state) {
+  return {{"epoch", state.epoch},
+          {"batch_start", state.batch_start},
+          {"parameters", vector_to_json(state.parameters)},
+          {"last_step", vector_to_json(state.last_step)},
+          {"before_last_step", vector_to_json(state.before_last_step)},
+          {"last_evaluated", vector_to_json(state.last_evaluated)},
+          {"update_state", state.update_state},
+          {"summary", training_summary_to_json(state.summary)}};
+}
+
+TrainerState trainer_state_from_json(const nlohmann::json& document, Index parameter_count) {
+  TrainerState state;
+  state.epoch = integer_from_json(document, "epoch");
+  state.batch_start = integer_from_json(document, "batch_start");
+  state.parameters = vector_from_json(document, "parameters", parameter_count);
+  const Index steps = vector_from_json(document, "last_step").size() == 0 ? 0 : parameter_count;
+  state.last_step = vector_from_json(document, "last_step", steps);
+  state.before_last_step = vector_from_json(document, "before_last_step", steps);
+  state.last_evaluated = vector_from_json(document, "last_evaluated", parameter_count);
+  if (!document.is_object() || !document.contains("update_state")) {
+    throw Error("checkpoint field 'update_state': missing");
+  }
+  state.update_state = document.at("update_state");
+  state.summary = training_summary_from_json(object_from_json(document, "summary"));
+  if (!state.summary.termination.empty()) {
+    throw Error("checkpoint field 'termination': a state to resume belongs to a run in progress");
+  }
+  return state;
+}
+
+}  // namespace physgrad
