@@ -250,7 +250,7 @@ OptionTexts config_options(const Experiment& experiment, const json& document) {
   return texts;
 }
 
-OptionTexts read_config_file(const Experiment& experiment, const std::filesystem::path& path) {
+nlohmann::json read_config_document(const std::filesystem::path& path) {
   const std::string where = std::string("config file '") + path.string() + "': ";
   std::error_code error;
   if (std::filesystem::is_directory(path, error)) throw Error(where + "is a directory");
@@ -260,9 +260,18 @@ OptionTexts read_config_file(const Experiment& experiment, const std::filesystem
   text << in.rdbuf();
   if (in.bad()) throw Error(where + "cannot read: " + std::strerror(errno));
   try {
-    return config_options(experiment, parse_config_json(text.str()));
+    return parse_config_json(text.str());
   } catch (const Error& e) {
     throw Error(where + e.what());
+  }
+}
+
+OptionTexts read_config_file(const Experiment& experiment, const std::filesystem::path& path) {
+  const nlohmann::json document = read_config_document(path);
+  try {
+    return config_options(experiment, document);
+  } catch (const Error& e) {
+    throw Error(std::string("config file '") + path.string() + "': " + e.what());
   }
 }
 

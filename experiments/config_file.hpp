@@ -25,6 +25,9 @@ nlohmann::json parse_config_json(const std::string& text);
 // its default. Every value is checked by parse_option(). Throws Error naming the bad key or value.
 OptionTexts config_options(const Experiment& experiment, const nlohmann::json& document);
 
+// Reads and parses a config file (without checking its values); errors start with
+// "config file 'PATH': ".
+nlohmann::json read_config_document(const std::filesystem::path& path);
 // Reads, parses and checks a config file; errors start with "config file 'PATH': ".
 OptionTexts read_config_file(const Experiment& experiment, const std::filesystem::path& path);
 

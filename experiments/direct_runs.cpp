@@ -29,6 +29,10 @@ DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Object
   MinimizeOptions options;
   options.max_iterations = iterations;
   options.loss_tolerance = tolerance;
+  options.callback = [&context](const IterationRecord&) {
+    context.check_interrupt();
+    return false;
+  };
   DirectResult result{rule, minimize(*optimizer, objective, x0, options), 0};
   result.initial_loss = result.summary.history.front().loss;
 

@@ -9,6 +9,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "interrupt.hpp"
 #include "physgrad/error.hpp"
 
 namespace physgrad::experiments {
@@ -218,6 +219,12 @@ void RunContext::progress(const std::string& line) {
 void RunContext::finish_progress() {
   if (progress_line_open_) std::cerr << '\n';
   progress_line_open_ = false;
+}
+
+void RunContext::check_interrupt() const {
+  if (stop_ != nullptr && stop_->load()) {
+    throw Interrupted(experiment_name_ + ": stopped on request");
+  }
 }
 
 std::vector<OptionSpec> common_options(const Experiment& experiment) {

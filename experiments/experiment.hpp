@@ -2,6 +2,7 @@
 // RunContext, which collects metrics, per-run summaries, figures and tables for the run folder.
 #pragma once
 
+#include <atomic>
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -11,6 +12,8 @@
 #include "physgrad/types.hpp"
 
 namespace physgrad::experiments {
+
+class ExperimentCheckpoint;
 
 // One command-line option of an experiment. Values are parsed and validated by parse_option(),
 // so every bad value gets the same kind of one-line error naming the option and the value.
@@ -85,6 +88,8 @@ class RunContext {
   void add_figure(Figure figure) { figures_.push_back(std::move(figure)); }
   void add_table(Table table) { tables_.push_back(std::move(table)); }
   void add_note(std::string text) { notes_.push_back(std::move(text)); }
+  // A trained network {"label", "seed", "widths", "parameters"} for networks.json.
+  void add_network(nlohmann::json network) { networks_.push_back(std::move(network)); }
   // Progress on stderr: an updating line on a terminal, periodic plain lines otherwise.
   void progress(const std::string& line);
 
@@ -93,10 +98,20 @@ class RunContext {
   const std::vector<Figure>& figures() const { return figures_; }
   const std::vector<Table>& tables() const { return tables_; }
   const std::vector<std::string>& notes() const { return notes_; }
+  const std::vector<nlohmann::json>& networks() const { return networks_; }
   void set_quiet(bool quiet) { quiet_ = quiet; }
   void set_experiment_name(std::string name) { experiment_name_ = std::move(name); }
   const std::string& experiment_name() const { return experiment_name_; }
   void finish_progress();
+
+  // Set by the CLI: the flag a stop request sets, and where learning runs keep their
+  // checkpoint. Both may stay null (no interruption, no checkpoint).
+  void set_stop_flag(const std::atomic<bool>* stop) { stop_ = stop; }
+  const std::atomic<bool>* stop_flag() const { return stop_; }
+  // Throws Interrupted once a stop was requested.
+  void check_interrupt() const;
+  void set_checkpoint(ExperimentCheckpoint* checkpoint) { checkpoint_ = checkpoint; }
+  ExperimentCheckpoint* checkpoint() const { return checkpoint_; }
 
  private:
   std::vector<nlohmann::json> metrics_;
@@ -104,7 +119,10 @@ class RunContext {
   std::vector<Figure> figures_;
   std::vector<Table> tables_;
   std::vector<std::string> notes_;
+  std::vector<nlohmann::json> networks_;
   std::string experiment_name_;
+  const std::atomic<bool>* stop_ = nullptr;
+  ExperimentCheckpoint* checkpoint_ = nullptr;
   bool quiet_ = false;
   bool progress_line_open_ = false;
   double last_progress_seconds_ = -1e9;

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "checkpoint.hpp"
 #include "direct_runs.hpp"
+#include "interrupt.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/report/svg_plot.hpp"
 
@@ -50,6 +52,12 @@ std::vector<OptionSpec> learning_options(const std::string& default_time,
       integer_option("eval-every", default_eval_every,
                      "evaluate every N iterations (default: every epoch)")
           .at_least(1),
+      integer_option("checkpoint-every", "",
+                     "also save a checkpoint every N iterations (physgrad resume continues it)")
+          .at_least(1),
+      real_option("checkpoint-seconds", "60",
+                  "save a checkpoint of the run in progress at least this often (wall seconds)")
+          .above(0),
   };
 }
 
@@ -89,8 +97,15 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                       std::to_string(result.seed) + ", iteration " +
                       std::to_string(r.iteration) + ", test loss " + format_value(r.test_loss));
   };
-  result.summary = train(network, *update, problem, train_set, test_set, options);
+  result.summary = train_or_resume(RunKey{static_cast<long long>(results_.size()), id, tag,
+                                          result.seed},
+                                   network, *update, problem, train_set, test_set, options);
   context_.finish_progress();
+  context_.add_network({{"label", result.label},
+                        {"seed", result.seed},
+                        {"widths", network.widths()},
+                        {"parameters", std::vector<double>(network.parameters().begin(),
+                                                           network.parameters().end())}});
 
   nlohmann::json run_params = update->params();
   run_params["batch"] = options.batch_size;
@@ -125,6 +140,38 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                                           {"update", s.update_seconds}}}});
   results_.push_back(std::move(result));
   return results_.back();
+}
+
+TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Mlp& network,
+                                               LearningUpdate& update,
+                                               const LearningProblem& problem,
+                                               const Dataset& train_set, const Dataset* test_set,
+                                               TrainerOptions options) {
+  options.stop = context_.stop_flag();
+  ExperimentCheckpoint* checkpoint = context_.checkpoint();
+  std::optional<TrainerState> state;
+  if (checkpoint != nullptr) {
+    const Index count = network.num_parameters();
+    if (std::optional<FinishedRun> done = checkpoint->finished(key, count)) {
+      network.set_parameters(done->parameters);
+      return std::move(done->summary);
+    }
+    state = checkpoint->in_progress(key, count);
+    if (state) options.resume = &*state;
+    if (settings_.has("checkpoint-every")) {
+      options.checkpoint_every = settings_.integer("checkpoint-every");
+    }
+    options.checkpoint_seconds = settings_.real("checkpoint-seconds");
+    options.on_checkpoint = [checkpoint, &key](const TrainerState& s) {
+      checkpoint->save_progress(key, s);
+    };
+  }
+  TrainingSummary summary = train(network, update, problem, train_set, test_set, options);
+  if (summary.termination == "interrupted") {
+    throw Interrupted(context_.experiment_name() + ": " + key.describe() + " " + summary.message);
+  }
+  if (checkpoint != nullptr) checkpoint->record_finished(key, summary, network.parameters());
+  return summary;
 }
 
 std::vector<const LearningResult*> LearningSweep::first_seed_runs(const std::string& tag) const {

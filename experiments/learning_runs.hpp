@@ -14,6 +14,8 @@
 
 namespace physgrad::experiments {
 
+struct RunKey;
+
 struct LearningResult {
   std::string id;     // update rule id
   std::string tag;    // the setting, e.g. "λ=0.01"
@@ -72,6 +74,13 @@ class LearningSweep {
   void add_tables() const;
 
  private:
+  // Trains, or takes the run from the context's checkpoint when it finished there, or
+  // continues it from its saved state; saves checkpoints as the settings ask. Throws
+  // Interrupted when a stop request ended the run.
+  TrainingSummary train_or_resume(const RunKey& key, Mlp& network, LearningUpdate& update,
+                                  const LearningProblem& problem, const Dataset& train_set,
+                                  const Dataset* test_set, TrainerOptions options);
+
   const Settings& settings_;
   RunContext& context_;
   std::map<std::string, RuleDefaults> defaults_;

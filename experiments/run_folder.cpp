@@ -1,10 +1,14 @@
 #include "run_folder.hpp"
 
+#include <fcntl.h>
+#include <stdio.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <set>
 #include <system_error>
 
+#include "checkpoint.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/report/atomic_file.hpp"
 #include "physgrad/report/csv.hpp"
@@ -101,14 +105,24 @@ std::string report_html(const Experiment& experiment, const Settings& settings,
 
 }  // namespace
 
-fs::path prepare_run_folder(const fs::path& out) {
+fs::path prepare_run_folder(const fs::path& out, bool resuming) {
   std::error_code error;
-  if (fs::exists(out, error)) {
+  const std::string name = std::string("'") + out.string() + "'";
+  if (resuming) {
+    if (!fs::exists(out / kCheckpointFile, error)) {
+      throw Error(name + " holds no checkpoint (" + kCheckpointFile +
+                  "): not the folder of an interrupted run");
+    }
+  } else if (fs::exists(out, error)) {
     if (!fs::is_directory(out, error)) {
-      throw Error("--out: '" + out.string() + "' exists and is not a directory");
+      throw Error("--out: " + name + " exists and is not a directory");
+    }
+    if (fs::exists(out / kCheckpointFile, error)) {
+      throw Error("--out: " + name + " holds an interrupted run; continue it with `physgrad " +
+                  "resume " + out.string() + "` or choose another folder");
     }
     if (!fs::is_empty(out, error)) {
-      throw Error("--out: '" + out.string() + "' already exists and is not empty");
+      throw Error("--out: " + name + " already exists and is not empty");
     }
   }
   const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
@@ -126,6 +140,13 @@ fs::path prepare_run_folder(const fs::path& out) {
   return staging;
 }
 
+nlohmann::json config_document(const Experiment& experiment, const Settings& settings,
+                               const std::string& command_line) {
+  return {{"experiment", experiment.name()},
+          {"command", command_line},
+          {"settings", settings.json()}};
+}
+
 nlohmann::json summary_document(const Experiment& experiment, const RunContext& context) {
   return {{"experiment", experiment.name()}, {"runs", context.runs()}};
 }
@@ -133,14 +154,16 @@ nlohmann::json summary_document(const Experiment& experiment, const RunContext& 
 void write_run_folder(const fs::path& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
                       const std::string& command_line) {
-  const nlohmann::json config = {{"experiment", experiment.name()},
-                                 {"command", command_line},
-                                 {"settings", settings.json()}};
-  write_file_atomic(staging / "config.json", config.dump(2) + "\n");
+  write_file_atomic(staging / "config.json",
+                    config_document(experiment, settings, command_line).dump(2) + "\n");
   write_file_atomic(staging / "metrics.csv", metrics_csv(context));
   write_file_atomic(staging / "summary.json", summary_document(experiment, context).dump(2) + "\n");
   for (const RunContext::Figure& figure : context.figures()) {
     write_file_atomic(staging / figure.file, figure.svg);
+  }
+  if (!context.networks().empty()) {
+    write_file_atomic(staging / "networks.json",
+                      nlohmann::json{{"networks", context.networks()}}.dump() + "\n");
   }
   write_file_atomic(staging / "report.html",
                     report_html(experiment, settings, context, command_line));
@@ -148,6 +171,18 @@ void write_run_folder(const fs::path& staging, const Experiment& experiment,
 
 void commit_run_folder(const fs::path& staging, const fs::path& out) {
   std::error_code error;
+  if (fs::exists(out, error) && !fs::is_empty(out, error)) {
+    // An interrupted run's folder: exchange it with the results at once, then drop it.
+    if (::renameat2(AT_FDCWD, staging.c_str(), AT_FDCWD, out.c_str(), RENAME_EXCHANGE) == 0) {
+      fs::remove_all(staging, error);
+      return;
+    }
+    if (errno != EINVAL && errno != ENOSYS) {
+      throw Error("--out: cannot move the results to '" + out.string() +
+                  "': " + std::generic_category().message(errno));
+    }
+    fs::remove_all(out, error);  // a file system without atomic exchange
+  }
   if (fs::exists(out, error)) fs::remove(out, error);  // an empty directory, checked before
   fs::rename(staging, out, error);
   if (error) {

@@ -2,82 +2,20 @@
 // naming the bad value, exit code 2 and no output; a good run writes the whole run folder; a
 // saved config.json reproduces its run; describe shows the options.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "cli_fixture.hpp"
+
 namespace {
 
+using physgrad::testing::Cli;
+using physgrad::testing::Outcome;
+using physgrad::testing::read_file;
 namespace fs = std::filesystem;
-
-struct Outcome {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
-
-class Cli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("physgrad_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    configs_ = dir_.string() + "_configs";
-    for (const fs::path& path : {dir_, configs_}) {
-      fs::remove_all(path);
-      fs::create_directories(path);
-    }
-  }
-  void TearDown() override {
-    fs::remove_all(dir_);
-    fs::remove_all(configs_);
-  }
-
-  // A config file outside the run's working folder, so that folder stays empty on errors.
-  std::string write_config(const std::string& name, const std::string& text) const {
-    const fs::path path = configs_ / name;
-    std::ofstream(path) << text;
-    return path.string();
-  }
-
-  Outcome run(const std::string& args) const {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string command = "cd '" + dir_.string() + "' && '" + PHYSGRAD_CLI + "' " + args +
-                                " > '" + out.string() + "' 2> '" + err.string() + "'";
-    const int status = std::system(command.c_str());
-    Outcome outcome;
-    outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    outcome.out = read_file(out);
-    outcome.err = read_file(err);
-    fs::remove(out);
-    fs::remove(err);
-    return outcome;
-  }
-
-  // Exit 2, a single stderr line mentioning `needle`, and nothing left in the folder.
-  void expect_rejected(const std::string& args, const std::string& needle) const {
-    const Outcome outcome = run(args + " --out result");
-    EXPECT_EQ(outcome.exit_code, 2) << args;
-    EXPECT_EQ(std::count(outcome.err.begin(), outcome.err.end(), '\n'), 1)
-        << args << ": " << outcome.err;
-    EXPECT_NE(outcome.err.find(needle), std::string::npos) << args << ": " << outcome.err;
-    EXPECT_TRUE(fs::is_empty(dir_)) << args << " left files behind";
-  }
-
-  fs::path dir_;
-  fs::path configs_;
-};
 
 TEST_F(Cli, BadInputIsOneLineExitTwoAndWritesNothing) {
   expect_rejected("run no-such-experiment", "'no-such-experiment'");

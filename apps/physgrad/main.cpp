@@ -1,6 +1,8 @@
 // physgrad — command-line front end: `physgrad list`, `physgrad describe NAME`,
-// `physgrad run NAME [--config FILE.json] [options]`.
+// `physgrad run NAME [--config FILE.json] [options]`, `physgrad resume DIR`.
 // Every error is one line on stderr and exit code 2; a run writes its folder only on success.
+// SIGINT/SIGTERM stop a run: learning runs leave a checkpoint in the run folder (exit 128 +
+// signal), other runs write nothing.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -9,10 +11,14 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <sstream>
 
+#include "checkpoint.hpp"
 #include "config_file.hpp"
 #include "experiment.hpp"
+#include "interrupt.hpp"
+#include "physgrad/train/checkpoint_file.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/threads.hpp"
 #include "run_folder.hpp"
@@ -99,9 +105,11 @@ void print_table(const ex::RunContext::Table& table) {
   std::cout << '\n';
 }
 
+// Runs `experiment` into its run folder; `resumed` is the checkpoint of an interrupted run to
+// continue (null for a fresh run).
 int run_experiment(const ex::Experiment& experiment,
                    const std::vector<std::pair<std::string, std::string>>& given,
-                   const std::string& command_line) {
+                   const std::string& command_line, const nlohmann::json& resumed = nullptr) {
   const ex::Settings settings = ex::resolve_settings(experiment, given);
   // One BLAS thread unless asked: the matrices of most runs are small, and a multithreaded
   // BLAS on busy cores costs more than it saves.
@@ -114,20 +122,51 @@ int run_experiment(const ex::Experiment& experiment,
   const fs::path out = settings.has("out") && !settings.text("out").empty()
                            ? fs::path(settings.text("out"))
                            : fs::path("runs") / (experiment.name() + "-" + timestamp());
-  const fs::path staging = ex::prepare_run_folder(out);
+  const fs::path staging = ex::prepare_run_folder(out, !resumed.is_null());
+  std::optional<ex::ExperimentCheckpoint> checkpoint;
   try {
+    checkpoint.emplace(out, ex::config_document(experiment, settings, command_line), resumed);
     ex::RunContext context;
     context.set_experiment_name(experiment.name());
+    context.set_stop_flag(&ex::stop_flag());
+    context.set_checkpoint(&*checkpoint);
     experiment.run(settings, context);
     ex::write_run_folder(staging, experiment, settings, context, command_line);
     ex::commit_run_folder(staging, out);
     for (const auto& table : context.tables()) print_table(table);
     std::cout << "report: " << (out / "report.html").string() << '\n';
+  } catch (const ex::Interrupted& e) {
+    ex::discard_run_folder(staging);
+    std::cerr << "physgrad: " << e.what() << "; "
+              << (checkpoint && checkpoint->written()
+                      ? "checkpoint saved, continue with: physgrad resume " + out.string()
+                      : std::string("nothing written"))
+              << '\n';
+    return 128 + ex::received_signal();
   } catch (...) {
     ex::discard_run_folder(staging);
     throw;
   }
   return 0;
+}
+
+// Continues the interrupted run in `folder` with the settings of its config.json.
+int resume_run(const fs::path& folder) {
+  if (!fs::exists(folder / ex::kCheckpointFile)) {
+    throw physgrad::Error("'" + folder.string() + "' holds no checkpoint (" +
+                          ex::kCheckpointFile + "): not the folder of an interrupted run");
+  }
+  const nlohmann::json config = ex::read_config_document(folder / "config.json");
+  if (!config.is_object() || !config.contains("experiment") || !config["experiment"].is_string()) {
+    throw physgrad::Error("'" + (folder / "config.json").string() + "' names no experiment");
+  }
+  const ex::Experiment& experiment = ex::find_experiment(config["experiment"].get<std::string>());
+  ex::OptionTexts given = ex::config_options(experiment, config);
+  given.emplace_back("out", folder.string());
+  const nlohmann::json resumed = physgrad::read_checkpoint_file(folder / ex::kCheckpointFile);
+  const std::string command =
+      config.contains("command") && config["command"].is_string() ? config["command"].get<std::string>() : "";
+  return run_experiment(experiment, given, command, resumed);
 }
 
 }  // namespace
@@ -146,6 +185,10 @@ int main(int argc, char** argv) {
   CLI::App* run = app.add_subcommand(
       "run", "run an experiment: physgrad run NAME [--config FILE.json] [options]");
   run->require_subcommand(1);
+  CLI::App* resume = app.add_subcommand(
+      "resume", "continue an interrupted run from the checkpoint in its folder");
+  std::string resume_folder;
+  resume->add_option("DIR", resume_folder, "the run folder (its --out)")->required();
 
   // Each experiment is a subcommand of `run` with its own options, all read as text and
   // validated by the experiment framework so every bad value gets the same kind of message.
@@ -195,6 +238,8 @@ int main(int argc, char** argv) {
       print_table(ex::options_table(ex::find_experiment(describe_name)));
       return 0;
     }
+    ex::install_interrupt_handlers();
+    if (resume->parsed()) return resume_run(resume_folder);
     for (const auto& experiment : ex::registry()) {
       CLI::App* sub = run->get_subcommand(experiment->name());
       if (!sub->parsed()) continue;

@@ -201,7 +201,7 @@ TrainingSummary TrainingRun::run() {
         checkpoint();
         summary_.termination = "interrupted";
         summary_.message = "stopped on request after iteration " +
-                           std::to_string(summary_.iterations) + "; its state was saved";
+                           std::to_string(summary_.iterations);
         return summary_;
       }
       if (checkpoint_due()) checkpoint();

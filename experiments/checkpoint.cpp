@@ -1,0 +1,125 @@
+#include "checkpoint.hpp"
+
+#include "physgrad/error.hpp"
+#include "physgrad/report/atomic_file.hpp"
+#include "physgrad/serialize.hpp"
+#include "physgrad/train/checkpoint_file.hpp"
+
+namespace physgrad::experiments {
+
+namespace fs = std::filesystem;
+
+nlohmann::json RunKey::json() const {
+  return {{"index", index}, {"optimizer", optimizer}, {"tag", tag}, {"seed", seed}};
+}
+
+std::string RunKey::describe() const {
+  return "run " + std::to_string(index) + " (" + optimizer + ", " + tag + ", seed " +
+         std::to_string(seed) + ")";
+}
+
+namespace {
+
+RunKey key_from_json(const nlohmann::json& document) {
+  const nlohmann::json& key = object_from_json(document, "key");
+  return {integer_from_json(key, "index"), string_from_json(key, "optimizer"),
+          string_from_json(key, "tag"), integer_from_json(key, "seed")};
+}
+
+}  // namespace
+
+ExperimentCheckpoint::ExperimentCheckpoint(fs::path folder, nlohmann::json config,
+                                           nlohmann::json resumed)
+    : folder_(std::move(folder)), config_(std::move(config)) {
+  if (resumed.is_null()) return;
+  const std::string experiment = string_from_json(resumed, "experiment");
+  if (experiment != config_.at("experiment").get<std::string>()) {
+    throw Error("the checkpoint belongs to experiment '" + experiment + "', config.json to '" +
+                config_.at("experiment").get<std::string>() + "'");
+  }
+  const nlohmann::json& settings = object_from_json(resumed, "settings");
+  for (const auto& [name, value] : config_.at("settings").items()) {
+    if (name != "out" && settings.value(name, nlohmann::json()) != value) {
+      throw Error("config.json and the checkpoint disagree on --" + name + " (" + value.dump() +
+                  " vs " + settings.value(name, nlohmann::json()).dump() + ")");
+    }
+  }
+  if (!resumed.contains("finished") || !resumed.at("finished").is_array()) {
+    throw Error("checkpoint field 'finished': expected an array of runs");
+  }
+  finished_ = resumed.at("finished");
+  for (std::size_t i = 0; i < finished_.size(); ++i) {
+    if (key_from_json(finished_[i]).index != static_cast<long long>(i)) {
+      throw Error("checkpoint field 'finished': run " + std::to_string(i) + " is out of order");
+    }
+  }
+  resumed_current_ = resumed.value("current", nlohmann::json());
+  written_ = true;  // the folder and config.json exist
+}
+
+const nlohmann::json* ExperimentCheckpoint::resumed_entry(const nlohmann::json& list,
+                                                          const RunKey& key) const {
+  for (const nlohmann::json& entry : list) {
+    const RunKey saved = key_from_json(entry);
+    if (saved.index != key.index) continue;
+    if (saved.json() != key.json()) {
+      throw Error("the checkpoint does not match this experiment: it has " + saved.describe() +
+                  " where the experiment runs " + key.describe());
+    }
+    return &entry;
+  }
+  return nullptr;
+}
+
+std::optional<FinishedRun> ExperimentCheckpoint::finished(const RunKey& key,
+                                                          Index parameter_count) const {
+  const nlohmann::json* entry = resumed_entry(finished_, key);
+  if (entry == nullptr) return std::nullopt;
+  FinishedRun run{training_summary_from_json(object_from_json(*entry, "summary")),
+                  vector_from_json(*entry, "parameters", parameter_count)};
+  if (run.summary.termination.empty() || run.summary.termination == "interrupted") {
+    throw Error("checkpoint: " + key.describe() + " is listed as finished but has termination '" +
+                run.summary.termination + "'");
+  }
+  return run;
+}
+
+std::optional<TrainerState> ExperimentCheckpoint::in_progress(const RunKey& key,
+                                                              Index parameter_count) const {
+  if (resumed_current_.is_null()) return std::nullopt;
+  const nlohmann::json list = nlohmann::json::array({resumed_current_});
+  const nlohmann::json* entry = resumed_entry(list, key);
+  if (entry == nullptr) return std::nullopt;
+  return trainer_state_from_json(object_from_json(*entry, "state"), parameter_count);
+}
+
+void ExperimentCheckpoint::record_finished(const RunKey& key, const TrainingSummary& summary,
+                                           const Vector& theta) {
+  finished_.push_back({{"key", key.json()},
+                       {"summary", training_summary_to_json(summary)},
+                       {"parameters", vector_to_json(theta)}});
+  write(nullptr);
+}
+
+void ExperimentCheckpoint::save_progress(const RunKey& key, const TrainerState& state) {
+  write({{"key", key.json()}, {"state", trainer_state_to_json(state)}});
+}
+
+void ExperimentCheckpoint::write(const nlohmann::json& current) {
+  if (!written_) {
+    std::error_code error;
+    fs::create_directories(folder_, error);
+    if (error) {
+      throw Error("cannot create the run folder '" + folder_.string() + "': " + error.message());
+    }
+    write_file_atomic(folder_ / "config.json", config_.dump(2) + "\n");
+    written_ = true;
+  }
+  write_checkpoint_file(folder_ / kCheckpointFile,
+                        {{"experiment", config_.at("experiment")},
+                         {"settings", config_.at("settings")},
+                         {"finished", finished_},
+                         {"current", current}});
+}
+
+}  // namespace physgrad::experiments

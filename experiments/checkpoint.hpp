@@ -1,0 +1,67 @@
+// Experiment checkpoints — the learning runs of one experiment, those finished (their summary
+// and final θ) and the one in progress (its TrainerState), in OUT/checkpoint.pgc next to the
+// resolved settings in OUT/config.json, so that `physgrad resume OUT` repeats the experiment's
+// deterministic set-up, takes the finished runs from the file and continues the interrupted
+// one where it stopped.
+#pragma once
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "physgrad/train/trainer.hpp"
+
+namespace physgrad::experiments {
+
+inline constexpr const char* kCheckpointFile = "checkpoint.pgc";
+
+// Which learning run of an experiment: its position and what identifies it.
+struct RunKey {
+  long long index = 0;  // 0 for the experiment's first learning run
+  std::string optimizer;
+  std::string tag;
+  long long seed = 0;
+
+  nlohmann::json json() const;
+  std::string describe() const;  // "run 3 (hig, λ=1, seed 2)"
+};
+
+struct FinishedRun {
+  TrainingSummary summary;
+  Vector parameters;
+};
+
+class ExperimentCheckpoint {
+ public:
+  // `config` is the config.json document of the run; `resumed` a checkpoint document read back
+  // with read_checkpoint_file() (null for a fresh run). Throws Error when `resumed` is not the
+  // checkpoint of this experiment with these settings.
+  ExperimentCheckpoint(std::filesystem::path folder, nlohmann::json config,
+                       nlohmann::json resumed = nullptr);
+
+  // The run `key` as the resumed checkpoint has it: finished, or in progress. Throws Error when
+  // the checkpoint holds another run at this position or an invalid state.
+  std::optional<FinishedRun> finished(const RunKey& key, Index parameter_count) const;
+  std::optional<TrainerState> in_progress(const RunKey& key, Index parameter_count) const;
+
+  // Both write the checkpoint file (and config.json, the first time).
+  void record_finished(const RunKey& key, const TrainingSummary& summary, const Vector& theta);
+  void save_progress(const RunKey& key, const TrainerState& state);
+
+  const std::filesystem::path& folder() const { return folder_; }
+  bool written() const { return written_; }
+
+ private:
+  void write(const nlohmann::json& current);
+  // The resumed checkpoint's entry for position key.index, checked against `key`.
+  const nlohmann::json* resumed_entry(const nlohmann::json& list, const RunKey& key) const;
+
+  std::filesystem::path folder_;
+  nlohmann::json config_;
+  nlohmann::json finished_ = nlohmann::json::array();
+  nlohmann::json resumed_current_;  // the run in progress when the checkpoint was taken
+  bool written_ = false;
+};
+
+}  // namespace physgrad::experiments

@@ -1,0 +1,82 @@
+#include "physgrad/train/checkpoint_file.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "physgrad/error.hpp"
+#include "physgrad/report/atomic_file.hpp"
+
+namespace physgrad {
+
+namespace {
+
+constexpr const char* kMagic = "physgrad-checkpoint";
+constexpr int kVersion = 1;
+
+std::string hex64(std::uint64_t value) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
+  return text;
+}
+
+}  // namespace
+
+std::uint64_t fnv1a64(std::string_view bytes) {
+  std::uint64_t hash = 0xcbf29ce484222325ULL;
+  for (const char c : bytes) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 0x100000001b3ULL;
+  }
+  return hash;
+}
+
+void write_checkpoint_file(const std::filesystem::path& path, const nlohmann::json& document) {
+  const std::string body = document.dump();
+  const std::string header = std::string(kMagic) + " " + std::to_string(kVersion) + " " +
+                             std::to_string(body.size()) + " " + hex64(fnv1a64(body)) + "\n";
+  write_file_atomic(path, header + body);
+}
+
+nlohmann::json parse_checkpoint(std::string_view text, const std::string& source) {
+  const auto fail = [&source](const std::string& problem) -> Error {
+    return Error("checkpoint '" + source + "': " + problem);
+  };
+  const std::size_t newline = text.find('\n');
+  std::istringstream header(std::string(text.substr(0, std::min(newline, std::size_t{200}))));
+  std::string magic, checksum;
+  long long version = 0, length = -1;
+  header >> magic >> version >> length >> checksum;
+  if (newline == std::string::npos || magic != kMagic || header.fail() || length < 0 ||
+      checksum.size() != 16) {
+    throw fail("not a physgrad checkpoint (bad header line)");
+  }
+  if (version != kVersion) {
+    throw fail("format version " + std::to_string(version) + ", this build reads version " +
+               std::to_string(kVersion));
+  }
+  const std::string_view body = text.substr(newline + 1);
+  if (static_cast<long long>(body.size()) != length) {
+    throw fail(static_cast<long long>(body.size()) < length
+                   ? "truncated (" + std::to_string(body.size()) + " of " +
+                         std::to_string(length) + " bytes)"
+                   : "longer than its stated " + std::to_string(length) + " bytes");
+  }
+  if (hex64(fnv1a64(body)) != checksum) throw fail("checksum mismatch: the file is corrupted");
+  try {
+    return nlohmann::json::parse(body);
+  } catch (const nlohmann::json::exception& e) {
+    throw fail(std::string("invalid JSON: ") + e.what());
+  }
+}
+
+nlohmann::json read_checkpoint_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("checkpoint '" + path.string() + "': cannot be read");
+  std::ostringstream content;
+  content << in.rdbuf();
+  return parse_checkpoint(content.str(), path.string());
+}
+
+}  // namespace physgrad

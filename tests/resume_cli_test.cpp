@@ -1,0 +1,157 @@
+// Interrupted runs end to end: a learning run killed part-way (SIGTERM, which saves a checkpoint
+// and exits 143, or SIGKILL, after which the last periodic checkpoint remains) continues with
+// `physgrad resume` to the same losses, trained networks and final figures as a run that was
+// never interrupted; a damaged checkpoint or config is a one-line error that changes nothing.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "cli_fixture.hpp"
+
+namespace {
+
+using physgrad::testing::Cli;
+using physgrad::testing::Outcome;
+using physgrad::testing::read_file;
+namespace fs = std::filesystem;
+
+// Six runs (Adam, Gauss-Newton, HIG for λ = 1 and 0.01) of 1500 iterations each.
+const std::string kRun =
+    "run hig-toy --seeds 1 --iters 1500 --eval-every 100 --checkpoint-every 50 --out ";
+
+// metrics.csv without its wall-clock column.
+std::string metrics_without_time(const fs::path& folder) {
+  std::istringstream lines(read_file(folder / "metrics.csv"));
+  std::string header, result;
+  std::getline(lines, header);
+  std::size_t skip = 0;  // the wall_seconds column's position
+  for (std::size_t at = 0, column = 0; at != std::string::npos; ++column) {
+    const std::size_t comma = header.find(',', at);
+    if (header.substr(at, comma - at) == "wall_seconds") skip = column;
+    at = comma == std::string::npos ? comma : comma + 1;
+  }
+  EXPECT_GT(skip, 0u) << header;
+  for (std::string line; std::getline(lines, line);) {
+    std::size_t at = 0;
+    for (std::size_t column = 0; column < skip; ++column) at = line.find(',', at) + 1;
+    result += line.substr(0, at) + line.substr(line.find(',', at) + 1) + "\n";
+  }
+  return result;
+}
+
+// Final losses per run from summary.json.
+nlohmann::json final_losses(const fs::path& folder) {
+  nlohmann::json finals = nlohmann::json::array();
+  for (const auto& run : nlohmann::json::parse(read_file(folder / "summary.json"))["runs"]) {
+    finals.push_back({run["label"], run["final"], run["iterations"], run["termination"]});
+  }
+  return finals;
+}
+
+class Resume : public Cli {
+ protected:
+  // Starts the run into `folder`, waits until its checkpoint holds the third run in progress
+  // and sends `signal`; returns the exit status.
+  int interrupt(const std::string& folder, int signal) {
+    const pid_t pid = spawn(kRun + folder);
+    const fs::path checkpoint = dir_ / folder / "checkpoint.pgc";
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (read_file(checkpoint).find("\"index\":2") == std::string::npos &&
+           std::chrono::steady_clock::now() < give_up) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ::kill(pid, signal);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return status;
+  }
+};
+
+TEST_F(Resume, TerminatedRunContinuesToTheSameResults) {
+  ASSERT_EQ(run(kRun + "whole").exit_code, 0);
+
+  const int status = interrupt("part", SIGTERM);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM);
+  const std::string err = read_file(configs_ / "spawned.err");
+  EXPECT_NE(err.find("checkpoint saved, continue with: physgrad resume part"), std::string::npos)
+      << err;
+  // The interrupted folder holds the settings and the checkpoint, nothing half-written.
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(dir_ / "part")) {
+    files.push_back(entry.path().filename().string());
+  }
+  std::sort(files.begin(), files.end());
+  EXPECT_EQ(files, (std::vector<std::string>{"checkpoint.pgc", "config.json"}));
+
+  const Outcome resumed = run("resume part");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_FALSE(fs::exists(dir_ / "part" / "checkpoint.pgc"));
+  EXPECT_EQ(metrics_without_time(dir_ / "part"), metrics_without_time(dir_ / "whole"));
+  EXPECT_EQ(read_file(dir_ / "part" / "networks.json"), read_file(dir_ / "whole" / "networks.json"));
+  EXPECT_EQ(final_losses(dir_ / "part"), final_losses(dir_ / "whole"));
+  // Nothing else is left beside the two run folders.
+  std::size_t entries = 0;
+  for (const auto& entry : fs::directory_iterator(dir_)) entries += entry.is_directory();
+  EXPECT_EQ(entries, 2u);
+}
+
+TEST_F(Resume, KilledRunContinuesFromItsLastPeriodicCheckpoint) {
+  ASSERT_EQ(run(kRun + "whole").exit_code, 0);
+  const int status = interrupt("part", SIGKILL);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  const Outcome resumed = run("resume part");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_EQ(metrics_without_time(dir_ / "part"), metrics_without_time(dir_ / "whole"));
+  EXPECT_EQ(read_file(dir_ / "part" / "networks.json"), read_file(dir_ / "whole" / "networks.json"));
+}
+
+TEST_F(Resume, DamagedCheckpointOrConfigIsOneLineAndChangesNothing) {
+  ASSERT_TRUE(WIFEXITED(interrupt("part", SIGTERM)));
+  const fs::path folder = dir_ / "part";
+  const std::string checkpoint = read_file(folder / "checkpoint.pgc");
+  const std::string config = read_file(folder / "config.json");
+  ASSERT_GT(checkpoint.size(), 1000u);
+
+  const auto expect_refused = [&](const std::string& args, const std::string& needle) {
+    const Outcome outcome = run(args);
+    EXPECT_EQ(outcome.exit_code, 2) << args;
+    EXPECT_EQ(std::count(outcome.err.begin(), outcome.err.end(), '\n'), 1) << outcome.err;
+    EXPECT_NE(outcome.err.find(needle), std::string::npos) << outcome.err;
+  };
+  const auto with_files = [&](const std::string& new_checkpoint, const std::string& new_config,
+                              const std::string& needle) {
+    std::ofstream(folder / "checkpoint.pgc", std::ios::binary) << new_checkpoint;
+    std::ofstream(folder / "config.json", std::ios::binary) << new_config;
+    expect_refused("resume part", needle);
+    // The folder is as it was: the same two files, nothing staged beside it.
+    EXPECT_EQ(read_file(folder / "checkpoint.pgc"), new_checkpoint);
+    EXPECT_EQ(std::distance(fs::directory_iterator(folder), fs::directory_iterator()), 2);
+    EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
+  };
+  with_files(checkpoint.substr(0, checkpoint.size() / 2), config, "truncated");
+  std::string flipped = checkpoint;
+  flipped[flipped.size() / 2] = flipped[flipped.size() / 2] == '1' ? '2' : '1';
+  with_files(flipped, config, "checksum mismatch");
+  with_files("not a checkpoint\n", config, "not a physgrad checkpoint");
+  with_files(checkpoint + "x", config, "longer than");
+  std::string other_lr = config;
+  other_lr.replace(other_lr.find("\"lr\": null"), 10, "\"lr\": 0.5");
+  with_files(checkpoint, other_lr, "disagree on --lr");
+  with_files(checkpoint, "{\"experiment\": \"hig-toy\", \"settings\": {\"iters\": 0}}",
+             "--iters");
+  with_files(checkpoint, "{", "invalid JSON");
+  // An interrupted folder is no place for a new run; a folder without a checkpoint is not one
+  // to resume; the intact folder still resumes.
+  std::ofstream(folder / "checkpoint.pgc", std::ios::binary) << checkpoint;
+  std::ofstream(folder / "config.json", std::ios::binary) << config;
+  expect_refused(kRun + "part", "physgrad resume part");
+  expect_refused("resume no-such-folder", "holds no checkpoint");
+  EXPECT_EQ(run("resume part").exit_code, 0);
+  EXPECT_TRUE(fs::exists(folder / "report.html"));
+}
+
+}  // namespace
