@@ -299,6 +299,103 @@ TEST(Trainer, NonFiniteTestLossRestoresTheLastEvaluatedParameters) {
   EXPECT_GT(summary.iterations, summary.history.back().iteration);
 }
 
+// P(x) = x with NaN injected from the `from`-th call of forward_batch or vjp_batch on (calls
+// before it are clean), for `count` calls.
+class Poisoned final : public Simulator {
+ public:
+  enum class Where { kForward, kVjp };
+  Poisoned(Where where, int from, int count) : where_(where), from_(from), count_(count) {}
+  std::string name() const override { return "poisoned"; }
+  Index input_dim() const override { return 2; }
+  Index output_dim() const override { return 2; }
+  Matrix forward_batch(const Matrix& x, const Matrix&) const override {
+    return where_ == Where::kForward ? poison(x) : x;
+  }
+  Matrix vjp_batch(const Matrix&, const Matrix&, const Matrix& gy) const override {
+    return where_ == Where::kVjp ? poison(gy) : gy;
+  }
+
+ private:
+  Matrix poison(const Matrix& m) const {
+    const int call = calls_++;
+    return call >= from_ && call < from_ + count_ ? Matrix::Constant(m.rows(), m.cols(), NAN) : m;
+  }
+  Where where_;
+  int from_, count_;
+  mutable int calls_ = 0;
+};
+
+// An update rule whose 4th step is NaN.
+class NanStep final : public LearningUpdate {
+ public:
+  std::string id() const override { return "nan-step"; }
+  nlohmann::json params() const override { return nlohmann::json::object(); }
+  UpdateNeed need() const override { return UpdateNeed::kGradient; }
+  UpdateStep step(const BatchState& batch) override {
+    const Vector delta = -0.1 * batch.gradient;
+    return {++steps_ == 4 ? Vector::Constant(delta.size(), NAN) : delta, 0};
+  }
+
+ private:
+  int steps_ = 0;
+};
+
+TEST(Trainer, InjectedNonFiniteNumbersNeverReachTheParametersOrTheHistory) {
+  const L2Loss loss;
+  Dataset data{Matrix::Random(2, 16), Matrix::Random(2, 16), Matrix()};
+  struct Case {
+    std::string rule;
+    Poisoned::Where where;
+    int from, count;
+    std::string expected;  // in the message; empty: training recovers
+  };
+  // Forward calls: the evaluation of the training set (call 0, then after every 5 iterations)
+  // and one per batch; SIP's numerical inverses add theirs after the batch's.
+  const std::vector<Case> cases = {
+      {"adam", Poisoned::Where::kForward, 8, 1000, "non-finite loss"},
+      {"adam", Poisoned::Where::kVjp, 5, 1000, "non-finite gradient"},
+      {"sip", Poisoned::Where::kForward, 1, 1000, "non-finite loss at iteration 1"},
+      {"sip", Poisoned::Where::kForward, 2, 1000, "non-finite update at iteration 1"},
+      {"hig", Poisoned::Where::kVjp, 10, 1000, "also after halving"},  // Jacobian rows
+      {"gn", Poisoned::Where::kForward, 9, 1000, "also after halving"},
+      {"hig", Poisoned::Where::kVjp, 10, 2, ""},  // a passing fault: halving recovers
+  };
+  for (const Case& c : cases) {
+    const Poisoned physics(c.where, c.from, c.count);
+    Mlp network({2, 5, 2}, Activation::kTanh);
+    network.initialize(2);
+    LearningUpdateSettings settings;
+    if (c.rule == "gn" || c.rule == "hig") settings.lr = 0.1;
+    const auto update = make_learning_update(c.rule, settings);
+    const TrainingSummary summary =
+        train(network, *update, {&physics, &loss}, data, nullptr, limits(30));
+    const std::string what = c.rule + " from call " + std::to_string(c.from);
+    EXPECT_TRUE(all_finite(network.parameters())) << what;
+    for (const TrainingRecord& r : summary.history) {
+      EXPECT_TRUE(std::isfinite(r.train_loss)) << what << " at " << r.iteration;
+    }
+    if (c.expected.empty()) {
+      EXPECT_EQ(summary.termination, "max_iterations") << what << ": " << summary.message;
+      EXPECT_GE(summary.step_halvings, 1) << what;
+    } else {
+      EXPECT_EQ(summary.termination, "numerical_failure") << what;
+      EXPECT_NE(summary.message.find(c.expected), std::string::npos) << what << ": " << summary.message;
+    }
+  }
+  // A non-finite step from the rule itself is not applied.
+  const Poisoned clean(Poisoned::Where::kForward, 1 << 30, 0);
+  Mlp network({2, 5, 2}, Activation::kTanh);
+  network.initialize(2);
+  NanStep nan_step;
+  const TrainingSummary summary = train(network, nan_step, {&clean, &loss}, data, nullptr, limits(30));
+  EXPECT_EQ(summary.termination, "numerical_failure");
+  EXPECT_EQ(summary.iterations, 3);
+  EXPECT_NE(summary.message.find("non-finite update at iteration 4; the step was not applied"),
+            std::string::npos)
+      << summary.message;
+  EXPECT_TRUE(all_finite(network.parameters()));
+}
+
 TEST(Trainer, UntrainedNetworkWithNonFiniteLossIsAnError) {
   const Fragile physics;
   const L2Loss loss;

@@ -68,6 +68,11 @@ LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, co
   MinimizeOptions run;
   run.max_iterations = options.max_iterations;
   run.loss_tolerance = 0.5 * residual_tolerance * residual_tolerance;
+  if (!std::isfinite(misfit.value(x0))) {
+    result.x = Vector::Constant(x0.size(), NAN);
+    result.residual = NAN;
+    return result;
+  }
   const MinimizeSummary summary = minimize(*solver, misfit, x0, run);
   result.x = summary.x;
   result.residual = std::sqrt(2 * summary.loss);

@@ -32,7 +32,9 @@ struct LocalInverseResult {
   bool converged = false;
 };
 
-// kAnalytic uses the simulator's own inverse (Error if it has none).
+// kAnalytic uses the simulator's own inverse (Error if it has none). When the misfit at x₀ is
+// not finite (a NaN from the simulator or in y) the numerical inverse cannot start: the result
+// is x = NaN, not converged, for the caller's numerical guard to see.
 LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, const Vector& x0,
                                  const Vector& context, const LocalInverseOptions& options);
 
