@@ -1,6 +1,7 @@
 #include "run_folder.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <stdio.h>
 #include <unistd.h>
 
@@ -103,6 +104,20 @@ std::string report_html(const Experiment& experiment, const Settings& settings,
   return html_report(experiment.name() + " — physgrad", experiment.description(), sections);
 }
 
+// Removes staging folders `prefix`PID left by processes that no longer exist (killed before
+// they could clean up).
+void remove_abandoned_staging(const fs::path& parent, const std::string& prefix) {
+  std::error_code error;
+  for (const fs::directory_entry& entry : fs::directory_iterator(parent, error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos) continue;
+    const auto pid = static_cast<pid_t>(std::stol(digits));
+    if (::kill(pid, 0) != 0 && errno == ESRCH) fs::remove_all(entry.path(), error);
+  }
+}
+
 }  // namespace
 
 fs::path prepare_run_folder(const fs::path& out, bool resuming) {
@@ -130,8 +145,9 @@ fs::path prepare_run_folder(const fs::path& out, bool resuming) {
   if (error) {
     throw Error("--out: cannot create '" + parent.string() + "': " + reason(error));
   }
-  const fs::path staging =
-      parent / (std::string(".") + out.filename().string() + ".partial-" + std::to_string(getpid()));
+  const std::string prefix = std::string(".") + out.filename().string() + ".partial-";
+  remove_abandoned_staging(parent, prefix);
+  const fs::path staging = parent / (prefix + std::to_string(getpid()));
   fs::remove_all(staging, error);
   if (!fs::create_directory(staging, error) || error) {
     throw Error("--out: cannot write in '" + parent.string() + "': " +

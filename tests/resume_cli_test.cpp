@@ -107,6 +107,8 @@ TEST_F(Resume, KilledRunContinuesFromItsLastPeriodicCheckpoint) {
   ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
   EXPECT_EQ(metrics_without_time(dir_ / "part"), metrics_without_time(dir_ / "whole"));
   EXPECT_EQ(read_file(dir_ / "part" / "networks.json"), read_file(dir_ / "whole" / "networks.json"));
+  // The killed process's staging folder is gone too.
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 2);
 }
 
 TEST_F(Resume, DamagedCheckpointOrConfigIsOneLineAndChangesNothing) {
