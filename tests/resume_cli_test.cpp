@@ -45,7 +45,8 @@ std::string metrics_without_time(const fs::path& folder) {
 // Final losses per run from summary.json.
 nlohmann::json final_losses(const fs::path& folder) {
   nlohmann::json finals = nlohmann::json::array();
-  for (const auto& run : nlohmann::json::parse(read_file(folder / "summary.json"))["runs"]) {
+  const nlohmann::json summary = nlohmann::json::parse(read_file(folder / "summary.json"));
+  for (const auto& run : summary.at("runs")) {
     finals.push_back({run["label"], run["final"], run["iterations"], run["termination"]});
   }
   return finals;
