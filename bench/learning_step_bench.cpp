@@ -5,6 +5,9 @@
 
 #include <lapacke.h>
 
+#include <algorithm>
+#include <vector>
+
 #include "physgrad/linalg/power_pinv.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"
@@ -36,18 +39,18 @@ struct Case {
   LearningProblem problem() const { return {physics.get(), &loss}; }
 };
 
-// 0: hig-toy (B 128), 1: oscillators paper (B 128), 2: poisson 8×8 (B 16).
-Case make_case(int which) {
+// 0: hig-toy (B 128), 1: oscillators paper (B 128), 2: poisson 8×8 (B 16); batch 0 = these.
+Case make_case(int which, Index batch = 0) {
   switch (which) {
     case 0:
       return Case(std::make_unique<DiagonalScale>(Vector{{1.0, 0.01}}), {1, 7, 2},
-                  Activation::kTanh, 128, false);
+                  Activation::kTanh, batch > 0 ? batch : 128, false);
     case 1:
       return Case(std::make_unique<CoupledOscillators>(OscillatorConfig::paper()),
-                  {4, 20, 20, 20, 96}, Activation::kRelu, 128, true);
+                  {4, 20, 20, 20, 96}, Activation::kRelu, batch > 0 ? batch : 128, true);
     default:
-      return Case(std::make_unique<Poisson>(8), {64, 64, 128, 64, 64}, Activation::kTanh, 16,
-                  false);
+      return Case(std::make_unique<Poisson>(8), {64, 64, 128, 64, 64}, Activation::kTanh,
+                  batch > 0 ? batch : 16, false);
   }
 }
 
@@ -103,6 +106,70 @@ void power_pinv_backend(benchmark::State& state) {
   state.SetLabel(to_string(backend));
 }
 
+// W f(Λ) Wᵀ g with f(λ) = λ^{−(1+κ)/2} over λ > rcond²·λ_max of the symmetric PSD `gram`, as the
+// Gram path computes it: every eigenpair by dsyevd, or (subset) only those above a lower
+// bound of the cutoff by dsyevr with a value range; λ_max is bounded below by the Rayleigh
+// quotient of a few power steps, so no kept pair is missed. Returns the result; `rank` the
+// number of kept pairs.
+Vector eigen_product(const Matrix& gram, const Vector& g, double kappa, double rcond,
+                     bool subset, Index& rank) {
+  const auto n = static_cast<lapack_int>(gram.rows());
+  Matrix w = gram;
+  Vector lambda(n);
+  Matrix vectors;
+  lapack_int found = n;
+  if (subset) {
+    Index start = 0;
+    double bound = gram.diagonal().maxCoeff(&start);
+    Vector v = Vector::Unit(n, start);
+    for (int step = 0; step < 4; ++step) {
+      v = (gram * v).normalized();
+      bound = std::max(bound, v.dot(gram * v));
+    }
+    vectors.resize(n, n);
+    std::vector<lapack_int> support(2 * static_cast<std::size_t>(n));
+    LAPACKE_dsyevr(LAPACK_COL_MAJOR, 'V', 'V', 'L', n, w.data(), n, rcond * rcond * bound,
+                   2 * gram.trace() + 1, 0, 0, 0.0, &found, lambda.data(), vectors.data(), n,
+                   support.data());
+  } else {
+    LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', n, w.data(), n, lambda.data());
+  }
+  const Matrix& basis = subset ? vectors : w;
+  const Vector sigma = lambda.head(found).cwiseMax(0.0).cwiseSqrt();
+  rank = (sigma.array() > rcond * sigma(found - 1)).count();
+  const auto kept = basis.middleCols(found - rank, rank);
+  Vector c = kept.transpose() * g;
+  c.array() *= sigma.tail(rank).array().pow(-1 - kappa);
+  return kept * c;
+}
+
+// The eigen part of the HIG Gram path on the Gram matrix of a reference configuration at batch
+// range(1): range(2) = 0 all eigenpairs (dsyevd, what power_pinv uses), 1 only those above the
+// cutoff (dsyevr with a value range). Counters: n, the kept rank, and the relative difference
+// of the two results.
+void eigen_route(benchmark::State& state) {
+  const auto which = static_cast<int>(state.range(0));
+  Case c = make_case(which, static_cast<Index>(state.range(1)));
+  const bool subset = state.range(2) == 1;
+  MlpCache cache;
+  const BatchState batch = evaluate_batch(c.network, c.problem(), c.batch,
+                                          UpdateNeed::kStackedJacobian, cache);
+  const Matrix gram = batch.jacobian->gram();
+  const Vector& g = batch.loss_gradient_y;
+  const double rcond = which == 2 ? 1e-5 : 1e-6;  // the experiments' τ for HIG
+  Index rank = 0, other_rank = 0;
+  Vector result;
+  for (auto _ : state) {
+    result = eigen_product(gram, g, 0.5, rcond, subset, rank);
+    benchmark::DoNotOptimize(result.data());
+  }
+  const Vector other = eigen_product(gram, g, 0.5, rcond, !subset, other_rank);
+  state.counters["n"] = static_cast<double>(gram.rows());
+  state.counters["rank"] = static_cast<double>(rank);
+  state.counters["rel_diff"] = (result - other).norm() / other.norm();
+  state.SetLabel(std::string(case_name(which)) + (subset ? " dsyevr above cutoff" : " dsyevd"));
+}
+
 void learning_step(benchmark::State& state) {
   Case c = make_case(static_cast<int>(state.range(0)));
   const std::string id = state.range(1) == 0 ? "adam" : state.range(1) == 1 ? "gn" : "hig";
@@ -124,6 +191,10 @@ BENCHMARK(power_pinv_backend)
     ->Args({512, 2956, static_cast<int>(PinvBackend::kSvd)})
     ->Args({512, 2956, static_cast<int>(PinvBackend::kGram)})
     ->Args({1024, 24896, static_cast<int>(PinvBackend::kGram)})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(eigen_route)
+    ->ArgsProduct({{1}, {64, 128, 256}, {0, 1}})
+    ->ArgsProduct({{2}, {4, 16}, {0, 1}})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(learning_step)
     ->ArgsProduct({{0, 1, 2}, {0, 1, 2}})
