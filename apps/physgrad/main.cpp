@@ -1,5 +1,5 @@
 // physgrad — command-line front end: `physgrad list`, `physgrad describe NAME`,
-// `physgrad run NAME [--config FILE.json] [options]`.
+// `physgrad run NAME [--config FILE.json] [options]`, `physgrad bench NAME [options]`.
 // Every error is one line on stderr and exit code 2; a run writes its folder only on success.
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -11,6 +11,7 @@
 #include <map>
 #include <sstream>
 
+#include "bench_command.hpp"
 #include "config_file.hpp"
 #include "experiment.hpp"
 #include "physgrad/error.hpp"
@@ -146,6 +147,7 @@ int main(int argc, char** argv) {
   CLI::App* run = app.add_subcommand(
       "run", "run an experiment: physgrad run NAME [--config FILE.json] [options]");
   run->require_subcommand(1);
+  const physgrad::cli::BenchCommand bench(app);
 
   // Each experiment is a subcommand of `run` with its own options, all read as text and
   // validated by the experiment framework so every bad value gets the same kind of message.
@@ -189,6 +191,10 @@ int main(int argc, char** argv) {
         std::cout << std::left << std::setw(static_cast<int>(width + 2)) << experiment->name()
                   << experiment->description() << '\n';
       }
+      return 0;
+    }
+    if (bench.parsed()) {
+      bench.run(std::cout);
       return 0;
     }
     if (describe->parsed()) {

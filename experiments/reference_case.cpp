@@ -1,0 +1,26 @@
+#include "reference_case.hpp"
+
+#include "physgrad/error.hpp"
+
+namespace physgrad::experiments {
+
+const std::vector<std::string>& reference_case_names() {
+  static const std::vector<std::string> names = {"hig-toy", "oscillators", "quantum-dipole",
+                                                 "poisson"};
+  return names;
+}
+
+ReferenceCase reference_case(const std::string& name, Index batch, std::uint64_t seed) {
+  if (batch < 1) throw Error("batch must be ≥ 1, got " + std::to_string(batch));
+  if (name == "hig-toy") return hig_toy_reference(batch, seed);
+  if (name == "oscillators") return oscillators_reference(batch, seed);
+  if (name == "quantum-dipole") return quantum_dipole_reference(batch, seed);
+  if (name == "poisson") return poisson_reference(batch, seed);
+  std::string known;
+  for (const std::string& candidate : reference_case_names()) {
+    known += (known.empty() ? "" : ", ") + candidate;
+  }
+  throw Error("unknown reference configuration '" + name + "' (known: " + known + ")");
+}
+
+}  // namespace physgrad::experiments
