@@ -1,5 +1,7 @@
 #include "reference_case.hpp"
 
+#include <algorithm>
+
 #include "physgrad/error.hpp"
 
 namespace physgrad::experiments {
@@ -21,6 +23,31 @@ ReferenceCase reference_case(const std::string& name, Index batch, std::uint64_t
     known += (known.empty() ? "" : ", ") + candidate;
   }
   throw Error("unknown reference configuration '" + name + "' (known: " + known + ")");
+}
+
+namespace {
+
+RuleDefaults rule_defaults(const ReferenceCase& reference, const std::string& id) {
+  const auto found = reference.defaults.find(id);
+  return found == reference.defaults.end() ? RuleDefaults{} : found->second;
+}
+
+}  // namespace
+
+std::unique_ptr<LearningUpdate> make_reference_update(const ReferenceCase& reference,
+                                                      const std::string& id) {
+  const auto& ids = learning_update_ids();
+  if (std::find(ids.begin(), ids.end(), id) == ids.end()) return make_learning_update(id);
+  const RuleDefaults defaults = rule_defaults(reference, id);
+  LearningUpdateSettings settings;
+  settings.lr = defaults.lr;
+  settings.rcond = defaults.rcond;
+  settings.sip_y_step = defaults.y_step;
+  return make_learning_update(id, settings);
+}
+
+Index reference_batch(const ReferenceCase& reference, const std::string& id) {
+  return rule_defaults(reference, id).batch;
 }
 
 }  // namespace physgrad::experiments

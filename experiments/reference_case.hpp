@@ -30,6 +30,13 @@ const std::vector<std::string>& reference_case_names();
 // Error for an unknown NAME (listing the known ones) or batch < 1.
 ReferenceCase reference_case(const std::string& name, Index batch, std::uint64_t seed = 0);
 
+// Rule `id` with the case's step size, τ and SIP step for it (the rule's own defaults where
+// the case has none). Throws Error for an unknown id.
+std::unique_ptr<LearningUpdate> make_reference_update(const ReferenceCase& reference,
+                                                      const std::string& id);
+// The case's batch size for rule `id` (32 where it has none).
+Index reference_batch(const ReferenceCase& reference, const std::string& id);
+
 // The parts, one per experiment file (defined there).
 ReferenceCase hig_toy_reference(Index batch, std::uint64_t seed);
 ReferenceCase oscillators_reference(Index batch, std::uint64_t seed);

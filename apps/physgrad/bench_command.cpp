@@ -90,19 +90,11 @@ void BenchCommand::run(std::ostream& out) const {
     set_blas_threads(1);
   }
 
-  // The rule's own defaults in NAME (lr, batch, τ), as `physgrad run NAME` uses them.
-  const ex::RuleDefaults defaults = [&] {
-    const ex::ReferenceCase probe = ex::reference_case(name_, 1);
-    const auto found = probe.defaults.find(optimizer_);
-    return found == probe.defaults.end() ? ex::RuleDefaults{} : found->second;
-  }();
-  const Index batch = batch_.empty() ? defaults.batch : read_integer("batch", batch_, 1);
+  // The rule's own batch size, step size and τ in NAME, as `physgrad run NAME` uses them.
+  const Index batch = batch_.empty() ? ex::reference_batch(ex::reference_case(name_, 1), optimizer_)
+                                     : read_integer("batch", batch_, 1);
   ex::ReferenceCase reference = ex::reference_case(name_, batch);
-  LearningUpdateSettings settings;
-  settings.lr = defaults.lr;
-  settings.rcond = defaults.rcond;
-  settings.sip_y_step = defaults.y_step;
-  const auto update = make_learning_update(optimizer_, settings);
+  const auto update = ex::make_reference_update(reference, optimizer_);
   const LearningProblem problem = reference.problem();
   Mlp& network = reference.network;
 
