@@ -34,9 +34,11 @@ std::string read_text(const std::string& path) {
 }
 
 // One benchmark run: its CPU time per iteration in milliseconds (one BLAS thread, so the work
-// itself; the wall time on a shared machine adds the waits for a core), label and counters.
+// itself; the wall time on a shared machine adds the waits for a core), its wall time, label
+// and counters.
 struct Entry {
   double ms = 0;
+  double wall_ms = 0;
   std::string label;
   json fields;
 };
@@ -52,7 +54,9 @@ class Results {
       // "learning_step/3/2/iterations:1" → "learning_step/3/2"
       if (const auto cut = name.find("/iterations:"); cut != std::string::npos) name.resize(cut);
       if (const auto cut = name.find("/repeats:"); cut != std::string::npos) name.resize(cut);
-      entries_[name] = {b.at("cpu_time").get<double>() * scale, b.value("label", ""), b};
+      if (const auto cut = name.find("/real_time"); cut != std::string::npos) name.resize(cut);
+      entries_[name] = {b.at("cpu_time").get<double>() * scale,
+                        b.at("real_time").get<double>() * scale, b.value("label", ""), b};
     }
   }
   const Entry* find(const std::string& name) const {
@@ -62,6 +66,10 @@ class Results {
   std::optional<double> ms(const std::string& name) const {
     const Entry* e = find(name);
     return e ? std::optional<double>(e->ms) : std::nullopt;
+  }
+  std::optional<double> wall_ms(const std::string& name) const {
+    const Entry* e = find(name);
+    return e ? std::optional<double>(e->wall_ms) : std::nullopt;
   }
   double counter(const std::string& name, const std::string& key) const {
     const Entry* e = find(name);
@@ -138,7 +146,7 @@ std::string reference_table(const Results& r) {
   });
   row("J Jᵀ formed (J, then dsyrk)",
       [&](const std::string& i) { return ms_text(r.ms("gram_matrix/" + i + "/0")); });
-  row("of which dsyrk on the formed J",
+  row("dsyrk alone on a formed J",
       [&](const std::string& i) { return ms_text(r.ms("gram_matrix/" + i + "/2")); });
   row("J Jᵀ from the layer factors",
       [&](const std::string& i) { return ms_text(r.ms("gram_matrix/" + i + "/1")); });
@@ -184,6 +192,14 @@ std::string ratios(const Results& r) {
     const std::string i = c.index;
     out << "- " << c.title << ": factored vs formed J Jᵀ "
         << ratio_text(r.ms("gram_matrix/" + i + "/0"), r.ms("gram_matrix/" + i + "/1")) << ".\n";
+  }
+  for (const Case& c : {kCases[2], kCases[1]}) {
+    const std::string one = "learning_step_threads/" + std::string(c.index) + "/1";
+    const std::string two = "learning_step_threads/" + std::string(c.index) + "/2";
+    if (!r.find(one) || !r.find(two)) continue;
+    out << "- " << c.title << ", HIG step with the m physics VJPs on 2 threads instead of 1 "
+        << "(wall time): " << ms_text(r.wall_ms(two)) << " vs " << ms_text(r.wall_ms(one))
+        << " (" << ratio_text(r.wall_ms(one), r.wall_ms(two)) << " faster).\n";
   }
   const auto toy_adam = r.ms("learning_step/0/0"), toy_hig = r.ms("learning_step/0/2");
   out << "- hig-toy: J has 30 columns, so HIG takes the normal path (30 × 30); its step is "

@@ -195,6 +195,17 @@ void learning_step(benchmark::State& state) {
   state.SetLabel(std::string(case_spec(state.range(0)).label) + " " + id);
 }
 
+// The HIG step on configuration range(0) with the m physics VJPs on range(1) threads.
+void learning_step_threads(benchmark::State& state) {
+  ReferenceCase c = make_case(state.range(0));
+  const auto update = experiments::make_reference_update(c, "hig");
+  set_jacobian_threads(static_cast<int>(state.range(1)));
+  time_steps(state, c, *update);
+  set_jacobian_threads(1);
+  state.SetLabel(std::string(case_spec(state.range(0)).label) + " hig, VJP threads " +
+                 std::to_string(state.range(1)));
+}
+
 // The HIG step on the Poisson problem with batch range(0) (B·m = 64·B) and a
 // 64-h-2h-h-64 tanh network with h = range(1) (|θ| = 4h² + 132h + 64): how the step grows
 // with B·m and |θ|, and where the backend switches (normal path when B·m > |θ|).
@@ -231,6 +242,11 @@ BENCHMARK(learning_step)
     ->ArgsProduct({{1, 4}, {0, 1, 2}})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(learning_step)->Args({3, 2})->Iterations(1)->Unit(benchmark::kMillisecond);
+// Wall time: the CPU time of the main thread alone would hide the workers.
+BENCHMARK(learning_step_threads)
+    ->ArgsProduct({{1, 4}, {1, 2}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(size_sweep)
     ->ArgsProduct({{1, 4, 16}, {8, 32, 128}})
     ->Unit(benchmark::kMillisecond);

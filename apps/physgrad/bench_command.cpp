@@ -56,8 +56,8 @@ double eigendecomposition_seconds(Index n, long long repeats) {
 
 BenchCommand::BenchCommand(CLI::App& app)
     : command_(app.add_subcommand(
-          "bench", "time steps of an update on a reference experiment, one JSON line: "
-                   "physgrad bench NAME [--optimizer U] [--batch B] [--steps N] [--warmup W]")) {
+          "bench", "time steps of an update on a reference experiment, one JSON line: physgrad bench "
+                   "NAME [--optimizer U] [--batch B] [--steps N] [--warmup W] [--threads T]")) {
   std::string names;
   for (const std::string& name : ex::reference_case_names()) {
     names += (names.empty() ? "" : ", ") + name;
@@ -73,11 +73,16 @@ BenchCommand::BenchCommand(CLI::App& app)
   command_->add_option("--warmup", warmup_, "untimed steps before (≥ 0)")
       ->default_str(warmup_)
       ->type_name("INT");
+  command_->add_option("--threads", threads_,
+                       "threads for the m physics VJPs of the stacked Jacobian (≥ 1)")
+      ->default_str(threads_)
+      ->type_name("INT");
 }
 
 void BenchCommand::run(std::ostream& out) const {
   const long long steps = read_integer("steps", steps_, 1);
   const long long warmup = read_integer("warmup", warmup_, 0);
+  const long long threads = read_integer("threads", threads_, 1);
   const auto& names = ex::reference_case_names();
   if (std::find(names.begin(), names.end(), name_) == names.end()) {
     ex::reference_case(name_, 1);  // throws, naming the known configurations
@@ -89,6 +94,7 @@ void BenchCommand::run(std::ostream& out) const {
   if (std::getenv("OPENBLAS_NUM_THREADS") == nullptr && std::getenv("OMP_NUM_THREADS") == nullptr) {
     set_blas_threads(1);
   }
+  set_jacobian_threads(static_cast<int>(std::min(threads, 1024LL)));
 
   // The rule's own batch size, step size and τ in NAME, as `physgrad run NAME` uses them.
   const Index batch = batch_.empty() ? ex::reference_batch(ex::reference_case(name_, 1), optimizer_)
@@ -140,6 +146,7 @@ void BenchCommand::run(std::ostream& out) const {
       {"batch", batch},
       {"steps", steps},
       {"warmup", warmup},
+      {"threads", threads},
       {"seconds_per_step", per_step},
       {"split",
        {{"jacobian", median(jacobian)},

@@ -1,5 +1,6 @@
-// `physgrad bench NAME [--optimizer U] [--batch B] [--steps N] [--warmup W]`: times N steps of
-// update U on reference experiment NAME after W warm-up steps and prints one JSON line.
+// `physgrad bench NAME [--optimizer U] [--batch B] [--steps N] [--warmup W] [--threads T]`:
+// times N steps of update U on reference experiment NAME after W warm-up steps and prints one
+// JSON line.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -23,6 +24,7 @@ class BenchCommand {
   std::string batch_;
   std::string steps_ = "10";
   std::string warmup_ = "2";
+  std::string threads_ = "1";
 };
 
 }  // namespace physgrad::cli

@@ -2,6 +2,12 @@
 
 #include <cblas.h>
 
+#include <algorithm>
+#include <exception>
+#include <thread>
+
+#include "physgrad/threads.hpp"
+
 namespace physgrad {
 
 StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
@@ -13,11 +19,40 @@ StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
       context_(std::move(context)),
       batch_(x_.cols()),
       outputs_(physics.output_dim()) {
-  Matrix unit(outputs_, batch_);
-  for (Index k = 0; k < outputs_; ++k) {
-    unit.setZero();
-    unit.row(k).setOnes();
-    output_cotangents_.push_back(physics.vjp_batch(x_, context_, unit));
+  // Output k's VJP writes only output_cotangents_[k]; worker t takes k ≡ t (mod threads).
+  output_cotangents_.resize(static_cast<std::size_t>(outputs_));
+  const Index threads = std::min<Index>(jacobian_threads(), outputs_);
+  const auto vjps = [this](Index first, Index stride) {
+    Matrix unit(outputs_, batch_);
+    for (Index k = first; k < outputs_; k += stride) {
+      unit.setZero();
+      unit.row(k).setOnes();
+      output_cotangents_[static_cast<std::size_t>(k)] = physics_->vjp_batch(x_, context_, unit);
+    }
+  };
+  if (threads <= 1) {
+    vjps(0, 1);
+    return;
+  }
+  std::vector<std::thread> workers;
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(threads));
+  for (Index t = 1; t < threads; ++t) {
+    workers.emplace_back([&vjps, &errors, t, threads] {
+      try {
+        vjps(t, threads);
+      } catch (...) {
+        errors[static_cast<std::size_t>(t)] = std::current_exception();
+      }
+    });
+  }
+  try {
+    vjps(0, threads);
+  } catch (...) {
+    errors[0] = std::current_exception();
+  }
+  for (std::thread& worker : workers) worker.join();
+  for (const std::exception_ptr& error : errors) {
+    if (error) std::rethrow_exception(error);
   }
 }
 
