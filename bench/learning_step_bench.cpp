@@ -9,6 +9,7 @@
 #include <lapacke.h>
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "physgrad/linalg/power_pinv.hpp"
@@ -140,19 +141,31 @@ Vector eigen_product(const Matrix& gram, const Vector& g, double kappa, double r
   return kept * c;
 }
 
+// The Gram matrix J Jᵀ of configuration `which` at `batch`, its g = ∂(mean L)/∂y and HIG's τ.
+struct GramCase {
+  Matrix gram;
+  Vector g;
+  double rcond;
+};
+
+GramCase gram_case(std::int64_t which, Index batch) {
+  ReferenceCase c = make_case(which, batch);
+  MlpCache cache;
+  const BatchState state = evaluate_batch(c.network, c.problem(), c.batch,
+                                          UpdateNeed::kStackedJacobian, cache);
+  return {state.jacobian->gram(), state.loss_gradient_y, c.defaults.at("hig").rcond};
+}
+
 // The eigen part of the HIG Gram path on the Gram matrix of a reference configuration at batch
 // range(1): range(2) = 0 all eigenpairs (dsyevd, what power_pinv uses), 1 only those above the
 // cutoff (dsyevr with a value range). Counters: n, the kept rank, and the relative difference
 // of the two results.
 void eigen_route(benchmark::State& state) {
-  ReferenceCase c = make_case(state.range(0), static_cast<Index>(state.range(1)));
   const bool subset = state.range(2) == 1;
-  MlpCache cache;
-  const BatchState batch = evaluate_batch(c.network, c.problem(), c.batch,
-                                          UpdateNeed::kStackedJacobian, cache);
-  const Matrix gram = batch.jacobian->gram();
-  const Vector& g = batch.loss_gradient_y;
-  const double rcond = c.defaults.at("hig").rcond;
+  const GramCase gc = gram_case(state.range(0), static_cast<Index>(state.range(1)));
+  const Matrix& gram = gc.gram;
+  const Vector& g = gc.g;
+  const double rcond = gc.rcond;
   Index rank = 0, other_rank = 0;
   Vector result;
   for (auto _ : state) {
@@ -165,6 +178,70 @@ void eigen_route(benchmark::State& state) {
   state.counters["rel_diff"] = (result - other).norm() / other.norm();
   state.SetLabel(std::string(case_spec(state.range(0)).label) +
                  (subset ? " dsyevr above cutoff" : " dsyevd"));
+}
+
+// An approximate f(G)·g with f(λ) = λ^{−(1+κ)/2}: k Lanczos steps from q₁ = g/‖g‖ (with full
+// reorthogonalization) give G Q = Q T + residual with T tridiagonal, and f(G)·g ≈
+// ‖g‖ Q f(T) e₁, where f is applied to the Ritz values above rcond² times the largest (0 below).
+// Its error depends on how well k steps resolve the kept part of the spectrum.
+Vector lanczos_product(const Matrix& gram, const Vector& g, double kappa, double rcond, Index k) {
+  const Index n = gram.rows();
+  k = std::min(k, n);
+  Matrix q(n, k);
+  Vector alpha = Vector::Zero(k), beta = Vector::Zero(k);
+  q.col(0) = g / g.norm();
+  Index steps = k;
+  Vector w(n);
+  for (Index j = 0; j < k; ++j) {
+    w.noalias() = gram * q.col(j);
+    alpha(j) = q.col(j).dot(w);
+    for (int pass = 0; pass < 2; ++pass) {
+      w -= q.leftCols(j + 1) * (q.leftCols(j + 1).transpose() * w);
+    }
+    if (j + 1 == k) break;
+    beta(j) = w.norm();
+    if (beta(j) <= 1e-14 * std::abs(alpha(0))) {
+      steps = j + 1;
+      break;
+    }
+    q.col(j + 1) = w / beta(j);
+  }
+  Matrix t = Matrix::Zero(steps, steps);
+  t.diagonal() = alpha.head(steps);
+  if (steps > 1) {
+    t.diagonal(1) = beta.head(steps - 1);
+    t.diagonal(-1) = beta.head(steps - 1);
+  }
+  const Eigen::SelfAdjointEigenSolver<Matrix> eig(t);
+  const Vector& theta = eig.eigenvalues();
+  const double cutoff = rcond * rcond * theta.maxCoeff();
+  Vector coefficients(steps);
+  for (Index i = 0; i < steps; ++i) {
+    coefficients(i) =
+        theta(i) > cutoff ? eig.eigenvectors()(0, i) * std::pow(theta(i), -0.5 * (1 + kappa)) : 0.0;
+  }
+  return g.norm() * (q.leftCols(steps) * (eig.eigenvectors() * coefficients));
+}
+
+// The Lanczos approximation with range(2) steps on the Gram matrix of configuration range(0)
+// at batch range(1); counter rel_err: its relative distance to the dsyevd result.
+void lanczos_route(benchmark::State& state) {
+  const GramCase gc = gram_case(state.range(0), static_cast<Index>(state.range(1)));
+  const Matrix& gram = gc.gram;
+  const Vector& g = gc.g;
+  const double rcond = gc.rcond;
+  const auto k = static_cast<Index>(state.range(2));
+  Vector result;
+  for (auto _ : state) {
+    result = lanczos_product(gram, g, 0.5, rcond, k);
+    benchmark::DoNotOptimize(result.data());
+  }
+  Index rank = 0;
+  const Vector exact = eigen_product(gram, g, 0.5, rcond, false, rank);
+  state.counters["n"] = static_cast<double>(gram.rows());
+  state.counters["k"] = static_cast<double>(k);
+  state.counters["rel_err"] = (result - exact).norm() / exact.norm();
+  state.SetLabel(std::string(case_spec(state.range(0)).label) + " Lanczos");
 }
 
 // One step (evaluate the batch, compute Δθ) of `update` on `c`; the counters give J's shape
@@ -237,6 +314,11 @@ BENCHMARK(eigen_route)
     ->ArgsProduct({{1}, {64, 128, 256}, {0, 1}})
     ->ArgsProduct({{2}, {4, 16}, {0, 1}})
     ->ArgsProduct({{4}, {16, 64}, {0, 1}})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(lanczos_route)
+    ->ArgsProduct({{1}, {128}, {32, 128, 512}})
+    ->ArgsProduct({{2}, {16}, {32, 128, 512}})
+    ->ArgsProduct({{4}, {64}, {32, 128, 512}})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(learning_step)
     ->ArgsProduct({{0, 2}, {0, 1, 2, 3}})
