@@ -38,9 +38,11 @@ demo: build
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
-# Micro-benchmarks of the learning step; results also in bench/results.json.
+# Micro-benchmarks of the learning step (about 5 minutes): bench/results.json, then the tables
+# of docs/performance.md (between its bench:begin/bench:end marks) and its size-sweep figure.
 bench: build
 	$(BUILD_DIR)/bench/physgrad_bench --benchmark_out=bench/results.json --benchmark_out_format=json
+	$(BUILD_DIR)/bench/bench_report bench/results.json docs/performance.md docs/performance_size_sweep.svg
 
 # Every reference experiment with its defaults (about 7 minutes): figures, summaries and the
 # printed tables in $(RESULTS_DIR), indexed in $(RESULTS_DIR)/README.md.

@@ -1,81 +1,82 @@
 // Micro-benchmarks of the learning step: stacked-Jacobian assembly (formed J vs the factored
-// Gram matrix), the power-pseudo-inverse backends, the reference eigendecomposition, and whole
-// steps of HIG / Gauss-Newton / Adam on the reference configurations.
+// Gram matrix), the power-pseudo-inverse backends, the reference eigendecomposition, the
+// eigenpairs-above-the-cutoff route, whole steps of Adam / Gauss-Newton / HIG / SIP on the
+// reference configurations (built by the experiments' own setup code), and a size sweep of
+// the HIG step over B·m and |θ|. bench_report turns the results into docs/performance.md.
 #include <benchmark/benchmark.h>
 
+#include <cblas.h>
 #include <lapacke.h>
 
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
 #include "physgrad/linalg/power_pinv.hpp"
-#include "physgrad/loss/loss.hpp"
-#include "physgrad/physics/coupled_oscillators.hpp"
-#include "physgrad/physics/diagonal_scale.hpp"
-#include "physgrad/physics/poisson.hpp"
 #include "physgrad/threads.hpp"
 #include "physgrad/train/trainer.hpp"
+#include "reference_case.hpp"
 
 namespace {
 
 using namespace physgrad;
+using experiments::ReferenceCase;
 
-// One reference configuration: network, physics, loss and one batch.
-struct Case {
-  std::unique_ptr<Simulator> physics;
-  L2Loss loss{2.0};
-  Mlp network;
-  Dataset batch;
-
-  Case(std::unique_ptr<Simulator> p, std::vector<Index> widths, Activation activation, Index b,
-       bool context)
-      : physics(std::move(p)), network(std::move(widths), activation) {
-    network.initialize(1);
-    const Index n_in = network.input_dim();
-    batch.inputs = Matrix::Random(n_in, b).cwiseAbs();
-    batch.targets = Matrix::Random(physics->output_dim(), b);
-    if (context) batch.context = batch.inputs;
-  }
-  LearningProblem problem() const { return {physics.get(), &loss}; }
+// The reference configurations: the experiment and the batch size.
+struct CaseSpec {
+  const char* experiment;
+  Index batch;
+  const char* label;
 };
 
-// 0: hig-toy (B 128), 1: oscillators paper (B 128), 2: poisson 8×8 (B 16).
-Case make_case(int which) {
-  switch (which) {
-    case 0:
-      return Case(std::make_unique<DiagonalScale>(Vector{{1.0, 0.01}}), {1, 7, 2},
-                  Activation::kTanh, 128, false);
-    case 1:
-      return Case(std::make_unique<CoupledOscillators>(OscillatorConfig::paper()),
-                  {4, 20, 20, 20, 96}, Activation::kRelu, 128, true);
-    default:
-      return Case(std::make_unique<Poisson>(8), {64, 64, 128, 64, 64}, Activation::kTanh, 16,
-                  false);
-  }
+constexpr CaseSpec kCases[] = {
+    {"hig-toy", 128, "hig_toy"},              // 0: J 256 × 30
+    {"oscillators", 128, "oscillators"},      // 1: J 512 × 2956
+    {"poisson", 16, "poisson"},               // 2: J 1024 × 24 896
+    {"poisson", 64, "poisson_b64"},           // 3: J 4096 × 24 896 (the HIG paper's batch)
+    {"quantum-dipole", 16, "quantum_dipole"},  // 4: J 448 × 9484
+};
+
+const CaseSpec& case_spec(std::int64_t which) { return kCases[static_cast<std::size_t>(which)]; }
+
+ReferenceCase make_case(std::int64_t which, Index batch = 0) {
+  const CaseSpec& spec = case_spec(which);
+  return experiments::reference_case(spec.experiment, batch > 0 ? batch : spec.batch);
 }
 
-const char* case_name(int which) {
-  return which == 0 ? "hig_toy" : which == 1 ? "oscillators" : "poisson";
+const char* rule_id(std::int64_t rule) {
+  static const char* const ids[] = {"adam", "gn", "hig", "sip"};
+  return ids[rule];
 }
 
-// J Jᵀ of a reference batch: range(1) = 0 forms J and then the rank-k update, 1 builds it from
-// the network's layer factors without forming J.
+// J Jᵀ (lower triangle) of J by dsyrk.
+Matrix syrk_gram(const Matrix& j) {
+  Matrix gram(j.rows(), j.rows());
+  cblas_dsyrk(CblasColMajor, CblasLower, CblasNoTrans, static_cast<int>(j.rows()),
+              static_cast<int>(j.cols()), 1.0, j.data(), static_cast<int>(j.rows()), 0.0,
+              gram.data(), static_cast<int>(j.rows()));
+  return gram;
+}
+
+// J Jᵀ of a reference batch: range(1) = 0 forms J and then the rank-k update (dsyrk), 1 builds
+// it from the network's layer factors without forming J, 2 times the dsyrk on a formed J alone.
 void gram_matrix(benchmark::State& state) {
-  const auto which = static_cast<int>(state.range(0));
-  const bool factored = state.range(1) == 1;
-  Case c = make_case(which);
+  const std::int64_t route = state.range(1);
+  ReferenceCase c = make_case(state.range(0));
   MlpCache cache;
   const BatchState batch = evaluate_batch(c.network, c.problem(), c.batch,
                                           UpdateNeed::kStackedJacobian, cache);
+  const Matrix formed = route == 2 ? batch.jacobian->materialize() : Matrix();
   for (auto _ : state) {
-    Matrix gram;
-    if (factored) {
-      gram = batch.jacobian->gram();
-    } else {
-      const Matrix j = batch.jacobian->materialize();
-      gram.setZero(j.rows(), j.rows());
-      gram.selfadjointView<Eigen::Lower>().rankUpdate(j);
-    }
+    const Matrix gram = route == 1   ? batch.jacobian->gram()
+                        : route == 2 ? syrk_gram(formed)
+                                     : syrk_gram(batch.jacobian->materialize());
     benchmark::DoNotOptimize(gram.data());
   }
-  state.SetLabel(std::string(case_name(which)) + (factored ? " J J^T factored" : " J J^T formed"));
+  state.counters["rows"] = static_cast<double>(batch.jacobian->rows());
+  state.counters["cols"] = static_cast<double>(batch.jacobian->cols());
+  state.SetLabel(std::string(case_spec(state.range(0)).label) +
+                 (route == 1 ? " J J^T factored" : route == 2 ? " dsyrk on J" : " J J^T formed"));
 }
 
 // The symmetric eigendecomposition of a B·m × B·m matrix alone: the step's irreducible part.
@@ -103,31 +104,236 @@ void power_pinv_backend(benchmark::State& state) {
   state.SetLabel(to_string(backend));
 }
 
-void learning_step(benchmark::State& state) {
-  Case c = make_case(static_cast<int>(state.range(0)));
-  const std::string id = state.range(1) == 0 ? "adam" : state.range(1) == 1 ? "gn" : "hig";
-  const auto update = make_learning_update(id);
+// W f(Λ) Wᵀ g with f(λ) = λ^{−(1+κ)/2} over λ > rcond²·λ_max of the symmetric PSD `gram`, as the
+// Gram path computes it: every eigenpair by dsyevd, or (subset) only those above a lower
+// bound of the cutoff by dsyevr with a value range; λ_max is bounded below by the Rayleigh
+// quotient of a few power steps, so no kept pair is missed. Returns the result; `rank` the
+// number of kept pairs.
+Vector eigen_product(const Matrix& gram, const Vector& g, double kappa, double rcond,
+                     bool subset, Index& rank) {
+  const auto n = static_cast<lapack_int>(gram.rows());
+  Matrix w = gram;
+  Vector lambda(n);
+  Matrix vectors;
+  lapack_int found = n;
+  if (subset) {
+    Index start = 0;
+    double bound = gram.diagonal().maxCoeff(&start);
+    Vector v = Vector::Unit(n, start);
+    for (int step = 0; step < 4; ++step) {
+      v = (gram * v).normalized();
+      bound = std::max(bound, v.dot(gram * v));
+    }
+    vectors.resize(n, n);
+    std::vector<lapack_int> support(2 * static_cast<std::size_t>(n));
+    LAPACKE_dsyevr(LAPACK_COL_MAJOR, 'V', 'V', 'L', n, w.data(), n, rcond * rcond * bound,
+                   2 * gram.trace() + 1, 0, 0, 0.0, &found, lambda.data(), vectors.data(), n,
+                   support.data());
+  } else {
+    LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', n, w.data(), n, lambda.data());
+  }
+  const Matrix& basis = subset ? vectors : w;
+  const Vector sigma = lambda.head(found).cwiseMax(0.0).cwiseSqrt();
+  rank = (sigma.array() > rcond * sigma(found - 1)).count();
+  const auto kept = basis.middleCols(found - rank, rank);
+  Vector c = kept.transpose() * g;
+  c.array() *= sigma.tail(rank).array().pow(-1 - kappa);
+  return kept * c;
+}
+
+// The Gram matrix J Jᵀ of configuration `which` at `batch`, its g = ∂(mean L)/∂y and HIG's τ.
+struct GramCase {
+  Matrix gram;
+  Vector g;
+  double rcond;
+};
+
+GramCase gram_case(std::int64_t which, Index batch) {
+  ReferenceCase c = make_case(which, batch);
+  MlpCache cache;
+  const BatchState state = evaluate_batch(c.network, c.problem(), c.batch,
+                                          UpdateNeed::kStackedJacobian, cache);
+  return {state.jacobian->gram(), state.loss_gradient_y, c.defaults.at("hig").rcond};
+}
+
+// The eigen part of the HIG Gram path on the Gram matrix of a reference configuration at batch
+// range(1): range(2) = 0 all eigenpairs (dsyevd, what power_pinv uses), 1 only those above the
+// cutoff (dsyevr with a value range). Counters: n, the kept rank, and the relative difference
+// of the two results.
+void eigen_route(benchmark::State& state) {
+  const bool subset = state.range(2) == 1;
+  const GramCase gc = gram_case(state.range(0), static_cast<Index>(state.range(1)));
+  const Matrix& gram = gc.gram;
+  const Vector& g = gc.g;
+  const double rcond = gc.rcond;
+  Index rank = 0, other_rank = 0;
+  Vector result;
+  for (auto _ : state) {
+    result = eigen_product(gram, g, 0.5, rcond, subset, rank);
+    benchmark::DoNotOptimize(result.data());
+  }
+  const Vector other = eigen_product(gram, g, 0.5, rcond, !subset, other_rank);
+  state.counters["n"] = static_cast<double>(gram.rows());
+  state.counters["rank"] = static_cast<double>(rank);
+  state.counters["rel_diff"] = (result - other).norm() / other.norm();
+  state.SetLabel(std::string(case_spec(state.range(0)).label) +
+                 (subset ? " dsyevr above cutoff" : " dsyevd"));
+}
+
+// An approximate f(G)·g with f(λ) = λ^{−(1+κ)/2}: k Lanczos steps from q₁ = g/‖g‖ (with full
+// reorthogonalization) give G Q = Q T + residual with T tridiagonal, and f(G)·g ≈
+// ‖g‖ Q f(T) e₁, where f is applied to the Ritz values above rcond² times the largest (0 below).
+// Its error depends on how well k steps resolve the kept part of the spectrum.
+Vector lanczos_product(const Matrix& gram, const Vector& g, double kappa, double rcond, Index k) {
+  const Index n = gram.rows();
+  k = std::min(k, n);
+  Matrix q(n, k);
+  Vector alpha = Vector::Zero(k), beta = Vector::Zero(k);
+  q.col(0) = g / g.norm();
+  Index steps = k;
+  Vector w(n);
+  for (Index j = 0; j < k; ++j) {
+    w.noalias() = gram * q.col(j);
+    alpha(j) = q.col(j).dot(w);
+    for (int pass = 0; pass < 2; ++pass) {
+      w -= q.leftCols(j + 1) * (q.leftCols(j + 1).transpose() * w);
+    }
+    if (j + 1 == k) break;
+    beta(j) = w.norm();
+    if (beta(j) <= 1e-14 * std::abs(alpha(0))) {
+      steps = j + 1;
+      break;
+    }
+    q.col(j + 1) = w / beta(j);
+  }
+  Matrix t = Matrix::Zero(steps, steps);
+  t.diagonal() = alpha.head(steps);
+  if (steps > 1) {
+    t.diagonal(1) = beta.head(steps - 1);
+    t.diagonal(-1) = beta.head(steps - 1);
+  }
+  const Eigen::SelfAdjointEigenSolver<Matrix> eig(t);
+  const Vector& theta = eig.eigenvalues();
+  const double cutoff = rcond * rcond * theta.maxCoeff();
+  Vector coefficients(steps);
+  for (Index i = 0; i < steps; ++i) {
+    coefficients(i) =
+        theta(i) > cutoff ? eig.eigenvectors()(0, i) * std::pow(theta(i), -0.5 * (1 + kappa)) : 0.0;
+  }
+  return g.norm() * (q.leftCols(steps) * (eig.eigenvectors() * coefficients));
+}
+
+// The Lanczos approximation with range(2) steps on the Gram matrix of configuration range(0)
+// at batch range(1); counter rel_err: its relative distance to the dsyevd result.
+void lanczos_route(benchmark::State& state) {
+  const GramCase gc = gram_case(state.range(0), static_cast<Index>(state.range(1)));
+  const Matrix& gram = gc.gram;
+  const Vector& g = gc.g;
+  const double rcond = gc.rcond;
+  const auto k = static_cast<Index>(state.range(2));
+  Vector result;
+  for (auto _ : state) {
+    result = lanczos_product(gram, g, 0.5, rcond, k);
+    benchmark::DoNotOptimize(result.data());
+  }
+  Index rank = 0;
+  const Vector exact = eigen_product(gram, g, 0.5, rcond, false, rank);
+  state.counters["n"] = static_cast<double>(gram.rows());
+  state.counters["k"] = static_cast<double>(k);
+  state.counters["rel_err"] = (result - exact).norm() / exact.norm();
+  state.SetLabel(std::string(case_spec(state.range(0)).label) + " Lanczos");
+}
+
+// One step (evaluate the batch, compute Δθ) of `update` on `c`; the counters give J's shape
+// and, for Gauss-Newton and HIG, the backend (0 svd, 1 gram, 2 normal) and the kept rank.
+void time_steps(benchmark::State& state, ReferenceCase& c, LearningUpdate& update) {
   MlpCache cache;
   for (auto _ : state) {
-    const BatchState batch = evaluate_batch(c.network, c.problem(), c.batch, update->need(), cache);
-    const UpdateStep step = update->step(batch);
+    const BatchState batch = evaluate_batch(c.network, c.problem(), c.batch, update.need(), cache);
+    const UpdateStep step = update.step(batch);
     benchmark::DoNotOptimize(step.delta.data());
   }
-  state.SetLabel(std::string(case_name(static_cast<int>(state.range(0)))) + " " + id);
+  state.counters["rows"] = static_cast<double>(c.batch.size() * c.physics->output_dim());
+  state.counters["cols"] = static_cast<double>(c.network.num_parameters());
+  if (const auto* inverse = dynamic_cast<const JacobianInverseUpdate*>(&update)) {
+    const PinvBackend backend = inverse->last_info().backend;
+    state.counters["backend"] = backend == PinvBackend::kSvd ? 0 : backend == PinvBackend::kGram ? 1 : 2;
+    state.counters["rank"] = static_cast<double>(inverse->last_info().rank);
+  }
+}
+
+// A whole step of rule range(1) (0 adam, 1 gn, 2 hig, 3 sip) on configuration range(0), with
+// the experiment's step size and τ for the rule.
+void learning_step(benchmark::State& state) {
+  ReferenceCase c = make_case(state.range(0));
+  const std::string id = rule_id(state.range(1));
+  const auto update = experiments::make_reference_update(c, id);
+  time_steps(state, c, *update);
+  state.SetLabel(std::string(case_spec(state.range(0)).label) + " " + id);
+}
+
+// The HIG step on configuration range(0) with the m physics VJPs on range(1) threads.
+void learning_step_threads(benchmark::State& state) {
+  ReferenceCase c = make_case(state.range(0));
+  const auto update = experiments::make_reference_update(c, "hig");
+  set_jacobian_threads(static_cast<int>(state.range(1)));
+  time_steps(state, c, *update);
+  set_jacobian_threads(1);
+  state.SetLabel(std::string(case_spec(state.range(0)).label) + " hig, VJP threads " +
+                 std::to_string(state.range(1)));
+}
+
+// The HIG step on the Poisson problem with batch range(0) (B·m = 64·B) and a
+// 64-h-2h-h-64 tanh network with h = range(1) (|θ| = 4h² + 132h + 64): how the step grows
+// with B·m and |θ|, and where the backend switches (normal path when B·m > |θ|).
+void size_sweep(benchmark::State& state) {
+  ReferenceCase c = experiments::reference_case("poisson", static_cast<Index>(state.range(0)));
+  const auto h = static_cast<Index>(state.range(1));
+  c.network = Mlp({64, h, 2 * h, h, 64}, Activation::kTanh);
+  c.network.initialize(0);
+  const auto update = experiments::make_reference_update(c, "hig");
+  time_steps(state, c, *update);
 }
 
 }  // namespace
 
-BENCHMARK(gram_matrix)->ArgsProduct({{0, 1, 2}, {0, 1}})->Unit(benchmark::kMillisecond);
-BENCHMARK(reference_eigendecomposition)->Arg(256)->Arg(512)->Arg(1024)->Unit(benchmark::kMillisecond);
+BENCHMARK(gram_matrix)->ArgsProduct({{0, 1, 4, 2, 3}, {1}})->Unit(benchmark::kMillisecond);
+BENCHMARK(gram_matrix)->ArgsProduct({{0, 1, 4, 2}, {0, 2}})->Unit(benchmark::kMillisecond);
+// J itself is 4096 × 24 896 (0.8 GB) here: one iteration.
+BENCHMARK(gram_matrix)->ArgsProduct({{3}, {0, 2}})->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(reference_eigendecomposition)->Arg(256)->Arg(448)->Arg(512)->Arg(1024)
+    ->Unit(benchmark::kMillisecond);
+// About 8 s an iteration at 4096: two, averaged.
+BENCHMARK(reference_eigendecomposition)->Arg(4096)->Iterations(2)->Unit(benchmark::kMillisecond);
 BENCHMARK(power_pinv_backend)
     ->Args({512, 2956, static_cast<int>(PinvBackend::kSvd)})
     ->Args({512, 2956, static_cast<int>(PinvBackend::kGram)})
     ->Args({1024, 24896, static_cast<int>(PinvBackend::kGram)})
     ->Unit(benchmark::kMillisecond);
-BENCHMARK(learning_step)
-    ->ArgsProduct({{0, 1, 2}, {0, 1, 2}})
+BENCHMARK(eigen_route)
+    ->ArgsProduct({{1}, {64, 128, 256}, {0, 1}})
+    ->ArgsProduct({{2}, {4, 16}, {0, 1}})
+    ->ArgsProduct({{4}, {16, 64}, {0, 1}})
     ->Unit(benchmark::kMillisecond);
+BENCHMARK(lanczos_route)
+    ->ArgsProduct({{1}, {128}, {32, 128, 512}})
+    ->ArgsProduct({{2}, {16}, {32, 128, 512}})
+    ->ArgsProduct({{4}, {64}, {32, 128, 512}})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(learning_step)
+    ->ArgsProduct({{0, 2}, {0, 1, 2, 3}})
+    ->ArgsProduct({{1, 4}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(learning_step)->Args({3, 2})->Iterations(2)->Unit(benchmark::kMillisecond);
+// Wall time: the CPU time of the main thread alone would hide the workers.
+BENCHMARK(learning_step_threads)
+    ->ArgsProduct({{1, 4}, {1, 2}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(size_sweep)
+    ->ArgsProduct({{1, 4, 16}, {8, 32, 128}})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(size_sweep)->ArgsProduct({{64}, {8, 32, 128}})->Iterations(1)->Unit(benchmark::kMillisecond);
 
 int main(int argc, char** argv) {
   physgrad::set_blas_threads(1);

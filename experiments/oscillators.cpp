@@ -3,6 +3,7 @@
 // simulator with Adam, Gauss-Newton, HIG or SIP (experiments.md E10 book, E11 paper).
 #include "experiment_list.hpp"
 #include "learning_runs.hpp"
+#include "reference_case.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"
@@ -48,6 +49,13 @@ Configuration configuration(const std::string& name) {
            {"sip", {1e-3, 256}}}};
 }
 
+// The 20-20-20 network of both configurations.
+Mlp make_network(const CoupledOscillators& physics, Activation activation, std::uint64_t seed) {
+  Mlp network({physics.output_dim(), 20, 20, 20, physics.input_dim()}, activation);
+  network.initialize(seed);
+  return network;
+}
+
 class Oscillators final : public Experiment {
  public:
   std::string name() const override { return "oscillators"; }
@@ -91,8 +99,7 @@ class Oscillators final : public Experiment {
     const std::vector<std::string> rules =
         settings.has("optimizers") ? settings.texts("optimizers") : config.rules;
     for (const std::string& id : rules) {
-      Mlp network({dim, 20, 20, 20, physics.input_dim()}, config.activation);
-      network.initialize(seed);
+      Mlp network = make_network(physics, config.activation, seed);
       sweep.run(id, config_name, {{"variant", config_name}, {"seed", seed}}, network, problem,
                 train_set, &test_set);
     }
@@ -110,5 +117,15 @@ class Oscillators final : public Experiment {
 }  // namespace
 
 std::unique_ptr<Experiment> make_oscillators() { return std::make_unique<Oscillators>(); }
+
+// The paper configuration.
+ReferenceCase oscillators_reference(Index batch, std::uint64_t seed) {
+  const Configuration config = configuration("paper");
+  auto physics = std::make_shared<CoupledOscillators>(config.physics);
+  Mlp network = make_network(*physics, config.activation, seed);
+  Dataset data = make_states(batch, physics->output_dim(), 2 * seed);
+  return {std::move(physics), std::make_shared<L2Loss>(2.0), std::move(network), std::move(data),
+          config.defaults};
+}
 
 }  // namespace physgrad::experiments

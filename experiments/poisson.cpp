@@ -5,6 +5,7 @@
 
 #include "experiment_list.hpp"
 #include "learning_runs.hpp"
+#include "reference_case.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/poisson.hpp"
@@ -39,6 +40,25 @@ Matrix make_fields(Index count, Index n, std::uint64_t seed) {
   return fields;
 }
 
+Mlp make_network(Index n, std::uint64_t seed) {
+  Mlp network({n * n, 64, 128, 64, n * n}, Activation::kTanh);
+  network.initialize(seed);
+  return network;
+}
+
+// Inputs and targets y* = ∇²x* of `count` fields.
+Dataset make_data(const Poisson& physics, Index count, std::uint64_t seed) {
+  const Matrix y = physics.forward_batch(make_fields(count, physics.grid_size(), seed), Matrix());
+  return {y, y, Matrix()};
+}
+
+const std::map<std::string, RuleDefaults>& rule_defaults() {
+  static const std::map<std::string, RuleDefaults> defaults = {
+      {"adam", {3e-4, 64}}, {"sgd", {1e-2, 64}}, {"gn", {0.16, 16, 1e-5}},
+      {"hig", {0.16, 16, 1e-5}}, {"sip", {1e-3, 64}}};
+  return defaults;
+}
+
 class PoissonExperiment final : public Experiment {
  public:
   std::string name() const override { return "poisson"; }
@@ -68,11 +88,9 @@ class PoissonExperiment final : public Experiment {
     const L2Loss loss;  // ½‖∇²x − y*‖² per sample
     const LearningProblem problem{&physics, &loss};
     const auto seed = static_cast<std::uint64_t>(settings.integer("seed"));
-    const Matrix x_train = make_fields(settings.integer("train-size"), n, 2 * seed);
+    const Dataset train_set = make_data(physics, settings.integer("train-size"), 2 * seed);
     const Matrix x_test = make_fields(settings.integer("test-size"), n, 2 * seed + 1);
-    const Matrix y_train = physics.forward_batch(x_train, Matrix());
     const Matrix y_test = physics.forward_batch(x_test, Matrix());
-    const Dataset train_set{y_train, y_train, Matrix()};
     const Dataset test_set{y_test, y_test, Matrix()};
     const auto observe = [&](const Mlp& network, TrainingRecord& record) {
       // experiments.md E13's x_distance_l1: mean over samples of Σ|x − x*|.
@@ -82,10 +100,9 @@ class PoissonExperiment final : public Experiment {
     };
 
     const std::string tag = std::to_string(n) + "x" + std::to_string(n);
-    LearningSweep sweep(settings, context, kDefaults);
+    LearningSweep sweep(settings, context, rule_defaults());
     for (const std::string& id : settings.texts("optimizers")) {
-      Mlp network({n * n, 64, 128, 64, n * n}, Activation::kTanh);
-      network.initialize(seed);
+      Mlp network = make_network(n, seed);
       sweep.run(id, tag, {{"seed", seed}}, network, problem, train_set, &test_set, observe);
     }
     sweep.add_loss_figures(context, sweep.first_seed_runs(tag), tag, "poisson");
@@ -96,15 +113,19 @@ class PoissonExperiment final : public Experiment {
         "paper's batch is 64 (J 4096 × 24 896); the default here is 16 so that a step takes a "
         "fraction of a second (--batch 64 for the paper's).");
   }
-
- private:
-  inline static const std::map<std::string, RuleDefaults> kDefaults = {
-      {"adam", {3e-4, 64}}, {"sgd", {1e-2, 64}}, {"gn", {0.16, 16, 1e-5}},
-      {"hig", {0.16, 16, 1e-5}}, {"sip", {1e-3, 64}}};
 };
 
 }  // namespace
 
 std::unique_ptr<Experiment> make_poisson() { return std::make_unique<PoissonExperiment>(); }
+
+// The 8×8 grid.
+ReferenceCase poisson_reference(Index batch, std::uint64_t seed) {
+  auto physics = std::make_shared<Poisson>(8);
+  Mlp network = make_network(8, seed);
+  Dataset data = make_data(*physics, batch, 2 * seed);
+  return {std::move(physics), std::make_shared<L2Loss>(), std::move(network), std::move(data),
+          rule_defaults()};
+}
 
 }  // namespace physgrad::experiments

@@ -5,6 +5,7 @@
 
 #include "experiment_list.hpp"
 #include "learning_runs.hpp"
+#include "reference_case.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/fidelity.hpp"
 #include "physgrad/physics/quantum_dipole.hpp"
@@ -25,6 +26,19 @@ Dataset make_targets(Index n, Index points, std::uint64_t seed) {
   }
   data.targets = data.inputs;
   return data;
+}
+
+Mlp make_network(const QuantumDipole& physics, std::uint64_t seed) {
+  Mlp network({physics.output_dim(), 20, 20, 20, physics.input_dim()}, Activation::kTanh);
+  network.initialize(seed);
+  return network;
+}
+
+const std::map<std::string, RuleDefaults>& rule_defaults() {
+  static const std::map<std::string, RuleDefaults> defaults = {
+      {"adam", {5e-4, 256}}, {"sgd", {1e-2, 256}}, {"gn", {0.5, 16, 1e-5}},
+      {"hig", {0.5, 16, 1e-5}}};
+  return defaults;
 }
 
 class QuantumDipoleExperiment final : public Experiment {
@@ -65,10 +79,9 @@ class QuantumDipoleExperiment final : public Experiment {
     const Dataset train_set = make_targets(settings.integer("train-size"), config.points, 2 * seed);
     const Dataset test_set = make_targets(settings.integer("test-size"), config.points, 2 * seed + 1);
 
-    LearningSweep sweep(settings, context, kDefaults);
+    LearningSweep sweep(settings, context, rule_defaults());
     for (const std::string& id : settings.texts("optimizers")) {
-      Mlp network({physics.output_dim(), 20, 20, 20, physics.input_dim()}, Activation::kTanh);
-      network.initialize(seed);
+      Mlp network = make_network(physics, seed);
       sweep.run(id, "Nt=" + std::to_string(config.steps), {{"seed", seed}}, network, problem,
                 train_set, &test_set);
     }
@@ -79,17 +92,21 @@ class QuantumDipoleExperiment final : public Experiment {
         "Reference (experiments.md E12): with u = 0 the infidelity is exactly 1. The paper ran "
         "5400 s per method (Adam B 256 lr 5e-4; HIG B 16 lr 0.5 τ 1e-5) and stored no numbers.");
   }
-
- private:
-  inline static const std::map<std::string, RuleDefaults> kDefaults = {
-      {"adam", {5e-4, 256}}, {"sgd", {1e-2, 256}}, {"gn", {0.5, 16, 1e-5}},
-      {"hig", {0.5, 16, 1e-5}}};
 };
 
 }  // namespace
 
 std::unique_ptr<Experiment> make_quantum_dipole() {
   return std::make_unique<QuantumDipoleExperiment>();
+}
+
+// The paper configuration (Nt 384).
+ReferenceCase quantum_dipole_reference(Index batch, std::uint64_t seed) {
+  const QuantumDipoleConfig config = QuantumDipoleConfig::paper();
+  auto physics = std::make_shared<QuantumDipole>(config);
+  Mlp network = make_network(*physics, seed);
+  return {std::move(physics), std::make_shared<FidelityLoss>(), std::move(network),
+          make_targets(batch, config.points, 2 * seed), rule_defaults()};
 }
 
 }  // namespace physgrad::experiments

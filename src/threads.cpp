@@ -2,6 +2,7 @@
 
 #include <dlfcn.h>
 
+#include <atomic>
 #include <string>
 
 #include "physgrad/error.hpp"
@@ -23,5 +24,16 @@ int blas_threads() {
   const auto getter = reinterpret_cast<Getter>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
   return getter == nullptr ? 0 : getter();
 }
+
+namespace {
+std::atomic<int> jacobian_thread_count{1};
+}  // namespace
+
+void set_jacobian_threads(int threads) {
+  if (threads < 1) throw Error("threads must be ≥ 1, got " + std::to_string(threads));
+  jacobian_thread_count.store(threads);
+}
+
+int jacobian_threads() { return jacobian_thread_count.load(); }
 
 }  // namespace physgrad

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "cli_fixture.hpp"
 
@@ -207,6 +209,47 @@ TEST_F(Cli, DescribeShowsEveryOptionAndRejectsUnknownExperiments) {
   EXPECT_NE(unknown.err.find("unknown experiment 'no-such-experiment'"), std::string::npos);
   const Outcome help = run("run scaled-toy --help");
   EXPECT_NE(help.out.find("--config FILE.json"), std::string::npos) << help.out;
+}
+
+// bench: one JSON line with the step time, its split, the shape of J, the backend and the
+// reference eigendecomposition of a B·m × B·m matrix; bad names and numbers are one-line errors.
+TEST_F(Cli, BenchPrintsOneJsonLineAndRejectsBadInput) {
+  const Outcome outcome = run("bench hig-toy --optimizer gn --steps 2 --warmup 1");
+  ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+  ASSERT_EQ(std::count(outcome.out.begin(), outcome.out.end(), '\n'), 1) << outcome.out;
+  const nlohmann::json line = nlohmann::json::parse(outcome.out);
+  EXPECT_EQ(line["experiment"], "hig-toy");
+  EXPECT_EQ(line["optimizer"], "gn");
+  EXPECT_EQ(line["batch"], 128);  // the rule's default in hig-toy
+  EXPECT_EQ(line["steps"], 2);
+  EXPECT_EQ(line["warmup"], 1);
+  EXPECT_EQ(line["jacobian_shape"], nlohmann::json({256, 30}));  // B·m × |θ| of the 1-7-2 net
+  EXPECT_EQ(line["backend"], "normal");                           // 256 rows > 30 columns
+  EXPECT_GT(line["seconds_per_step"].get<double>(), 0.0);
+  for (const char* part : {"jacobian", "inverse", "update", "other"}) {
+    EXPECT_GE(line["split"][part].get<double>(), 0.0) << part;
+  }
+  EXPECT_EQ(line["reference_linalg"]["operation"], "dsyevd");
+  EXPECT_EQ(line["reference_linalg"]["n"], 256);
+  EXPECT_GT(line["reference_linalg"]["seconds"].get<double>(), 0.0);
+
+  const Outcome sip = run("bench poisson --optimizer sip --batch 4 --steps 1 --warmup 0");
+  ASSERT_EQ(sip.exit_code, 0) << sip.err;
+  const nlohmann::json sip_line = nlohmann::json::parse(sip.out);
+  EXPECT_EQ(sip_line["jacobian_shape"], nlohmann::json({256, 24896}));
+  EXPECT_EQ(sip_line["backend"], "local inverse");
+
+  for (const auto& [args, needle] : std::vector<std::pair<std::string, std::string>>{
+           {"bench no-such-case", "unknown reference configuration 'no-such-case'"},
+           {"bench hig-toy --optimizer newton", "unknown learning update 'newton'"},
+           {"bench hig-toy --steps 0", "--steps: must be ≥ 1"},
+           {"bench hig-toy --batch x", "--batch: 'x' is not a whole number"}}) {
+    const Outcome bad = run(args);
+    EXPECT_EQ(bad.exit_code, 2) << args;
+    EXPECT_TRUE(bad.out.empty()) << args << ": " << bad.out;
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << args << ": " << bad.err;
+    EXPECT_NE(bad.err.find(needle), std::string::npos) << args << ": " << bad.err;
+  }
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/physics/comparison_toy.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
+#include "physgrad/threads.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad {
@@ -71,6 +72,28 @@ TEST(EvaluateBatch, FactoredGramAndTransposeProductMatchTheFormedJacobian) {
   const Vector c = Vector::LinSpaced(j.rows(), -1.0, 2.0);
   EXPECT_LT((state.jacobian->apply_transpose(c) - j.transpose() * c).norm(),
             1e-13 * (j.transpose() * c).norm());
+}
+
+// The physics VJPs on several threads give bit-identical results: each output's VJP is
+// computed by one thread into its own matrix.
+TEST(EvaluateBatch, StackedJacobianIsTheSameOnAnyNumberOfThreads) {
+  NetworkThroughPhysics s(9);
+  const auto gram_and_transpose = [&](int threads) {
+    set_jacobian_threads(threads);
+    MlpCache cache;
+    const BatchState state =
+        evaluate_batch(s.network, s.problem, s.data, UpdateNeed::kStackedJacobian, cache);
+    const Vector c = Vector::LinSpaced(state.jacobian->rows(), -1.0, 2.0);
+    return std::make_pair(state.jacobian->gram(), state.jacobian->apply_transpose(c));
+  };
+  const auto one = gram_and_transpose(1);
+  for (const int threads : {2, 3}) {
+    const auto many = gram_and_transpose(threads);
+    EXPECT_TRUE(many.first == one.first) << threads << " threads";
+    EXPECT_TRUE(many.second == one.second) << threads << " threads";
+  }
+  set_jacobian_threads(1);
+  EXPECT_GT(one.first.norm(), 0.0);
 }
 
 TEST(EvaluateBatch, GradientMatchesFiniteDifferencesAndTheJacobianPath) {

@@ -1,5 +1,6 @@
 // physgrad — command-line front end: `physgrad list`, `physgrad describe NAME`,
-// `physgrad run NAME [--config FILE.json] [options]`, `physgrad resume DIR`.
+// `physgrad run NAME [--config FILE.json] [options]`, `physgrad resume DIR`,
+// `physgrad bench NAME [options]`.
 // Every error is one line on stderr and exit code 2; a run writes its folder only on success.
 // SIGINT/SIGTERM stop a run: learning runs leave a checkpoint in the run folder (exit 128 +
 // signal), other runs write nothing.
@@ -14,6 +15,7 @@
 #include <optional>
 #include <sstream>
 
+#include "bench_command.hpp"
 #include "checkpoint.hpp"
 #include "config_file.hpp"
 #include "experiment.hpp"
@@ -189,6 +191,7 @@ int main(int argc, char** argv) {
       "resume", "continue an interrupted run from the checkpoint in its folder");
   std::string resume_folder;
   resume->add_option("DIR", resume_folder, "the run folder (its --out)")->required();
+  const physgrad::cli::BenchCommand bench(app);
 
   // Each experiment is a subcommand of `run` with its own options, all read as text and
   // validated by the experiment framework so every bad value gets the same kind of message.
@@ -232,6 +235,10 @@ int main(int argc, char** argv) {
         std::cout << std::left << std::setw(static_cast<int>(width + 2)) << experiment->name()
                   << experiment->description() << '\n';
       }
+      return 0;
+    }
+    if (bench.parsed()) {
+      bench.run(std::cout);
       return 0;
     }
     if (describe->parsed()) {

@@ -1,5 +1,6 @@
 // Threads of the BLAS/LAPACK library behind the linear algebra (OpenBLAS when it is the active
-// implementation). Multithreaded BLAS pays off only for large matrices and hurts on busy cores.
+// implementation), and of the physics VJPs of the stacked Jacobian. Both pay off only on idle
+// cores; on busy ones they cost more than they save.
 #pragma once
 
 namespace physgrad {
@@ -10,5 +11,13 @@ bool set_blas_threads(int threads);
 
 // The BLAS library's current thread count, or 0 when it cannot tell.
 int blas_threads();
+
+// Threads that compute the m batched physics VJPs of a StackedJacobian (one per output k, each
+// into its own matrix, so the result does not depend on the count); 1, the default, runs them
+// in the calling thread. With more, the simulator's vjp_batch is called concurrently on the
+// same const object: every built-in simulator allows that. Process-wide; throws Error unless
+// threads ≥ 1.
+void set_jacobian_threads(int threads);
+int jacobian_threads();
 
 }  // namespace physgrad

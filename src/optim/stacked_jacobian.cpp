@@ -1,5 +1,13 @@
 #include "physgrad/optim/stacked_jacobian.hpp"
 
+#include <cblas.h>
+
+#include <algorithm>
+#include <exception>
+#include <thread>
+
+#include "physgrad/threads.hpp"
+
 namespace physgrad {
 
 StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
@@ -11,11 +19,40 @@ StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
       context_(std::move(context)),
       batch_(x_.cols()),
       outputs_(physics.output_dim()) {
-  Matrix unit(outputs_, batch_);
-  for (Index k = 0; k < outputs_; ++k) {
-    unit.setZero();
-    unit.row(k).setOnes();
-    output_cotangents_.push_back(physics.vjp_batch(x_, context_, unit));
+  // Output k's VJP writes only output_cotangents_[k]; worker t takes k ≡ t (mod threads).
+  output_cotangents_.resize(static_cast<std::size_t>(outputs_));
+  const Index threads = std::min<Index>(jacobian_threads(), outputs_);
+  const auto vjps = [this](Index first, Index stride) {
+    Matrix unit(outputs_, batch_);
+    for (Index k = first; k < outputs_; k += stride) {
+      unit.setZero();
+      unit.row(k).setOnes();
+      output_cotangents_[static_cast<std::size_t>(k)] = physics_->vjp_batch(x_, context_, unit);
+    }
+  };
+  if (threads <= 1) {
+    vjps(0, 1);
+    return;
+  }
+  std::vector<std::thread> workers;
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(threads));
+  for (Index t = 1; t < threads; ++t) {
+    workers.emplace_back([&vjps, &errors, t, threads] {
+      try {
+        vjps(t, threads);
+      } catch (...) {
+        errors[static_cast<std::size_t>(t)] = std::current_exception();
+      }
+    });
+  }
+  try {
+    vjps(0, threads);
+  } catch (...) {
+    errors[0] = std::current_exception();
+  }
+  for (std::thread& worker : workers) worker.join();
+  for (const std::exception_ptr& error : errors) {
+    if (error) std::rethrow_exception(error);
   }
 }
 
@@ -29,34 +66,43 @@ Matrix StackedJacobian::materialize() const {
 }
 
 Matrix StackedJacobian::gram() const {
-  const Index layers = network_->num_layers();
+  const Index n = rows();
   const Index b = batch_;
-  // D_l for every layer, filled output by output.
-  std::vector<Matrix> stacked(static_cast<std::size_t>(layers));
+  const auto lapack = [](Index value) { return static_cast<blasint>(value); };
+  // D_l of all outputs at once: one backward sweep over the B·m columns (column k·B + i), so
+  // every layer costs one matrix product instead of m.
+  const std::vector<Matrix>& derivatives = cache_->derivatives;
+  Matrix delta(network_->output_dim(), n);
   for (Index k = 0; k < outputs_; ++k) {
-    const std::vector<Matrix> deltas =
-        network_->layer_deltas(*cache_, output_cotangents_[static_cast<std::size_t>(k)]);
-    for (Index l = 0; l < layers; ++l) {
-      Matrix& d = stacked[static_cast<std::size_t>(l)];
-      if (k == 0) d.resize(deltas[static_cast<std::size_t>(l)].rows(), rows());
-      d.middleCols(k * b, b) = deltas[static_cast<std::size_t>(l)];
-    }
+    delta.middleCols(k * b, b) =
+        output_cotangents_[static_cast<std::size_t>(k)].cwiseProduct(derivatives.back());
   }
-  Matrix gram = Matrix::Zero(rows(), rows());
-  Matrix block(rows(), rows());
-  for (Index l = 0; l < layers; ++l) {
+  Matrix gram = Matrix::Zero(n, n);
+  Matrix block = Matrix::Zero(n, n);  // D_lᵀ D_l; dsyrk writes only the lower triangle
+  Matrix inputs(b, b);
+  Matrix next;
+  for (Index l = network_->num_layers() - 1;; --l) {
+    cblas_dsyrk(CblasColMajor, CblasLower, CblasTrans, lapack(n), lapack(delta.rows()), 1.0,
+                delta.data(), lapack(delta.rows()), 0.0, block.data(), lapack(n));
     const Matrix& a = cache_->activations[static_cast<std::size_t>(l)];
-    Matrix inputs = a.transpose() * a;  // a_{l−1,i} · a_{l−1,j}
-    inputs.array() += 1.0;               // + 1 for the bias
-    const Matrix& d = stacked[static_cast<std::size_t>(l)];
-    block.noalias() = d.transpose() * d;
-    for (Index k = 0; k < outputs_; ++k) {
-      for (Index kk = 0; kk < outputs_; ++kk) {
+    inputs.noalias() = a.transpose() * a;  // a_{l−1,i} · a_{l−1,j}
+    inputs.array() += 1.0;                  // + 1 for the bias
+    // The lower blocks (k ≥ kk) only; within a diagonal block the strict upper part is junk
+    // (zero in block) and is overwritten by the mirror below.
+    for (Index kk = 0; kk < outputs_; ++kk) {
+      for (Index k = kk; k < outputs_; ++k) {
         gram.block(k * b, kk * b, b, b).array() +=
             block.block(k * b, kk * b, b, b).array() * inputs.array();
       }
     }
+    if (l == 0) break;
+    next.noalias() = network_->weight(l).transpose() * delta;
+    for (Index k = 0; k < outputs_; ++k) {
+      next.middleCols(k * b, b).array() *= derivatives[static_cast<std::size_t>(l - 1)].array();
+    }
+    delta.swap(next);
   }
+  gram.triangularView<Eigen::StrictlyUpper>() = gram.transpose();
   return gram;
 }
 

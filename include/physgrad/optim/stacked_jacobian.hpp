@@ -19,7 +19,8 @@ namespace physgrad {
 class StackedJacobian {
  public:
   // m batched VJPs through the physics (one per output k) give each sample's cotangent at the
-  // network output; nothing per-parameter is computed yet.
+  // network output, on jacobian_threads() threads (threads.hpp); nothing per-parameter is
+  // computed yet. An exception from a VJP is rethrown here.
   StackedJacobian(const Mlp& network, const MlpCache& cache, const Simulator& physics,
                   Matrix x, Matrix context);
 

@@ -1,0 +1,165 @@
+#include "bench_command.hpp"
+
+#include <lapacke.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "experiment.hpp"
+#include "physgrad/error.hpp"
+#include "physgrad/threads.hpp"
+#include "reference_case.hpp"
+
+namespace physgrad::cli {
+
+namespace {
+
+namespace ex = physgrad::experiments;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+long long read_integer(const std::string& name, const std::string& text, double at_least) {
+  return ex::parse_option(ex::integer_option(name, "", "").at_least(at_least), text)
+      .get<long long>();
+}
+
+// Median seconds of dsyevd (all eigenpairs) on a symmetric positive definite n × n matrix.
+double eigendecomposition_seconds(Index n, long long repeats) {
+  const Matrix a = Matrix::Random(n, n);
+  const Matrix sym = a * a.transpose();
+  Vector lambda(n);
+  std::vector<double> times;
+  for (long long r = 0; r < repeats; ++r) {
+    Matrix w = sym;
+    const auto start = Clock::now();
+    const lapack_int status = LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', static_cast<lapack_int>(n),
+                                             w.data(), static_cast<lapack_int>(n), lambda.data());
+    times.push_back(seconds_since(start));
+    if (status != 0) throw Error("bench: dsyevd failed (info = " + std::to_string(status) + ")");
+  }
+  return median(times);
+}
+
+}  // namespace
+
+BenchCommand::BenchCommand(CLI::App& app)
+    : command_(app.add_subcommand(
+          "bench", "time steps of an update on a reference experiment, one JSON line: physgrad bench "
+                   "NAME [--optimizer U] [--batch B] [--steps N] [--warmup W] [--threads T]")) {
+  std::string names;
+  for (const std::string& name : ex::reference_case_names()) {
+    names += (names.empty() ? "" : ", ") + name;
+  }
+  command_->add_option("NAME", name_, "reference experiment: " + names)->required();
+  std::string rules;
+  for (const std::string& id : learning_update_ids()) rules += (rules.empty() ? "" : ", ") + id;
+  command_->add_option("--optimizer", optimizer_, "update rule: " + rules)
+      ->default_str(optimizer_);
+  command_->add_option("--batch", batch_, "batch size (default: the rule's own in NAME)")
+      ->type_name("INT");
+  command_->add_option("--steps", steps_, "timed steps (≥ 1)")->default_str(steps_)->type_name("INT");
+  command_->add_option("--warmup", warmup_, "untimed steps before (≥ 0)")
+      ->default_str(warmup_)
+      ->type_name("INT");
+  command_->add_option("--threads", threads_,
+                       "threads for the m physics VJPs of the stacked Jacobian (≥ 1)")
+      ->default_str(threads_)
+      ->type_name("INT");
+}
+
+void BenchCommand::run(std::ostream& out) const {
+  const long long steps = read_integer("steps", steps_, 1);
+  const long long warmup = read_integer("warmup", warmup_, 0);
+  const long long threads = read_integer("threads", threads_, 1);
+  const auto& names = ex::reference_case_names();
+  if (std::find(names.begin(), names.end(), name_) == names.end()) {
+    ex::reference_case(name_, 1);  // throws, naming the known configurations
+  }
+  const auto& ids = learning_update_ids();
+  if (std::find(ids.begin(), ids.end(), optimizer_) == ids.end()) {
+    make_learning_update(optimizer_);  // throws, naming the known rules
+  }
+  if (std::getenv("OPENBLAS_NUM_THREADS") == nullptr && std::getenv("OMP_NUM_THREADS") == nullptr) {
+    set_blas_threads(1);
+  }
+  set_jacobian_threads(static_cast<int>(std::min(threads, 1024LL)));
+
+  // The rule's own batch size, step size and τ in NAME, as `physgrad run NAME` uses them.
+  const Index batch = batch_.empty() ? ex::reference_batch(ex::reference_case(name_, 1), optimizer_)
+                                     : read_integer("batch", batch_, 1);
+  ex::ReferenceCase reference = ex::reference_case(name_, batch);
+  const auto update = ex::make_reference_update(reference, optimizer_);
+  const LearningProblem problem = reference.problem();
+  Mlp& network = reference.network;
+
+  std::vector<double> total, jacobian, inverse, rule, other;
+  MlpCache cache;
+  for (long long s = 0; s < warmup + steps; ++s) {
+    const auto start = Clock::now();
+    BatchTiming timing;
+    const BatchState state =
+        evaluate_batch(network, problem, reference.batch, update->need(), cache, &timing);
+    const auto step_start = Clock::now();
+    const UpdateStep step = update->step(state);
+    const double step_seconds = seconds_since(step_start);
+    if (!all_finite(step.delta)) {
+      throw Error("bench: step " + std::to_string(s + 1) + " of " + optimizer_ + " on " + name_ +
+                  " is not finite");
+    }
+    network.parameters() += step.delta;
+    const double seconds = seconds_since(start);
+    if (s < warmup) continue;
+    total.push_back(seconds);
+    jacobian.push_back(timing.derivatives + step.jacobian_seconds);
+    inverse.push_back(step.inversion_seconds);
+    rule.push_back(std::max(0.0, step_seconds - step.jacobian_seconds - step.inversion_seconds));
+    other.push_back(std::max(0.0, seconds - timing.derivatives - step_seconds));
+  }
+
+  const Index rows = reference.batch.size() * reference.physics->output_dim();
+  std::string backend = "none";
+  nlohmann::json rank = nullptr;
+  if (const auto* inverse_rule = dynamic_cast<const JacobianInverseUpdate*>(update.get())) {
+    backend = to_string(inverse_rule->last_info().backend);
+    rank = inverse_rule->last_info().rank;
+  } else if (optimizer_ == "sip") {
+    backend = "local inverse";
+  }
+  // At most 5 repeats: at B·m = 4096 one takes seconds.
+  const double reference_seconds = eigendecomposition_seconds(rows, std::min(steps, 5LL));
+  const double per_step = median(total);
+  nlohmann::json line = {
+      {"experiment", name_},
+      {"optimizer", optimizer_},
+      {"batch", batch},
+      {"steps", steps},
+      {"warmup", warmup},
+      {"threads", threads},
+      {"seconds_per_step", per_step},
+      {"split",
+       {{"jacobian", median(jacobian)},
+        {"inverse", median(inverse)},
+        {"update", median(rule)},
+        {"other", median(other)}}},
+      {"jacobian_shape", {rows, network.num_parameters()}},
+      {"backend", backend},
+      {"rank", rank},
+      {"reference_linalg", {{"operation", "dsyevd"}, {"n", rows}, {"seconds", reference_seconds}}},
+      {"step_over_reference", per_step / reference_seconds},
+  };
+  out << line.dump() << '\n';
+}
+
+}  // namespace physgrad::cli
