@@ -243,7 +243,8 @@ TEST_F(Cli, BenchPrintsOneJsonLineAndRejectsBadInput) {
            {"bench no-such-case", "unknown reference configuration 'no-such-case'"},
            {"bench hig-toy --optimizer newton", "unknown learning update 'newton'"},
            {"bench hig-toy --steps 0", "--steps: must be ≥ 1"},
-           {"bench hig-toy --batch x", "--batch: 'x' is not a whole number"}}) {
+           {"bench hig-toy --batch x", "--batch: 'x' is not a whole number"},
+           {"bench hig-toy --threads 0", "--threads: "}}) {
     const Outcome bad = run(args);
     EXPECT_EQ(bad.exit_code, 2) << args;
     EXPECT_TRUE(bad.out.empty()) << args << ": " << bad.out;

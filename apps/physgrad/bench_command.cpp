@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -30,8 +31,10 @@ double median(std::vector<double> values) {
   return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
-long long read_integer(const std::string& name, const std::string& text, double at_least) {
-  return ex::parse_option(ex::integer_option(name, "", "").at_least(at_least), text)
+long long read_integer(const std::string& name, const std::string& text, double at_least,
+                       double at_most = std::numeric_limits<double>::infinity()) {
+  return ex::parse_option(ex::integer_option(name, "", "").at_least(at_least).at_most(at_most),
+                          text)
       .get<long long>();
 }
 
@@ -74,7 +77,7 @@ BenchCommand::BenchCommand(CLI::App& app)
       ->default_str(warmup_)
       ->type_name("INT");
   command_->add_option("--threads", threads_,
-                       "threads for the m physics VJPs of the stacked Jacobian (≥ 1)")
+                       "threads for the m physics VJPs of the stacked Jacobian (1 to 1024)")
       ->default_str(threads_)
       ->type_name("INT");
 }
@@ -82,7 +85,7 @@ BenchCommand::BenchCommand(CLI::App& app)
 void BenchCommand::run(std::ostream& out) const {
   const long long steps = read_integer("steps", steps_, 1);
   const long long warmup = read_integer("warmup", warmup_, 0);
-  const long long threads = read_integer("threads", threads_, 1);
+  const long long threads = read_integer("threads", threads_, 1, 1024);
   const auto& names = ex::reference_case_names();
   if (std::find(names.begin(), names.end(), name_) == names.end()) {
     ex::reference_case(name_, 1);  // throws, naming the known configurations
@@ -94,7 +97,7 @@ void BenchCommand::run(std::ostream& out) const {
   if (std::getenv("OPENBLAS_NUM_THREADS") == nullptr && std::getenv("OMP_NUM_THREADS") == nullptr) {
     set_blas_threads(1);
   }
-  set_jacobian_threads(static_cast<int>(std::min(threads, 1024LL)));
+  set_jacobian_threads(static_cast<int>(threads));
 
   // The rule's own batch size, step size and τ in NAME, as `physgrad run NAME` uses them.
   const Index batch = batch_.empty() ? ex::reference_batch(ex::reference_case(name_, 1), optimizer_)

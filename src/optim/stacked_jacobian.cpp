@@ -36,14 +36,19 @@ StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
   }
   std::vector<std::thread> workers;
   std::vector<std::exception_ptr> errors(static_cast<std::size_t>(threads));
-  for (Index t = 1; t < threads; ++t) {
-    workers.emplace_back([&vjps, &errors, t, threads] {
-      try {
-        vjps(t, threads);
-      } catch (...) {
-        errors[static_cast<std::size_t>(t)] = std::current_exception();
-      }
-    });
+  try {
+    for (Index t = 1; t < threads; ++t) {
+      workers.emplace_back([&vjps, &errors, t, threads] {
+        try {
+          vjps(t, threads);
+        } catch (...) {
+          errors[static_cast<std::size_t>(t)] = std::current_exception();
+        }
+      });
+    }
+  } catch (...) {  // a thread could not be started: wait for the others, then report it
+    for (std::thread& worker : workers) worker.join();
+    throw;
   }
   try {
     vjps(0, threads);
