@@ -48,8 +48,11 @@ nlohmann::json parse_checkpoint(std::string_view text, const std::string& source
   std::string magic, checksum;
   long long version = 0, length = -1;
   header >> magic >> version >> length >> checksum;
-  if (newline == std::string::npos || magic != kMagic || header.fail() || length < 0 ||
-      checksum.size() != 16) {
+  // Only the canonical spelling of the header is accepted, so any changed byte in it shows.
+  if (newline == std::string::npos || header.fail() || magic != kMagic || length < 0 ||
+      checksum.size() != 16 ||
+      text.substr(0, newline) != std::string(kMagic) + " " + std::to_string(version) + " " +
+                                     std::to_string(length) + " " + checksum) {
     throw fail("not a physgrad checkpoint (bad header line)");
   }
   if (version != kVersion) {
