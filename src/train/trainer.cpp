@@ -7,6 +7,7 @@
 #include <string>
 
 #include "physgrad/error.hpp"
+#include "physgrad/train/data_parallel.hpp"
 
 namespace physgrad {
 
@@ -129,14 +130,15 @@ TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProble
   const Index batch_size = std::min(options.batch_size, n);
   TrainingSummary summary;
   update.reset();
+  DataParallel parallel(options.communicator);  // this process alone without a communicator
 
   const auto evaluate = [&] {
     TrainingRecord record;
     record.iteration = summary.iterations;
     record.epoch = static_cast<double>(summary.iterations * batch_size) / static_cast<double>(n);
     record.train_seconds = summary.train_seconds;
-    record.train_loss = mean_loss(network, problem, train_set);
-    record.test_loss = test_set ? mean_loss(network, problem, *test_set) : NAN;
+    record.train_loss = parallel.mean_loss(network, problem, train_set);
+    record.test_loss = test_set ? parallel.mean_loss(network, problem, *test_set) : NAN;
     if (options.on_evaluate) options.on_evaluate(network, record);
     summary.history.push_back(record);
     if (options.on_progress) options.on_progress(record);
@@ -178,7 +180,7 @@ TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProble
       const auto step_start = Clock::now();
       BatchTiming timing;
       const BatchState batch =
-          evaluate_batch(network, problem, train_set.select(indices), update.need(), cache, &timing);
+          parallel.evaluate(network, problem, train_set, indices, update.need(), cache, &timing);
       summary.forward_seconds += timing.forward;
       summary.derivative_seconds += timing.derivatives;
       const char* failure = !std::isfinite(batch.loss)                 ? "loss"
@@ -188,7 +190,7 @@ TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProble
       const auto update_start = Clock::now();
       UpdateStep step;
       if (failure == nullptr) {
-        step = update.step(batch);
+        step = parallel.step(update, batch);
         summary.inversion_seconds += step.inversion_seconds;
         summary.derivative_seconds += step.jacobian_seconds;
         if (!all_finite(step.delta)) failure = "update";

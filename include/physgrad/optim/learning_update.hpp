@@ -98,6 +98,8 @@ class JacobianInverseUpdate final : public LearningUpdate {
   UpdateStep step(const BatchState& batch) override;
   // Backend and kept rank of the last step.
   const PowerPinvInfo& last_info() const { return info_; }
+  double lr() const { return lr_; }
+  const PowerPinvOptions& pinv_options() const { return pinv_; }
 
  private:
   std::string id_;
