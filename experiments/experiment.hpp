@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "physgrad/parallel/communicator.hpp"
 #include "physgrad/types.hpp"
 
 namespace physgrad::experiments {
@@ -96,6 +97,11 @@ class RunContext {
   void set_quiet(bool quiet) { quiet_ = quiet; }
   void set_experiment_name(std::string name) { experiment_name_ = std::move(name); }
   const std::string& experiment_name() const { return experiment_name_; }
+  // The ranks that train together (data-parallel learning); none: this process alone.
+  void set_communicator(std::shared_ptr<Communicator> communicator) {
+    communicator_ = std::move(communicator);
+  }
+  const std::shared_ptr<Communicator>& communicator() const { return communicator_; }
   void finish_progress();
 
  private:
@@ -105,6 +111,7 @@ class RunContext {
   std::vector<Table> tables_;
   std::vector<std::string> notes_;
   std::string experiment_name_;
+  std::shared_ptr<Communicator> communicator_;
   bool quiet_ = false;
   bool progress_line_open_ = false;
   double last_progress_seconds_ = -1e9;

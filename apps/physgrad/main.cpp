@@ -15,6 +15,7 @@
 #include "experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/threads.hpp"
+#include "ranks.hpp"
 #include "run_folder.hpp"
 
 namespace {
@@ -68,8 +69,8 @@ std::string one_line(const std::string& message) {
 }
 
 int usage_error(const std::string& message) {
-  std::cerr << "physgrad: error: " << one_line(message) << '\n';
-  return kUsageError;
+  std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << one_line(message) << '\n';
+  return physgrad::cli::end_run(kUsageError);  // under mpirun: ends the other ranks too
 }
 
 void print_table(const ex::RunContext::Table& table) {
@@ -114,11 +115,16 @@ int run_experiment(const ex::Experiment& experiment,
   const fs::path out = settings.has("out") && !settings.text("out").empty()
                            ? fs::path(settings.text("out"))
                            : fs::path("runs") / (experiment.name() + "-" + timestamp());
-  const fs::path staging = ex::prepare_run_folder(out);
+  // Under mpirun every rank trains its share; rank 0 alone prints and writes the run folder.
+  const bool writer = physgrad::cli::is_writer();
+  const fs::path staging = writer ? ex::prepare_run_folder(out) : fs::path();
   try {
     ex::RunContext context;
     context.set_experiment_name(experiment.name());
+    context.set_communicator(physgrad::cli::communicator());
+    context.set_quiet(!writer);
     experiment.run(settings, context);
+    if (!writer) return 0;
     ex::write_run_folder(staging, experiment, settings, context, command_line);
     ex::commit_run_folder(staging, out);
     for (const auto& table : context.tables()) print_table(table);
@@ -133,6 +139,7 @@ int run_experiment(const ex::Experiment& experiment,
 }  // namespace
 
 int main(int argc, char** argv) {
+  const physgrad::cli::Ranks ranks(&argc, &argv);
   std::string command_line;
   for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
 
