@@ -1,5 +1,6 @@
 #include "ranks.hpp"
 
+#include <cstdlib>
 #include <iostream>
 
 #ifdef PHYSGRAD_WITH_MPI
@@ -20,6 +21,14 @@ std::shared_ptr<Communicator>& current() {
 Ranks::Ranks([[maybe_unused]] int* argc, [[maybe_unused]] char*** argv) {
 #ifdef PHYSGRAD_WITH_MPI
   if (launched_by_mpi()) current() = mpi_world_communicator(argc, argv);
+#else
+  // Several copies of a build without MPI would each train alone and race for the run folder.
+  if (launcher_size() > 1) {
+    std::cerr << "physgrad: error: this physgrad was built without MPI (PHYSGRAD_WITH_MPI off or "
+                 "no MPI found), so it cannot share a run among "
+              << launcher_size() << " processes; run it without mpirun\n";
+    std::exit(2);
+  }
 #endif
 }
 

@@ -1,6 +1,7 @@
 #include "physgrad/parallel/communicator.hpp"
 
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -26,6 +27,23 @@ Share share_of(std::size_t count, int rank, int size) {
   const auto r = static_cast<std::size_t>(rank);
   const std::size_t base = count / k, extra = count % k;
   return {r * base + (r < extra ? r : extra), base + (r < extra ? 1 : 0)};
+}
+
+bool launched_by_mpi() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_SIZE", "PMI_RANK"}) {
+    if (std::getenv(name) != nullptr) return true;
+  }
+  return false;
+}
+
+int launcher_size() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"}) {
+    if (const char* value = std::getenv(name)) {
+      const int size = std::atoi(value);
+      return size > 1 ? size : 1;
+    }
+  }
+  return 1;
 }
 
 std::uint64_t hash_doubles(const double* data, std::size_t count) {

@@ -4,7 +4,6 @@
 
 #include <climits>
 #include <cstdint>
-#include <cstdlib>
 #include <string>
 
 #include "physgrad/error.hpp"
@@ -108,13 +107,6 @@ class MpiCommunicator final : public Communicator {
 };
 
 }  // namespace
-
-bool launched_by_mpi() {
-  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_SIZE", "PMI_RANK"}) {
-    if (std::getenv(name) != nullptr) return true;
-  }
-  return false;
-}
 
 std::shared_ptr<Communicator> mpi_world_communicator(int* argc, char*** argv) {
   return std::make_shared<MpiCommunicator>(argc, argv);

@@ -63,6 +63,13 @@ struct Share {
 };
 Share share_of(std::size_t count, int rank, int size);
 
+// True when this process was started by an MPI launcher (mpirun/mpiexec of Open MPI or of an
+// MPICH-style process manager), judged from the environment the launcher sets.
+bool launched_by_mpi();
+// The number of processes the launcher started (OMPI_COMM_WORLD_SIZE or PMI_SIZE), 1 when not
+// launched or unknown.
+int launcher_size();
+
 // A 64-bit FNV-1a hash of the bytes of `count` doubles; ranks compare it to check that their
 // parameters are bit-identical.
 std::uint64_t hash_doubles(const double* data, std::size_t count);

@@ -8,10 +8,6 @@
 
 namespace physgrad {
 
-// True when this process was started by an MPI launcher (mpirun/mpiexec of Open MPI or of an
-// MPICH-style process manager), judged from the environment the launcher sets.
-bool launched_by_mpi();
-
 // Initializes MPI (MPI_Init) and finalizes it (MPI_Finalize) when the last reference goes away;
 // one per process. Throws Error when MPI was initialized before by someone else.
 std::shared_ptr<Communicator> mpi_world_communicator(int* argc, char*** argv);
