@@ -237,6 +237,44 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"hig", 320, 1e-2, 2, 1e-9}),
     case_name);
 
+// The doubles one step exchanges, as docs/distributed.md counts them (B = 8, m = 2, n = 2,
+// |θ| = 32): the batch loss (1), then ∇θ (|θ|) for adam; ∂L/∂y (B·m), the output cotangents
+// (B·m·n) and the Jᵀc cotangents (B·n) for hig on the Gram path.
+TEST(DataParallel, ExchangesWhatTheModelCounts) {
+  const Problem p(40);
+  const std::vector<Index> indices = {3, 1, 4, 15, 9, 2, 6, 5};
+  for (const std::string rule : {"adam", "hig"}) {
+    constexpr int kRanks = 2;
+    testing::ThreadHub hub(kRanks);
+    std::vector<double> exchanged(kRanks);
+    std::vector<Vector> deltas(kRanks);
+    std::vector<std::thread> threads;
+    for (int r = 0; r < kRanks; ++r) {
+      threads.emplace_back([&, r] {
+        DataParallel parallel(std::make_shared<testing::ThreadCommunicator>(hub, r));
+        const auto update = make_learning_update(rule);
+        MlpCache cache;
+        const BatchState batch =
+            parallel.evaluate(p.network, p.problem, p.data, indices, update->need(), cache);
+        deltas[static_cast<std::size_t>(r)] = parallel.step(*update, batch).delta;
+        exchanged[static_cast<std::size_t>(r)] = parallel.exchanged_doubles();
+      });
+    }
+    for (std::thread& t : threads) t.join();
+    const double expected = rule == "adam" ? 1 + 32 : 1 + 8 * 2 + 8 * 2 * 2 + 8 * 2;
+    EXPECT_EQ(exchanged[0], expected) << rule;
+    EXPECT_EQ(exchanged[1], expected) << rule;
+    EXPECT_EQ(deltas[0], deltas[1]) << rule;
+    // The same step as one process on the whole batch.
+    MlpCache cache;
+    const auto update = make_learning_update(rule);
+    const BatchState whole =
+        evaluate_batch(p.network, p.problem, p.data.select(indices), update->need(), cache);
+    const Vector alone = update->step(whole).delta;
+    EXPECT_LE((alone - deltas[0]).norm(), 1e-12 * alone.norm()) << rule;
+  }
+}
+
 TEST(DataParallel, OneRankIsTheOneProcessPath) {
   const Problem p(40);
   TrainerOptions options;
