@@ -237,6 +237,28 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"hig", 320, 1e-2, 2, 1e-9}),
     case_name);
 
+// A StackedJacobian given the output cotangents (as data-parallel runs gather them) is the one
+// that computes them: the same J and J Jᵀ, bit for bit.
+TEST(DataParallel, StackedJacobianFromGivenCotangents) {
+  const Problem p(12);
+  MlpCache cache;
+  const Matrix x = p.network.forward(p.data.inputs, cache);
+  const StackedJacobian computed(p.network, cache, p.physics, x, Matrix());
+  std::vector<Matrix> cotangents;
+  for (Index k = 0; k < 2; ++k) {
+    Matrix unit = Matrix::Zero(2, x.cols());
+    unit.row(k).setOnes();
+    cotangents.push_back(p.physics.vjp_batch(x, Matrix(), unit));
+  }
+  const StackedJacobian given(p.network, cache, p.physics, x, Matrix(), cotangents);
+  EXPECT_EQ(given.materialize(), computed.materialize());
+  EXPECT_EQ(given.gram(), computed.gram());
+  EXPECT_THROW(StackedJacobian(p.network, cache, p.physics, x, Matrix(), {cotangents[0]}), Error);
+  EXPECT_THROW(StackedJacobian(p.network, cache, p.physics, x, Matrix(),
+                               {cotangents[0], Matrix::Zero(2, 3)}),
+               Error);
+}
+
 // The doubles one step exchanges, as docs/distributed.md counts them (B = 8, m = 2, n = 2,
 // |θ| = 32): the batch loss (1), then ∇θ (|θ|) for adam; ∂L/∂y (B·m), the output cotangents
 // (B·m·n) and the Jᵀc cotangents (B·n) for hig on the Gram path.

@@ -1,5 +1,9 @@
 #include "physgrad/optim/stacked_jacobian.hpp"
 
+#include <string>
+
+#include "physgrad/error.hpp"
+
 namespace physgrad {
 
 StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
@@ -16,6 +20,31 @@ StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
     unit.setZero();
     unit.row(k).setOnes();
     output_cotangents_.push_back(physics.vjp_batch(x_, context_, unit));
+  }
+}
+
+StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
+                                 const Simulator& physics, Matrix x, Matrix context,
+                                 std::vector<Matrix> output_cotangents)
+    : network_(&network),
+      cache_(&cache),
+      physics_(&physics),
+      x_(std::move(x)),
+      context_(std::move(context)),
+      batch_(x_.cols()),
+      outputs_(physics.output_dim()),
+      output_cotangents_(std::move(output_cotangents)) {
+  if (static_cast<Index>(output_cotangents_.size()) != outputs_) {
+    throw Error("StackedJacobian: " + std::to_string(output_cotangents_.size()) +
+                " output cotangents for a simulator with " + std::to_string(outputs_) +
+                " outputs");
+  }
+  for (const Matrix& c : output_cotangents_) {
+    if (c.rows() != x_.rows() || c.cols() != batch_) {
+      throw Error("StackedJacobian: an output cotangent is " + std::to_string(c.rows()) + "×" +
+                  std::to_string(c.cols()) + ", the network outputs are " +
+                  std::to_string(x_.rows()) + "×" + std::to_string(batch_));
+    }
   }
 }
 

@@ -25,56 +25,6 @@ Index share_length(Index count, int rank, int size) {
   return static_cast<Index>(share_of(static_cast<std::size_t>(count), rank, size).length);
 }
 
-// J Jᵀ = Σ_l (D_lᵀ D_l) ⊙ (A_lᵀ A_l + 1) of the whole batch, formed as StackedJacobian::gram()
-// forms it (same operations, same order) from the network's cache and the output cotangents.
-Matrix gram_matrix(const Mlp& network, const MlpCache& cache,
-                   const std::vector<Matrix>& output_cotangents) {
-  const Index layers = network.num_layers();
-  const auto outputs = static_cast<Index>(output_cotangents.size());
-  const Index b = output_cotangents.front().cols();
-  const Index rows = b * outputs;
-  std::vector<Matrix> stacked(static_cast<std::size_t>(layers));
-  for (Index k = 0; k < outputs; ++k) {
-    const std::vector<Matrix> deltas =
-        network.layer_deltas(cache, output_cotangents[static_cast<std::size_t>(k)]);
-    for (Index l = 0; l < layers; ++l) {
-      Matrix& d = stacked[static_cast<std::size_t>(l)];
-      if (k == 0) d.resize(deltas[static_cast<std::size_t>(l)].rows(), rows);
-      d.middleCols(k * b, b) = deltas[static_cast<std::size_t>(l)];
-    }
-  }
-  Matrix gram = Matrix::Zero(rows, rows);
-  Matrix block(rows, rows);
-  for (Index l = 0; l < layers; ++l) {
-    const Matrix& a = cache.activations[static_cast<std::size_t>(l)];
-    Matrix inputs = a.transpose() * a;
-    inputs.array() += 1.0;
-    const Matrix& d = stacked[static_cast<std::size_t>(l)];
-    block.noalias() = d.transpose() * d;
-    for (Index k = 0; k < outputs; ++k) {
-      for (Index kk = 0; kk < outputs; ++kk) {
-        gram.block(k * b, kk * b, b, b).array() +=
-            block.block(k * b, kk * b, b, b).array() * inputs.array();
-      }
-    }
-  }
-  return gram;
-}
-
-// J (B·m × |θ|, row k·B + i) from the cache and the output cotangents, as
-// StackedJacobian::materialize() forms it.
-Matrix jacobian_matrix(const Mlp& network, const MlpCache& cache,
-                       const std::vector<Matrix>& output_cotangents) {
-  const auto outputs = static_cast<Index>(output_cotangents.size());
-  const Index b = output_cotangents.front().cols();
-  Matrix j(b * outputs, network.num_parameters());
-  for (Index k = 0; k < outputs; ++k) {
-    network.per_sample_gradients(cache, output_cotangents[static_cast<std::size_t>(k)],
-                                 j.middleRows(k * b, b));
-  }
-  return j;
-}
-
 }  // namespace
 
 struct DataParallel::Shard {
@@ -86,6 +36,7 @@ struct DataParallel::Shard {
   Index count = 0;
   Index outputs = 0;  // m
   Matrix x, context;  // this rank's network outputs and physics context
+  Matrix whole_x, whole_context;          // the same for the whole batch
   std::vector<Matrix> output_cotangents;  // [k]: n × count, (∂P/∂x)ᵀ e_k per sample
   Vector loss_gradient_y;                 // the whole batch's, entry k·B + i
 };
@@ -180,8 +131,12 @@ BatchState DataParallel::evaluate(const Mlp& network, const LearningProblem& pro
   state.batch_size = global;
   const Index outputs = physics.output_dim();
   Matrix x(network.output_dim(), 0), y(outputs, 0), gradient_y(outputs, 0);
+  Dataset whole;
+  Matrix whole_x;
   if (jacobian) {
-    x = network.forward(data.select(indices).inputs, cache).middleCols(begin, count);
+    whole = data.select(indices);
+    whole_x = network.forward(whole.inputs, cache);
+    x = whole_x.middleCols(begin, count);
   } else if (count > 0) {
     x = network.forward(batch.inputs, cache);
   }
@@ -228,6 +183,8 @@ BatchState DataParallel::evaluate(const Mlp& network, const LearningProblem& pro
     shard->outputs = outputs;
     shard->x = x;
     shard->context = batch.context;
+    shard->whole_x = std::move(whole_x);
+    shard->whole_context = std::move(whole.context);
     Matrix unit(outputs, count);
     for (Index k = 0; k < outputs; ++k) {
       unit.setZero();
@@ -236,8 +193,8 @@ BatchState DataParallel::evaluate(const Mlp& network, const LearningProblem& pro
                                                    : Matrix(x.rows(), 0));
     }
     // ∂L/∂y of the whole batch in the one-process order k·B + i (gathered as m × B columns).
-    const Matrix whole = gather_columns({gradient_y}, outputs, global).front();
-    state.loss_gradient_y = whole.transpose().reshaped();
+    const Matrix all = gather_columns({gradient_y}, outputs, global).front();
+    state.loss_gradient_y = all.transpose().reshaped();
     shard->loss_gradient_y = state.loss_gradient_y;
     shard_ = std::move(shard);
   }
@@ -271,7 +228,9 @@ UpdateStep DataParallel::step(LearningUpdate& update, const BatchState& batch) {
     if (s.count > 0) {
       MlpCache own;  // the network on this rank's samples only
       network.forward(s.cache->activations.front().middleCols(s.begin, s.count), own);
-      const Matrix j = jacobian_matrix(network, own, s.output_cotangents);
+      const Matrix j =
+          StackedJacobian(network, own, *s.physics, s.x, s.context, s.output_cotangents)
+              .materialize();
       cblas_dsyrk(CblasColMajor, CblasLower, CblasTrans, static_cast<int>(params),
                   static_cast<int>(j.rows()), 1.0, j.data(), static_cast<int>(j.rows()), 0.0,
                   normal.data(), static_cast<int>(params));
@@ -303,11 +262,13 @@ UpdateStep DataParallel::step(LearningUpdate& update, const BatchState& batch) {
     direction = power_pinv_apply_normal(std::move(normal), jt_g, pinv, &info);
     step.inversion_seconds = seconds_since(formed_at);
   } else {
-    // Every rank's output cotangents: each rank then holds the one-process J (or J Jᵀ).
-    const std::vector<Matrix> cotangents = gather_columns(s.output_cotangents, n, s.batch);
+    // Every rank's output cotangents: each rank then forms the one-process J Jᵀ (or J) with
+    // the one-process code (its apply_transpose() would rerun the physics on the whole batch,
+    // so Jᵀc is done below).
+    const StackedJacobian whole(network, *s.cache, *s.physics, s.whole_x, s.whole_context,
+                                gather_columns(s.output_cotangents, n, s.batch));
     const bool gram = exchange == JacobianExchange::kGatherGram;
-    Matrix formed = gram ? gram_matrix(network, *s.cache, cotangents)
-                         : jacobian_matrix(network, *s.cache, cotangents);
+    Matrix formed = gram ? whole.gram() : whole.materialize();
     const auto formed_at = Clock::now();
     step.jacobian_seconds = std::chrono::duration<double>(formed_at - start).count();
     if (!all_finite(formed)) {
