@@ -5,7 +5,8 @@ BUILD_DIR   ?= build
 JOBS        ?= $(shell nproc)
 DEMO_OUT    ?= runs/demo
 DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapacke-dev \
-               libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev
+               libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev \
+               libopenmpi-dev openmpi-bin
 
 SANITIZE_DIR ?= build-sanitize
 
@@ -13,7 +14,7 @@ RESULTS_DIR ?= docs/results
 EXPERIMENTS  = scaled-toy sensitivity comparison hig-toy sin-rotation heat-inverse oscillators \
                quantum-dipole poisson
 
-.PHONY: all deps build demo test test-sanitize bench results clean
+.PHONY: all deps build demo test test-sanitize bench bench-mpi results clean
 
 all: build
 
@@ -43,6 +44,10 @@ test: build
 bench: build
 	$(BUILD_DIR)/bench/physgrad_bench --benchmark_out=bench/results.json --benchmark_out_format=json
 	$(BUILD_DIR)/bench/bench_report bench/results.json docs/performance.md docs/performance_size_sweep.svg
+
+# Step time of data-parallel training with 1 and 2 ranks (docs/distributed.md).
+bench-mpi: build
+	bench/distributed_steps.sh $(BUILD_DIR) 2
 
 # Every reference experiment with its defaults (about 7 minutes): figures, summaries and the
 # printed tables in $(RESULTS_DIR), indexed in $(RESULTS_DIR)/README.md.

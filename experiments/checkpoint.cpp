@@ -29,8 +29,8 @@ RunKey key_from_json(const nlohmann::json& document) {
 }  // namespace
 
 ExperimentCheckpoint::ExperimentCheckpoint(fs::path folder, nlohmann::json config,
-                                           nlohmann::json resumed)
-    : folder_(std::move(folder)), config_(std::move(config)) {
+                                           nlohmann::json resumed, bool writes)
+    : folder_(std::move(folder)), config_(std::move(config)), writes_(writes) {
   if (resumed.is_null()) return;
   const std::string experiment = string_from_json(resumed, "experiment");
   if (experiment != config_.at("experiment").get<std::string>()) {
@@ -106,6 +106,7 @@ void ExperimentCheckpoint::save_progress(const RunKey& key, const TrainerState& 
 }
 
 void ExperimentCheckpoint::write(const nlohmann::json& current) {
+  if (!writes_) return;
   if (!written_) {
     std::error_code error;
     fs::create_directories(folder_, error);

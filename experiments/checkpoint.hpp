@@ -35,10 +35,11 @@ struct FinishedRun {
 class ExperimentCheckpoint {
  public:
   // `config` is the config.json document of the run; `resumed` a checkpoint document read back
-  // with read_checkpoint_file() (null for a fresh run). Throws Error when `resumed` is not the
-  // checkpoint of this experiment with these settings.
+  // with read_checkpoint_file() (null for a fresh run); without `writes` (the other ranks of a
+  // data-parallel run) nothing is written. Throws Error when `resumed` is not the checkpoint of
+  // this experiment with these settings.
   ExperimentCheckpoint(std::filesystem::path folder, nlohmann::json config,
-                       nlohmann::json resumed = nullptr);
+                       nlohmann::json resumed = nullptr, bool writes = true);
 
   // The run `key` as the resumed checkpoint has it: finished, or in progress. Throws Error when
   // the checkpoint holds another run at this position or an invalid state.
@@ -61,6 +62,7 @@ class ExperimentCheckpoint {
   nlohmann::json config_;
   nlohmann::json finished_ = nlohmann::json::array();
   nlohmann::json resumed_current_;  // the run in progress when the checkpoint was taken
+  bool writes_ = true;
   bool written_ = false;
 };
 

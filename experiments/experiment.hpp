@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "physgrad/parallel/communicator.hpp"
 #include "physgrad/types.hpp"
 
 namespace physgrad::experiments {
@@ -102,6 +103,11 @@ class RunContext {
   void set_quiet(bool quiet) { quiet_ = quiet; }
   void set_experiment_name(std::string name) { experiment_name_ = std::move(name); }
   const std::string& experiment_name() const { return experiment_name_; }
+  // The ranks that train together (data-parallel learning); none: this process alone.
+  void set_communicator(std::shared_ptr<Communicator> communicator) {
+    communicator_ = std::move(communicator);
+  }
+  const std::shared_ptr<Communicator>& communicator() const { return communicator_; }
   void finish_progress();
 
   // Set by the CLI: the flag a stop request sets, and where learning runs keep their
@@ -123,6 +129,7 @@ class RunContext {
   std::string experiment_name_;
   const std::atomic<bool>* stop_ = nullptr;
   ExperimentCheckpoint* checkpoint_ = nullptr;
+  std::shared_ptr<Communicator> communicator_;
   bool quiet_ = false;
   bool progress_line_open_ = false;
   double last_progress_seconds_ = -1e9;

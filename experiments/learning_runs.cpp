@@ -91,6 +91,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   if (settings_.has("time")) options.time_budget_seconds = settings_.real("time");
   if (settings_.has("eval-every")) options.eval_every = settings_.integer("eval-every");
   options.seed = static_cast<std::uint64_t>(result.seed);
+  options.communicator = context_.communicator();
   options.on_evaluate = std::move(observe);
   options.on_progress = [&](const TrainingRecord& r) {
     context_.progress(context_.experiment_name() + ": " + result.label + " seed " +

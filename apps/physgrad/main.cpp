@@ -23,6 +23,7 @@
 #include "physgrad/train/checkpoint_file.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/threads.hpp"
+#include "ranks.hpp"
 #include "run_folder.hpp"
 
 namespace {
@@ -76,8 +77,8 @@ std::string one_line(const std::string& message) {
 }
 
 int usage_error(const std::string& message) {
-  std::cerr << "physgrad: error: " << one_line(message) << '\n';
-  return kUsageError;
+  std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << one_line(message) << '\n';
+  return physgrad::cli::end_run(kUsageError);  // under mpirun: ends the other ranks too
 }
 
 void print_table(const ex::RunContext::Table& table) {
@@ -124,20 +125,28 @@ int run_experiment(const ex::Experiment& experiment,
   const fs::path out = settings.has("out") && !settings.text("out").empty()
                            ? fs::path(settings.text("out"))
                            : fs::path("runs") / (experiment.name() + "-" + timestamp());
-  const fs::path staging = ex::prepare_run_folder(out, !resumed.is_null());
+  // Under mpirun every rank trains its share; rank 0 alone prints and writes the run folder and
+  // the checkpoint (every rank reads a resumed one).
+  const bool writer = physgrad::cli::is_writer();
+  const fs::path staging = writer ? ex::prepare_run_folder(out, !resumed.is_null()) : fs::path();
   std::optional<ex::ExperimentCheckpoint> checkpoint;
   try {
-    checkpoint.emplace(out, ex::config_document(experiment, settings, command_line), resumed);
+    checkpoint.emplace(out, ex::config_document(experiment, settings, command_line), resumed,
+                       writer);
     ex::RunContext context;
     context.set_experiment_name(experiment.name());
     context.set_stop_flag(&ex::stop_flag());
     context.set_checkpoint(&*checkpoint);
+    context.set_communicator(physgrad::cli::communicator());
+    context.set_quiet(!writer);
     experiment.run(settings, context);
+    if (!writer) return 0;
     ex::write_run_folder(staging, experiment, settings, context, command_line);
     ex::commit_run_folder(staging, out);
     for (const auto& table : context.tables()) print_table(table);
     std::cout << "report: " << (out / "report.html").string() << '\n';
   } catch (const ex::Interrupted& e) {
+    if (!writer) return 128 + ex::received_signal();
     ex::discard_run_folder(staging);
     std::cerr << "physgrad: " << e.what() << "; "
               << (checkpoint && checkpoint->written()
@@ -146,7 +155,7 @@ int run_experiment(const ex::Experiment& experiment,
               << '\n';
     return 128 + ex::received_signal();
   } catch (...) {
-    ex::discard_run_folder(staging);
+    if (writer) ex::discard_run_folder(staging);
     throw;
   }
   return 0;
@@ -174,6 +183,7 @@ int resume_run(const fs::path& folder) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const physgrad::cli::Ranks ranks(&argc, &argv);
   std::string command_line;
   for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
 

@@ -181,6 +181,23 @@ Vector power_pinv_apply_gram(Matrix gram, const Vector& g,
   return apply_transpose(eigen_apply(gram, g, options.kappa, out));
 }
 
+Vector power_pinv_apply_normal(Matrix normal, const Vector& jt_g, const PowerPinvOptions& options,
+                               PowerPinvInfo* info) {
+  if (normal.rows() != normal.cols()) {
+    throw Error("power_pinv_apply_normal: the normal matrix is not square");
+  }
+  check_operands(normal, jt_g, "power_pinv_apply_normal");
+  check_rcond(options.rcond);
+  check_kappa(options.kappa);
+  PowerPinvInfo local;
+  PowerPinvInfo& out = info != nullptr ? *info : local;
+  out = {};
+  out.backend = PinvBackend::kNormal;
+  out.rcond_used = std::max(options.rcond, kMinGramRcond);
+  if (normal.size() == 0) return Vector::Zero(0);
+  return eigen_apply(normal, jt_g, options.kappa, out);
+}
+
 Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, double rcond) {
   check_operands(a, g, "symmetric_pinv_apply");
   check_rcond(rcond);

@@ -77,7 +77,10 @@ UpdateStep SipUpdate::step(const BatchState& batch) {
     const Vector y_target = y + options_.y_step * batch.loss_function->newton_step(y, target);
     const Vector x_tilde =
         local_inverse(*batch.physics, y_target, x, context, options_.inverse).x;
-    cotangent.col(i) = (x - x_tilde) / static_cast<double>(count);
+    // The mean is over the whole mini-batch, which in a data-parallel run (batch_size) spans
+    // more samples than this process's columns.
+    const Index divisor = batch.batch_size > count ? batch.batch_size : count;
+    cotangent.col(i) = (x - x_tilde) / static_cast<double>(divisor);
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

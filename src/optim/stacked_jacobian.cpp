@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <exception>
+#include <string>
 #include <thread>
 
+#include "physgrad/error.hpp"
 #include "physgrad/threads.hpp"
 
 namespace physgrad {
@@ -58,6 +60,31 @@ StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
   for (std::thread& worker : workers) worker.join();
   for (const std::exception_ptr& error : errors) {
     if (error) std::rethrow_exception(error);
+  }
+}
+
+StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
+                                 const Simulator& physics, Matrix x, Matrix context,
+                                 std::vector<Matrix> output_cotangents)
+    : network_(&network),
+      cache_(&cache),
+      physics_(&physics),
+      x_(std::move(x)),
+      context_(std::move(context)),
+      batch_(x_.cols()),
+      outputs_(physics.output_dim()),
+      output_cotangents_(std::move(output_cotangents)) {
+  if (static_cast<Index>(output_cotangents_.size()) != outputs_) {
+    throw Error("StackedJacobian: " + std::to_string(output_cotangents_.size()) +
+                " output cotangents for a simulator with " + std::to_string(outputs_) +
+                " outputs");
+  }
+  for (const Matrix& c : output_cotangents_) {
+    if (c.rows() != x_.rows() || c.cols() != batch_) {
+      throw Error("StackedJacobian: an output cotangent is " + std::to_string(c.rows()) + "×" +
+                  std::to_string(c.cols()) + ", the network outputs are " +
+                  std::to_string(x_.rows()) + "×" + std::to_string(batch_));
+    }
   }
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "physgrad/error.hpp"
+#include "physgrad/train/data_parallel.hpp"
 
 namespace physgrad {
 
@@ -145,18 +146,27 @@ class TrainingRun {
         test_set_(test_set),
         options_(options),
         n_(train_set.size()),
-        batch_size_(std::min(options.batch_size, train_set.size())) {}
+        batch_size_(std::min(options.batch_size, train_set.size())),
+        parallel_(options.communicator) {}
 
   TrainingSummary run();
 
  private:
   void restore(const TrainerState& state);
+  // What ends training between two iterations besides the iteration limit: a stop request and
+  // the time budget, agreed by all ranks of a data-parallel run (any rank's counts), so that
+  // every rank stops at the same iteration.
+  struct Requests {
+    bool stop = false;
+    bool time_out = false;
+  };
+  Requests requests();
   bool evaluate();
-  bool step(const Dataset& batch);
+  bool step(const std::vector<Index>& batch);
   void stop_for_numbers(const std::string& message);
   bool checkpoint_due() const;
   void checkpoint();
-  const char* out_of_budget() const;
+  const char* out_of_budget(bool time_out) const;
 
   Mlp& network_;
   LearningUpdate& update_;
@@ -166,6 +176,7 @@ class TrainingRun {
   const TrainerOptions& options_;
   const Index n_;
   const Index batch_size_;
+  DataParallel parallel_;  // this process alone without a communicator
 
   TrainingSummary summary_;
   long long epoch_ = 0;
@@ -197,7 +208,8 @@ TrainingSummary TrainingRun::run() {
       std::iota(order.begin(), order.end(), Index{0});
     }
     while (batch_start_ < n_ && summary_.termination.empty()) {
-      if (options_.stop != nullptr && options_.stop->load()) {
+      const Requests pending = requests();
+      if (pending.stop) {
         checkpoint();
         summary_.termination = "interrupted";
         summary_.message = "stopped on request after iteration " +
@@ -205,13 +217,13 @@ TrainingSummary TrainingRun::run() {
         return summary_;
       }
       if (checkpoint_due()) checkpoint();
-      if (const char* reason = out_of_budget()) {
+      if (const char* reason = out_of_budget(pending.time_out)) {
         summary_.termination = reason;
         break;
       }
       const Index count = std::min(batch_size_, n_ - batch_start_);
       const auto first = order.begin() + batch_start_;
-      if (!step(train_set_.select(std::vector<Index>(first, first + count)))) break;
+      if (!step(std::vector<Index>(first, first + count))) break;
       batch_start_ += batch_size_;
       if (options_.eval_every && summary_.iterations % *options_.eval_every == 0) evaluate();
     }
@@ -262,8 +274,8 @@ bool TrainingRun::evaluate() {
   record.epoch =
       static_cast<double>(summary_.iterations * batch_size_) / static_cast<double>(n_);
   record.train_seconds = summary_.train_seconds;
-  record.train_loss = mean_loss(network_, problem_, train_set_);
-  record.test_loss = test_set_ ? mean_loss(network_, problem_, *test_set_) : NAN;
+  record.train_loss = parallel_.mean_loss(network_, problem_, train_set_);
+  record.test_loss = test_set_ ? parallel_.mean_loss(network_, problem_, *test_set_) : NAN;
   const char* bad = !std::isfinite(record.train_loss)                       ? "train"
                     : test_set_ != nullptr && !std::isfinite(record.test_loss) ? "test"
                                                                                : nullptr;
@@ -288,8 +300,9 @@ bool TrainingRun::evaluate() {
   return true;
 }
 
-// One update on `batch` under the numerical guard; false when training must stop.
-bool TrainingRun::step(const Dataset& batch) {
+// One update on the samples `batch` under the numerical guard; false when training must stop.
+// Every rank of a data-parallel run sees the same combined numbers and takes the same branches.
+bool TrainingRun::step(const std::vector<Index>& batch) {
   const auto step_start = Clock::now();
   UpdateStep step;
   const char* failure = nullptr;
@@ -297,7 +310,7 @@ bool TrainingRun::step(const Dataset& batch) {
   for (;;) {
     BatchTiming timing;
     const BatchState state =
-        evaluate_batch(network_, problem_, batch, update_.need(), cache_, &timing);
+        parallel_.evaluate(network_, problem_, train_set_, batch, update_.need(), cache_, &timing);
     summary_.forward_seconds += timing.forward;
     summary_.derivative_seconds += timing.derivatives;
     failure = !std::isfinite(state.loss)            ? "loss"
@@ -306,7 +319,7 @@ bool TrainingRun::step(const Dataset& batch) {
                                                     : nullptr;
     const auto update_start = Clock::now();
     if (failure == nullptr) {
-      step = update_.step(state);
+      step = parallel_.step(update_, state);
       summary_.inversion_seconds += step.inversion_seconds;
       summary_.derivative_seconds += step.jacobian_seconds;
       if (!all_finite(step.delta)) failure = "update";
@@ -359,6 +372,16 @@ void TrainingRun::stop_for_numbers(const std::string& message) {
   summary_.message += (summary_.message.empty() ? "" : "; then ") + message;
 }
 
+TrainingRun::Requests TrainingRun::requests() {
+  double flags[2] = {
+      options_.stop != nullptr && options_.stop->load() ? 1.0 : 0.0,
+      options_.time_budget_seconds && summary_.train_seconds >= *options_.time_budget_seconds
+          ? 1.0
+          : 0.0};
+  if (parallel_.active()) parallel_.communicator()->allreduce_sum(flags, 2);
+  return {flags[0] > 0, flags[1] > 0};
+}
+
 bool TrainingRun::checkpoint_due() const {
   if (!options_.on_checkpoint || summary_.iterations == last_checkpoint_iteration_) return false;
   return (options_.checkpoint_every && summary_.iterations % *options_.checkpoint_every == 0) ||
@@ -383,14 +406,11 @@ void TrainingRun::checkpoint() {
   last_checkpoint_iteration_ = summary_.iterations;
 }
 
-const char* TrainingRun::out_of_budget() const {
+const char* TrainingRun::out_of_budget(bool time_out) const {
   if (options_.max_iterations && summary_.iterations >= *options_.max_iterations) {
     return "max_iterations";
   }
-  if (options_.time_budget_seconds && summary_.train_seconds >= *options_.time_budget_seconds) {
-    return "time_budget";
-  }
-  return nullptr;
+  return time_out ? "time_budget" : nullptr;
 }
 
 }  // namespace

@@ -58,6 +58,12 @@ Vector power_pinv_apply_gram(Matrix gram, const Vector& g,
                              const std::function<Vector(const Vector&)>& apply_transpose,
                              const PowerPinvOptions& options = {}, PowerPinvInfo* info = nullptr);
 
+// J^{−κ} g from the normal matrix A = Jᵀ J (lower triangle read) and b = Jᵀ g, for callers that
+// sum A and b over row blocks of J (the ranks of a data-parallel run): the kNormal path with its
+// cutoff floor, result V Σ^{−1−κ} Vᵀ b. Throws like power_pinv_apply.
+Vector power_pinv_apply_normal(Matrix normal, const Vector& jt_g,
+                               const PowerPinvOptions& options = {}, PowerPinvInfo* info = nullptr);
+
 // Truncated pseudo-inverse of a symmetric positive semi-definite matrix applied to g:
 // A⁺ g over the eigenvalues λᵢ > rcond·λ_max (the normal-equation solve of Gauss-Newton).
 Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, double rcond = 1e-12);

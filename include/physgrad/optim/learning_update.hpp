@@ -110,6 +110,8 @@ class JacobianInverseUpdate final : public LearningUpdate {
   bool steps_can_be_halved() const override { return true; }
   // Backend and kept rank of the last step.
   const PowerPinvInfo& last_info() const { return info_; }
+  double lr() const { return lr_; }
+  const PowerPinvOptions& pinv_options() const { return pinv_; }
 
  private:
   std::string id_;

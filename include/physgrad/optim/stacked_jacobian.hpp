@@ -23,6 +23,10 @@ class StackedJacobian {
   // computed yet. An exception from a VJP is rethrown here.
   StackedJacobian(const Mlp& network, const MlpCache& cache, const Simulator& physics,
                   Matrix x, Matrix context);
+  // Same, with the m output cotangents (∂P/∂x)ᵀ e_k (n × B each) given, e.g. gathered from the
+  // ranks of a data-parallel run that each ran the physics on their share of the batch.
+  StackedJacobian(const Mlp& network, const MlpCache& cache, const Simulator& physics,
+                  Matrix x, Matrix context, std::vector<Matrix> output_cotangents);
 
   Index rows() const { return batch_ * outputs_; }
   Index cols() const { return network_->num_parameters(); }

@@ -11,6 +11,7 @@
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/nn/mlp.hpp"
 #include "physgrad/optim/learning_update.hpp"
+#include "physgrad/parallel/communicator.hpp"
 #include "physgrad/physics/simulator.hpp"
 #include "physgrad/train/dataset.hpp"
 
@@ -71,6 +72,9 @@ struct TrainerOptions {
   std::optional<long long> eval_every;
   bool shuffle = true;
   std::uint64_t seed = 0;  // shuffling order
+  // Data-parallel training: the ranks of this communicator share every mini-batch (see
+  // train/data_parallel.hpp); none, or one rank: this process alone.
+  std::shared_ptr<Communicator> communicator;
   // Adds experiment-specific figures to a record at each evaluation.
   std::function<void(const Mlp&, TrainingRecord&)> on_evaluate;
   // Progress line after each evaluation.

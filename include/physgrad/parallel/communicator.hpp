@@ -1,0 +1,80 @@
+// Communicator — the K processes ("ranks") of a data-parallel run and the collective operations
+// they use: sum over ranks, concatenation of per-rank blocks, broadcast from one rank.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace physgrad {
+
+// Every rank calls each collective in the same order with matching sizes. Results are the same
+// bits on every rank (the sum is reduced on rank 0 and broadcast, so no reduction order can make
+// ranks drift apart).
+class Communicator {
+ public:
+  virtual ~Communicator() = default;
+  virtual int rank() const = 0;  // 0 … size() − 1
+  virtual int size() const = 0;  // K ≥ 1
+  virtual std::string name() const = 0;  // "serial", "mpi", …
+
+  // data[i] ← Σ_ranks data[i], for i < count (count equal on every rank).
+  virtual void allreduce_sum(double* data, std::size_t count) = 0;
+  // The blocks of all ranks concatenated in rank order; each rank's block may have any size
+  // (also 0). `counts`, if given, receives the size of every rank's block.
+  virtual std::vector<double> allgather(const double* data, std::size_t count,
+                                        std::vector<std::size_t>* counts = nullptr) = 0;
+  // data[i] ← data[i] of rank `root`, for i < count.
+  virtual void broadcast(double* data, std::size_t count, int root) = 0;
+  // Ends every rank after an unrecoverable error on this one (so none waits forever in a
+  // collective); the serial communicator has nothing to end and returns.
+  virtual void abort(int exit_code) = 0;
+
+  // Convenience forms on vectors.
+  void allreduce_sum(std::vector<double>& data) { allreduce_sum(data.data(), data.size()); }
+  double allreduce_sum(double value) {
+    allreduce_sum(&value, 1);
+    return value;
+  }
+};
+
+// One process: sums and concatenations return the local data.
+class SerialCommunicator final : public Communicator {
+ public:
+  int rank() const override { return 0; }
+  int size() const override { return 1; }
+  std::string name() const override { return "serial"; }
+  void allreduce_sum(double* /*data*/, std::size_t /*count*/) override {}
+  std::vector<double> allgather(const double* data, std::size_t count,
+                                std::vector<std::size_t>* counts = nullptr) override;
+  void broadcast(double* data, std::size_t count, int root) override;
+  void abort(int /*exit_code*/) override {}
+  using Communicator::allreduce_sum;
+};
+
+// The contiguous share of `count` items (batch columns, data-set samples) that rank `rank` of
+// `size` owns: [begin, begin + length). Shares differ by at most one item, the larger ones on
+// the lower ranks, and are empty when count < size for the ranks beyond count.
+struct Share {
+  std::size_t begin = 0;
+  std::size_t length = 0;
+};
+Share share_of(std::size_t count, int rank, int size);
+
+// True when this process was started by an MPI launcher (mpirun/mpiexec of Open MPI or of an
+// MPICH-style process manager), judged from the environment the launcher sets.
+bool launched_by_mpi();
+// The number of processes the launcher started (OMPI_COMM_WORLD_SIZE or PMI_SIZE), 1 when not
+// launched or unknown.
+int launcher_size();
+
+// A 64-bit FNV-1a hash of the bytes of `count` doubles; ranks compare it to check that their
+// parameters are bit-identical.
+std::uint64_t hash_doubles(const double* data, std::size_t count);
+
+// True when every rank passed the same hash (one allgather).
+bool same_on_all_ranks(Communicator& communicator, std::uint64_t hash);
+
+}  // namespace physgrad
