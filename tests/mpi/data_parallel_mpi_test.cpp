@@ -3,9 +3,12 @@
 // rule and for the Gram, normal and SVD paths of gn/hig; rank 0 alone writes the run folder; an
 // error on a rank ends every rank with exit code 2 instead of hanging.
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -13,6 +16,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -53,20 +57,24 @@ class MpiRun : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  // Runs the CLI in the test folder, with `ranks` > 0 under mpiexec; returns the exit code.
-  int run(int ranks, const std::string& args, std::string* err = nullptr) const {
-    const fs::path err_file = dir_ / "stderr.txt";
+  // The command line of the CLI with `args` in the test folder, under mpiexec with `ranks` > 0.
+  std::string command(int ranks, const std::string& args) const {
     std::string launcher;
     if (ranks > 0) {
       // Open MPI refuses root (containers, CI) and more ranks than cores unless told.
       launcher = std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                             "OMPI_MCA_rmaps_base_oversubscribe=1 ") +
+                             "OMPI_MCA_rmaps_base_oversubscribe=1 exec ") +
                  PHYSGRAD_MPIEXEC + " " + PHYSGRAD_MPIEXEC_NUMPROC_FLAG + " " +
                  std::to_string(ranks) + " ";
     }
-    const std::string command = "cd '" + dir_.string() + "' && " + launcher + "'" +
-                                PHYSGRAD_CLI + "' " + args + " > /dev/null 2> '" +
-                                err_file.string() + "'";
+    return "cd '" + dir_.string() + "' && " + launcher + "'" + PHYSGRAD_CLI + "' " + args;
+  }
+
+  // Runs the CLI in the test folder, with `ranks` > 0 under mpiexec; returns the exit code.
+  int run(int ranks, const std::string& args, std::string* err = nullptr) const {
+    const fs::path err_file = dir_ / "stderr.txt";
+    const std::string command =
+        this->command(ranks, args) + " > /dev/null 2> '" + err_file.string() + "'";
     const int status = std::system(command.c_str());
     if (err != nullptr) {
       std::ifstream in(err_file);
@@ -168,6 +176,57 @@ TEST_F(MpiRun, EmptyShareMatchesOneProcess) {
       "run hig-toy --lambda 1 --seeds 1 --batch 2 --iters 20 --eval-every 5 "
       "--optimizers adam,hig,sip",
       3);
+}
+
+// SIGTERM to mpiexec mid-run: every rank stops at the same iteration, rank 0 saves the
+// checkpoint, and `mpiexec physgrad resume` ends with the losses and networks of an
+// uninterrupted run on the same ranks.
+TEST_F(MpiRun, InterruptedRunResumesToTheSameResults) {
+  const std::string args =
+      "run hig-toy --seeds 1 --iters 6000 --eval-every 500 --checkpoint-every 50 --out ";
+  ASSERT_EQ(run(2, args + "whole"), 0);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const std::string line = command(2, args + "part") + " > /dev/null 2> /dev/null";
+    ::execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Wait until the third of the six runs is in progress, then interrupt.
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  const auto checkpoint_text = [&] {
+    std::ifstream in(dir_ / "part" / "checkpoint.pgc");
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+  };
+  while (checkpoint_text().find("\"index\":2") == std::string::npos &&
+         std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  EXPECT_TRUE(fs::exists(dir_ / "part" / "checkpoint.pgc"));
+  EXPECT_FALSE(fs::exists(dir_ / "part" / "report.html"));
+
+  ASSERT_EQ(run(2, "resume part"), 0);
+  const auto without_time = [](Csv csv) {
+    const auto at = std::find(csv.header.begin(), csv.header.end(), "wall_seconds");
+    const auto column = static_cast<std::size_t>(at - csv.header.begin());
+    for (auto& row : csv.rows) {
+      if (column < row.size()) row.erase(row.begin() + static_cast<std::ptrdiff_t>(column));
+    }
+    return csv.rows;
+  };
+  EXPECT_EQ(without_time(read_csv(dir_ / "part" / "metrics.csv")),
+            without_time(read_csv(dir_ / "whole" / "metrics.csv")));
+  const auto text = [](const fs::path& path) {
+    std::ifstream in(path);
+    std::stringstream content;
+    content << in.rdbuf();
+    return content.str();
+  };
+  EXPECT_EQ(text(dir_ / "part" / "networks.json"), text(dir_ / "whole" / "networks.json"));
 }
 
 // An error on rank 0 alone (its run folder cannot be made) ends both ranks with exit code 2 and
