@@ -39,7 +39,7 @@ demo: build
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
-# Micro-benchmarks of the learning step (about 5 minutes): bench/results.json, then the tables
+# Micro-benchmarks of the learning step (about 3 minutes): bench/results.json, then the tables
 # of docs/performance.md (between its bench:begin/bench:end marks) and its size-sweep figure.
 bench: build
 	$(BUILD_DIR)/bench/physgrad_bench --benchmark_out=bench/results.json --benchmark_out_format=json
