@@ -61,9 +61,13 @@ class MpiRun : public ::testing::Test {
   std::string command(int ranks, const std::string& args) const {
     std::string launcher;
     if (ranks > 0) {
-      // Open MPI refuses root (containers, CI) and more ranks than cores unless told.
+      // Open MPI refuses root (containers, CI) and more ranks than cores unless told. In a
+      // sanitizer build LeakSanitizer ignores what Open MPI keeps until exit (full stacks, so
+      // that the suppressions see its libraries).
       launcher = std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                             "OMPI_MCA_rmaps_base_oversubscribe=1 exec ") +
+                             "OMPI_MCA_rmaps_base_oversubscribe=1 "
+                             "LSAN_OPTIONS=suppressions=") +
+                 PHYSGRAD_LSAN_SUPPRESSIONS + ":fast_unwind_on_malloc=0 exec " +
                  PHYSGRAD_MPIEXEC + " " + PHYSGRAD_MPIEXEC_NUMPROC_FLAG + " " +
                  std::to_string(ranks) + " ";
     }
