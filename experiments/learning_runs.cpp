@@ -135,6 +135,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                     {"wall_seconds", s.train_seconds},
                     {"termination", s.termination},
                     {"message", s.message},
+                    {"step_halvings", s.step_halvings},
                     {"seconds_per_part", {{"forward", s.forward_seconds},
                                           {"derivatives", s.derivative_seconds},
                                           {"inversion", s.inversion_seconds},
