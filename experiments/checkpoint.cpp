@@ -54,6 +54,7 @@ ExperimentCheckpoint::ExperimentCheckpoint(fs::path folder, nlohmann::json confi
     }
   }
   resumed_current_ = resumed.value("current", nlohmann::json());
+  resumed_environment_ = resumed.value("environment", nlohmann::json::object());
   written_ = true;  // the folder and config.json exist
 }
 
@@ -93,6 +94,19 @@ std::optional<TrainerState> ExperimentCheckpoint::in_progress(const RunKey& key,
   return trainer_state_from_json(object_from_json(*entry, "state"), parameter_count);
 }
 
+std::string ExperimentCheckpoint::set_environment(nlohmann::json environment) {
+  environment_ = std::move(environment);
+  std::string differences;
+  if (!resumed_environment_.is_object()) return differences;
+  for (const auto& [key, value] : environment_.items()) {
+    const auto saved = resumed_environment_.find(key);
+    if (saved == resumed_environment_.end() || *saved == value) continue;
+    differences += (differences.empty() ? "" : ", ") + key + " " + saved->dump() + " (now " +
+                   value.dump() + ")";
+  }
+  return differences;
+}
+
 void ExperimentCheckpoint::record_finished(const RunKey& key, const TrainingSummary& summary,
                                            const Vector& theta) {
   finished_.push_back({{"key", key.json()},
@@ -119,6 +133,7 @@ void ExperimentCheckpoint::write(const nlohmann::json& current) {
   write_checkpoint_file(folder_ / kCheckpointFile,
                         {{"experiment", config_.at("experiment")},
                          {"settings", config_.at("settings")},
+                         {"environment", environment_},
                          {"finished", finished_},
                          {"current", current}});
 }

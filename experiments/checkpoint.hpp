@@ -50,6 +50,11 @@ class ExperimentCheckpoint {
   void record_finished(const RunKey& key, const TrainingSummary& summary, const Vector& theta);
   void save_progress(const RunKey& key, const TrainerState& state);
 
+  // What besides the settings decides the last bits of the results (BLAS threads, ranks); it
+  // is saved with every checkpoint. Returns, for a resumed checkpoint, "blas_threads 2 (now 1)"
+  // for each entry that differs from `environment` (empty when all agree).
+  std::string set_environment(nlohmann::json environment);
+
   const std::filesystem::path& folder() const { return folder_; }
   bool written() const { return written_; }
 
@@ -62,6 +67,8 @@ class ExperimentCheckpoint {
   nlohmann::json config_;
   nlohmann::json finished_ = nlohmann::json::array();
   nlohmann::json resumed_current_;  // the run in progress when the checkpoint was taken
+  nlohmann::json resumed_environment_;
+  nlohmann::json environment_ = nlohmann::json::object();
   bool writes_ = true;
   bool written_ = false;
 };

@@ -6,6 +6,7 @@
 #include <signal.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -153,7 +154,20 @@ TEST_F(Resume, DamagedCheckpointOrConfigIsOneLineAndChangesNothing) {
   std::ofstream(folder / "config.json", std::ios::binary) << config;
   expect_refused(kRun + "part", "physgrad resume part");
   expect_refused("resume no-such-folder", "holds no checkpoint");
-  EXPECT_EQ(run("resume part").exit_code, 0);
+  // Another BLAS thread count than the checkpoint's is allowed, with a warning.
+  const char* threads = std::getenv("OPENBLAS_NUM_THREADS");
+  const std::string saved_threads = threads == nullptr ? "" : threads;
+  ::setenv("OPENBLAS_NUM_THREADS", saved_threads == "2" ? "3" : "2", 1);
+  const Outcome resumed = run("resume part");
+  if (saved_threads.empty()) {
+    ::unsetenv("OPENBLAS_NUM_THREADS");
+  } else {
+    ::setenv("OPENBLAS_NUM_THREADS", saved_threads.c_str(), 1);
+  }
+  EXPECT_EQ(resumed.exit_code, 0) << resumed.err;
+  EXPECT_NE(resumed.err.find("physgrad: warning: the checkpoint was written with blas_threads"),
+            std::string::npos)
+      << resumed.err;
   EXPECT_TRUE(fs::exists(folder / "report.html"));
 }
 

@@ -133,6 +133,13 @@ int run_experiment(const ex::Experiment& experiment,
   try {
     checkpoint.emplace(out, ex::config_document(experiment, settings, command_line), resumed,
                        writer);
+    const std::string changed =
+        checkpoint->set_environment({{"blas_threads", physgrad::blas_threads()},
+                                     {"ranks", physgrad::cli::communicator()->size()}});
+    if (!changed.empty() && writer) {
+      std::cerr << "physgrad: warning: the checkpoint was written with " << changed
+                << "; the continued run may differ from an uninterrupted one in the last bits\n";
+    }
     ex::RunContext context;
     context.set_experiment_name(experiment.name());
     context.set_stop_flag(&ex::stop_flag());
