@@ -165,35 +165,37 @@ Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions
   return svd_apply(j, g, options.kappa, out);
 }
 
+namespace {
+
+// Checks the operands of a symmetric path (a square matrix of g's size) and starts its info.
+void start_symmetric(const Matrix& matrix, const Vector& g, const char* name,
+                     PinvBackend backend, const PowerPinvOptions& options, PowerPinvInfo& out) {
+  if (matrix.rows() != matrix.cols()) throw Error(std::string(name) + ": the matrix is not square");
+  check_operands(matrix, g, name);
+  check_rcond(options.rcond);
+  check_kappa(options.kappa);
+  out = {};
+  out.backend = backend;
+  out.rcond_used = std::max(options.rcond, kMinGramRcond);
+}
+
+}  // namespace
+
 Vector power_pinv_apply_gram(Matrix gram, const Vector& g,
                              const std::function<Vector(const Vector&)>& apply_transpose,
                              const PowerPinvOptions& options, PowerPinvInfo* info) {
-  if (gram.rows() != gram.cols()) throw Error("power_pinv_apply_gram: the Gram matrix is not square");
-  check_operands(gram, g, "power_pinv_apply_gram");
-  check_rcond(options.rcond);
-  check_kappa(options.kappa);
   PowerPinvInfo local;
   PowerPinvInfo& out = info != nullptr ? *info : local;
-  out = {};
-  out.backend = PinvBackend::kGram;
-  out.rcond_used = std::max(options.rcond, kMinGramRcond);
+  start_symmetric(gram, g, "power_pinv_apply_gram", PinvBackend::kGram, options, out);
   if (gram.size() == 0) return apply_transpose(Vector::Zero(0));
   return apply_transpose(eigen_apply(gram, g, options.kappa, out));
 }
 
 Vector power_pinv_apply_normal(Matrix normal, const Vector& jt_g, const PowerPinvOptions& options,
                                PowerPinvInfo* info) {
-  if (normal.rows() != normal.cols()) {
-    throw Error("power_pinv_apply_normal: the normal matrix is not square");
-  }
-  check_operands(normal, jt_g, "power_pinv_apply_normal");
-  check_rcond(options.rcond);
-  check_kappa(options.kappa);
   PowerPinvInfo local;
   PowerPinvInfo& out = info != nullptr ? *info : local;
-  out = {};
-  out.backend = PinvBackend::kNormal;
-  out.rcond_used = std::max(options.rcond, kMinGramRcond);
+  start_symmetric(normal, jt_g, "power_pinv_apply_normal", PinvBackend::kNormal, options, out);
   if (normal.size() == 0) return Vector::Zero(0);
   return eigen_apply(normal, jt_g, options.kappa, out);
 }
