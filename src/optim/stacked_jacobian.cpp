@@ -12,29 +12,27 @@
 
 namespace physgrad {
 
-StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
-                                 const Simulator& physics, Matrix x, Matrix context)
-    : network_(&network),
-      cache_(&cache),
-      physics_(&physics),
-      x_(std::move(x)),
-      context_(std::move(context)),
-      batch_(x_.cols()),
-      outputs_(physics.output_dim()) {
-  // Output k's VJP writes only output_cotangents_[k]; worker t takes k ≡ t (mod threads).
-  output_cotangents_.resize(static_cast<std::size_t>(outputs_));
-  const Index threads = std::min<Index>(jacobian_threads(), outputs_);
-  const auto vjps = [this](Index first, Index stride) {
-    Matrix unit(outputs_, batch_);
-    for (Index k = first; k < outputs_; k += stride) {
+namespace {
+
+// (∂P/∂x)ᵀ e_k for every physics output k, one batched VJP each, on jacobian_threads() threads:
+// output k's VJP writes only its own matrix, worker t takes k ≡ t (mod threads), so the result
+// does not depend on the thread count.
+std::vector<Matrix> output_cotangents_of(const Simulator& physics, const Matrix& x,
+                                         const Matrix& context) {
+  const Index outputs = physics.output_dim(), batch = x.cols();
+  std::vector<Matrix> cotangents(static_cast<std::size_t>(outputs));
+  const Index threads = std::min<Index>(jacobian_threads(), outputs);
+  const auto vjps = [&](Index first, Index stride) {
+    Matrix unit(outputs, batch);
+    for (Index k = first; k < outputs; k += stride) {
       unit.setZero();
       unit.row(k).setOnes();
-      output_cotangents_[static_cast<std::size_t>(k)] = physics_->vjp_batch(x_, context_, unit);
+      cotangents[static_cast<std::size_t>(k)] = physics.vjp_batch(x, context, unit);
     }
   };
   if (threads <= 1) {
     vjps(0, 1);
-    return;
+    return cotangents;
   }
   std::vector<std::thread> workers;
   std::vector<std::exception_ptr> errors(static_cast<std::size_t>(threads));
@@ -61,7 +59,15 @@ StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
   for (const std::exception_ptr& error : errors) {
     if (error) std::rethrow_exception(error);
   }
+  return cotangents;
 }
+
+}  // namespace
+
+StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
+                                 const Simulator& physics, Matrix x, Matrix context)
+    : StackedJacobian(network, cache, physics, x, context,
+                      output_cotangents_of(physics, x, context)) {}
 
 StackedJacobian::StackedJacobian(const Mlp& network, const MlpCache& cache,
                                  const Simulator& physics, Matrix x, Matrix context,
