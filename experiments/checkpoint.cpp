@@ -26,6 +26,17 @@ RunKey key_from_json(const nlohmann::json& document) {
           string_from_json(key, "tag"), integer_from_json(key, "seed")};
 }
 
+// True when `entry` is the saved run at key.index; Error when that run is another one.
+bool is_run(const nlohmann::json& entry, const RunKey& key) {
+  const RunKey saved = key_from_json(entry);
+  if (saved.index != key.index) return false;
+  if (saved.json() != key.json()) {
+    throw Error("the checkpoint does not match this experiment: it has " + saved.describe() +
+                " where the experiment runs " + key.describe());
+  }
+  return true;
+}
+
 }  // namespace
 
 ExperimentCheckpoint::ExperimentCheckpoint(fs::path folder, nlohmann::json config,
@@ -58,26 +69,14 @@ ExperimentCheckpoint::ExperimentCheckpoint(fs::path folder, nlohmann::json confi
   written_ = true;  // the folder and config.json exist
 }
 
-const nlohmann::json* ExperimentCheckpoint::resumed_entry(const nlohmann::json& list,
-                                                          const RunKey& key) const {
-  for (const nlohmann::json& entry : list) {
-    const RunKey saved = key_from_json(entry);
-    if (saved.index != key.index) continue;
-    if (saved.json() != key.json()) {
-      throw Error("the checkpoint does not match this experiment: it has " + saved.describe() +
-                  " where the experiment runs " + key.describe());
-    }
-    return &entry;
-  }
-  return nullptr;
-}
-
 std::optional<FinishedRun> ExperimentCheckpoint::finished(const RunKey& key,
                                                           Index parameter_count) const {
-  const nlohmann::json* entry = resumed_entry(finished_, key);
-  if (entry == nullptr) return std::nullopt;
-  FinishedRun run{training_summary_from_json(object_from_json(*entry, "summary")),
-                  vector_from_json(*entry, "parameters", parameter_count)};
+  // finished_[i] is run i (checked when the checkpoint was read).
+  if (key.index < 0 || key.index >= static_cast<long long>(finished_.size())) return std::nullopt;
+  const nlohmann::json& entry = finished_[static_cast<std::size_t>(key.index)];
+  if (!is_run(entry, key)) return std::nullopt;
+  FinishedRun run{training_summary_from_json(object_from_json(entry, "summary")),
+                  vector_from_json(entry, "parameters", parameter_count)};
   if (run.summary.termination.empty() || run.summary.termination == "interrupted") {
     throw Error("checkpoint: " + key.describe() + " is listed as finished but has termination '" +
                 run.summary.termination + "'");
@@ -87,11 +86,8 @@ std::optional<FinishedRun> ExperimentCheckpoint::finished(const RunKey& key,
 
 std::optional<TrainerState> ExperimentCheckpoint::in_progress(const RunKey& key,
                                                               Index parameter_count) const {
-  if (resumed_current_.is_null()) return std::nullopt;
-  const nlohmann::json list = nlohmann::json::array({resumed_current_});
-  const nlohmann::json* entry = resumed_entry(list, key);
-  if (entry == nullptr) return std::nullopt;
-  return trainer_state_from_json(object_from_json(*entry, "state"), parameter_count);
+  if (resumed_current_.is_null() || !is_run(resumed_current_, key)) return std::nullopt;
+  return trainer_state_from_json(object_from_json(resumed_current_, "state"), parameter_count);
 }
 
 std::string ExperimentCheckpoint::set_environment(nlohmann::json environment) {

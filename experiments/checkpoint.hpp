@@ -60,8 +60,6 @@ class ExperimentCheckpoint {
 
  private:
   void write(const nlohmann::json& current);
-  // The resumed checkpoint's entry for position key.index, checked against `key`.
-  const nlohmann::json* resumed_entry(const nlohmann::json& list, const RunKey& key) const;
 
   std::filesystem::path folder_;
   nlohmann::json config_;

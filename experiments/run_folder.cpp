@@ -123,12 +123,7 @@ void remove_abandoned_staging(const fs::path& parent, const std::string& prefix)
 fs::path prepare_run_folder(const fs::path& out, bool resuming) {
   std::error_code error;
   const std::string name = std::string("'") + out.string() + "'";
-  if (resuming) {
-    if (!fs::exists(out / kCheckpointFile, error)) {
-      throw Error(name + " holds no checkpoint (" + kCheckpointFile +
-                  "): not the folder of an interrupted run");
-    }
-  } else if (fs::exists(out, error)) {
+  if (!resuming && fs::exists(out, error)) {
     if (!fs::is_directory(out, error)) {
       throw Error("--out: " + name + " exists and is not a directory");
     }

@@ -11,7 +11,8 @@
 namespace physgrad::experiments {
 
 // Checks that `out` can become the run folder (absent or an empty directory; with `resuming`,
-// the folder of an interrupted run) and creates the staging folder beside it. Throws Error
+// the folder of an interrupted run, whose checkpoint the caller has read) and creates the
+// staging folder beside it. Throws Error
 // naming the path and the reason otherwise.
 std::filesystem::path prepare_run_folder(const std::filesystem::path& out, bool resuming = false);
 

@@ -3,15 +3,18 @@
 #pragma once
 
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 
 namespace physgrad::testing {
 
@@ -28,6 +31,42 @@ inline std::string read_file(const fs::path& path) {
   std::stringstream buffer;
   buffer << in.rdbuf();
   return buffer.str();
+}
+
+// A run folder's metrics.csv without its wall-clock column: what an interrupted and resumed run
+// must reproduce exactly.
+inline std::string metrics_without_time(const fs::path& folder) {
+  std::istringstream lines(read_file(folder / "metrics.csv"));
+  std::string header, result;
+  std::getline(lines, header);
+  std::size_t skip = 0;  // the wall_seconds column's position
+  for (std::size_t at = 0, column = 0; at != std::string::npos; ++column) {
+    const std::size_t comma = header.find(',', at);
+    if (header.substr(at, comma - at) == "wall_seconds") skip = column;
+    at = comma == std::string::npos ? comma : comma + 1;
+  }
+  EXPECT_GT(skip, 0u) << header;
+  for (std::string line; std::getline(lines, line);) {
+    std::size_t at = 0;
+    for (std::size_t column = 0; column < skip; ++column) at = line.find(',', at) + 1;
+    result += line.substr(0, at) + line.substr(line.find(',', at) + 1) + "\n";
+  }
+  return result;
+}
+
+// Waits (up to two minutes) until `checkpoint` contains `needle`, sends `signal` to `pid` and
+// returns its exit status.
+inline int interrupt_when(pid_t pid, const fs::path& checkpoint, const std::string& needle,
+                          int signal) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (read_file(checkpoint).find(needle) == std::string::npos &&
+         std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ::kill(pid, signal);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return status;
 }
 
 class Cli : public ::testing::Test {

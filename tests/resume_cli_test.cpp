@@ -5,16 +5,16 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
-#include <chrono>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
-#include <thread>
 
 #include "cli_fixture.hpp"
 
 namespace {
 
 using physgrad::testing::Cli;
+using physgrad::testing::interrupt_when;
+using physgrad::testing::metrics_without_time;
 using physgrad::testing::Outcome;
 using physgrad::testing::read_file;
 namespace fs = std::filesystem;
@@ -22,26 +22,6 @@ namespace fs = std::filesystem;
 // Six runs (Adam, Gauss-Newton, HIG for λ = 1 and 0.01) of 1500 iterations each.
 const std::string kRun =
     "run hig-toy --seeds 1 --iters 1500 --eval-every 100 --checkpoint-every 50 --out ";
-
-// metrics.csv without its wall-clock column.
-std::string metrics_without_time(const fs::path& folder) {
-  std::istringstream lines(read_file(folder / "metrics.csv"));
-  std::string header, result;
-  std::getline(lines, header);
-  std::size_t skip = 0;  // the wall_seconds column's position
-  for (std::size_t at = 0, column = 0; at != std::string::npos; ++column) {
-    const std::size_t comma = header.find(',', at);
-    if (header.substr(at, comma - at) == "wall_seconds") skip = column;
-    at = comma == std::string::npos ? comma : comma + 1;
-  }
-  EXPECT_GT(skip, 0u) << header;
-  for (std::string line; std::getline(lines, line);) {
-    std::size_t at = 0;
-    for (std::size_t column = 0; column < skip; ++column) at = line.find(',', at) + 1;
-    result += line.substr(0, at) + line.substr(line.find(',', at) + 1) + "\n";
-  }
-  return result;
-}
 
 // Final losses per run from summary.json.
 nlohmann::json final_losses(const fs::path& folder) {
@@ -58,17 +38,8 @@ class Resume : public Cli {
   // Starts the run into `folder`, waits until its checkpoint holds the third run in progress
   // and sends `signal`; returns the exit status.
   int interrupt(const std::string& folder, int signal) {
-    const pid_t pid = spawn(kRun + folder);
-    const fs::path checkpoint = dir_ / folder / "checkpoint.pgc";
-    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-    while (read_file(checkpoint).find("\"index\":2") == std::string::npos &&
-           std::chrono::steady_clock::now() < give_up) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    ::kill(pid, signal);
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    return status;
+    return interrupt_when(spawn(kRun + folder), dir_ / folder / "checkpoint.pgc", "\"index\":2",
+                          signal);
   }
 };
 

@@ -1,5 +1,6 @@
 // TrainerState ↔ JSON for checkpoints.
 #include <cmath>
+#include <utility>
 
 #include "physgrad/error.hpp"
 #include "physgrad/serialize.hpp"
@@ -51,15 +52,16 @@ TrainingSummary training_summary_from_json(const nlohmann::json& document) {
   summary.termination = string_from_json(document, "termination");
   summary.message = string_from_json(document, "message");
   summary.iterations = integer_from_json(document, "iterations");
-  double* const times[] = {&summary.train_seconds, &summary.forward_seconds,
-                           &summary.derivative_seconds, &summary.inversion_seconds,
-                           &summary.update_seconds};
-  const char* const keys[] = {"train_seconds", "forward_seconds", "derivative_seconds",
-                              "inversion_seconds", "update_seconds"};
-  for (std::size_t k = 0; k < 5; ++k) {
-    *times[k] = real_from_json(document, keys[k]);
-    if (!(*times[k] >= 0) || !std::isfinite(*times[k])) {
-      throw Error(std::string("checkpoint field '") + keys[k] + "': must be a finite time ≥ 0");
+  const std::pair<const char*, double*> times[] = {
+      {"train_seconds", &summary.train_seconds},
+      {"forward_seconds", &summary.forward_seconds},
+      {"derivative_seconds", &summary.derivative_seconds},
+      {"inversion_seconds", &summary.inversion_seconds},
+      {"update_seconds", &summary.update_seconds}};
+  for (const auto& [key, time] : times) {
+    *time = real_from_json(document, key);
+    if (!(*time >= 0) || !std::isfinite(*time)) {
+      throw Error(std::string("checkpoint field '") + key + "': must be a finite time ≥ 0");
     }
   }
   summary.step_halvings = integer_from_json(document, "step_halvings");

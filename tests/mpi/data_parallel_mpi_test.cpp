@@ -8,7 +8,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -16,8 +15,9 @@
 #include <map>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
+
+#include "../cli_fixture.hpp"
 
 namespace {
 
@@ -195,42 +195,17 @@ TEST_F(MpiRun, InterruptedRunResumesToTheSameResults) {
     ::execl("/bin/sh", "sh", "-c", line.c_str(), static_cast<char*>(nullptr));
     ::_exit(127);
   }
-  // Wait until the third of the six runs is in progress, then interrupt.
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(120);
-  const auto checkpoint_text = [&] {
-    std::ifstream in(dir_ / "part" / "checkpoint.pgc");
-    std::stringstream text;
-    text << in.rdbuf();
-    return text.str();
-  };
-  while (checkpoint_text().find("\"index\":2") == std::string::npos &&
-         std::chrono::steady_clock::now() < give_up) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  ::kill(pid, SIGTERM);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
+  // Interrupt once the third of the six runs is in progress.
+  physgrad::testing::interrupt_when(pid, dir_ / "part" / "checkpoint.pgc", "\"index\":2",
+                                    SIGTERM);
   EXPECT_TRUE(fs::exists(dir_ / "part" / "checkpoint.pgc"));
   EXPECT_FALSE(fs::exists(dir_ / "part" / "report.html"));
 
   ASSERT_EQ(run(2, "resume part"), 0);
-  const auto without_time = [](Csv csv) {
-    const auto at = std::find(csv.header.begin(), csv.header.end(), "wall_seconds");
-    const auto column = static_cast<std::size_t>(at - csv.header.begin());
-    for (auto& row : csv.rows) {
-      if (column < row.size()) row.erase(row.begin() + static_cast<std::ptrdiff_t>(column));
-    }
-    return csv.rows;
-  };
-  EXPECT_EQ(without_time(read_csv(dir_ / "part" / "metrics.csv")),
-            without_time(read_csv(dir_ / "whole" / "metrics.csv")));
-  const auto text = [](const fs::path& path) {
-    std::ifstream in(path);
-    std::stringstream content;
-    content << in.rdbuf();
-    return content.str();
-  };
-  EXPECT_EQ(text(dir_ / "part" / "networks.json"), text(dir_ / "whole" / "networks.json"));
+  EXPECT_EQ(physgrad::testing::metrics_without_time(dir_ / "part"),
+            physgrad::testing::metrics_without_time(dir_ / "whole"));
+  EXPECT_EQ(physgrad::testing::read_file(dir_ / "part" / "networks.json"),
+            physgrad::testing::read_file(dir_ / "whole" / "networks.json"));
 }
 
 // An error on rank 0 alone (its run folder cannot be made) ends both ranks with exit code 2 and
