@@ -8,6 +8,7 @@
 #include "interrupt.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/report/svg_plot.hpp"
+#include "physgrad/serialize.hpp"
 
 namespace physgrad::experiments {
 
@@ -105,8 +106,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   context_.add_network({{"label", result.label},
                         {"seed", result.seed},
                         {"widths", network.widths()},
-                        {"parameters", std::vector<double>(network.parameters().begin(),
-                                                           network.parameters().end())}});
+                        {"parameters", vector_to_json(network.parameters())}});
 
   nlohmann::json run_params = update->params();
   run_params["batch"] = options.batch_size;
