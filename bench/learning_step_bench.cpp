@@ -153,7 +153,9 @@ GramCase gram_case(std::int64_t which, Index batch) {
   MlpCache cache;
   const BatchState state = evaluate_batch(c.network, c.problem(), c.batch,
                                           UpdateNeed::kStackedJacobian, cache);
-  return {state.jacobian->gram(), state.loss_gradient_y, c.defaults.at("hig").rcond};
+  const double rcond =
+      experiments::make_reference_update(c, "hig")->params().at("rcond").get<double>();
+  return {state.jacobian->gram(), state.loss_gradient_y, rcond};
 }
 
 // The eigen part of the HIG Gram path on the Gram matrix of a reference configuration at batch
@@ -244,18 +246,21 @@ void lanczos_route(benchmark::State& state) {
   state.SetLabel(std::string(case_spec(state.range(0)).label) + " Lanczos");
 }
 
-// One step (evaluate the batch, compute Δθ) of `update` on `c`; the counters give J's shape
-// and, for Gauss-Newton and HIG, the backend (0 svd, 1 gram, 2 normal) and the kept rank.
+// Whole train_step() calls of `update` on `c` (evaluate the batch, compute and apply Δθ); the
+// counters give J's shape and, for Gauss-Newton and HIG, the backend (0 svd, 1 gram, 2 normal)
+// and the kept rank.
 void time_steps(benchmark::State& state, ReferenceCase& c, LearningUpdate& update) {
-  MlpCache cache;
+  StepState step_state;
   for (auto _ : state) {
-    const BatchState batch = evaluate_batch(c.network, c.problem(), c.batch, update.need(), cache);
-    const UpdateStep step = update.step(batch);
-    benchmark::DoNotOptimize(step.delta.data());
+    const StepReport report = train_step(c.network, update, c.problem(), c.batch, step_state);
+    if (!report.applied()) {
+      state.SkipWithError(describe_failure(report, 0).c_str());
+      break;
+    }
   }
   state.counters["rows"] = static_cast<double>(c.batch.size() * c.physics->output_dim());
   state.counters["cols"] = static_cast<double>(c.network.num_parameters());
-  if (const auto* inverse = dynamic_cast<const JacobianInverseUpdate*>(&update)) {
+  if (const auto* inverse = dynamic_cast<const HigUpdate*>(&update)) {
     const PinvBackend backend = inverse->last_info().backend;
     state.counters["backend"] = backend == PinvBackend::kSvd ? 0 : backend == PinvBackend::kGram ? 1 : 2;
     state.counters["rank"] = static_cast<double>(inverse->last_info().rank);

@@ -4,10 +4,10 @@
 #include <cstdio>
 
 #include "physgrad/autodiff/dual.hpp"
+#include "physgrad/catalogue.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/optim/minimize.hpp"
 #include "physgrad/optim/objective.hpp"
-#include "physgrad/optim/registry.hpp"
 
 using physgrad::Index;
 using physgrad::Vector;

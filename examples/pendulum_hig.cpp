@@ -6,8 +6,9 @@
 #include "pendulum.hpp"
 #include "physgrad/autodiff/dual.hpp"
 #include "physgrad/autodiff/finite_difference.hpp"
+#include "physgrad/catalogue.hpp"
 #include "physgrad/loss/loss.hpp"
-#include "physgrad/optim/learning_update.hpp"
+#include "physgrad/nn/mlp.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace {

@@ -4,9 +4,10 @@
 
 #include "pendulum.hpp"
 #include "physgrad/autodiff/finite_difference.hpp"
+#include "physgrad/catalogue.hpp"
 #include "physgrad/linalg/power_pinv.hpp"
 #include "physgrad/loss/loss.hpp"
-#include "physgrad/optim/learning_update.hpp"
+#include "physgrad/nn/mlp.hpp"
 #include "physgrad/optim/local_inverse.hpp"
 #include "physgrad/train/trainer.hpp"
 

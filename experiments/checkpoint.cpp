@@ -77,9 +77,10 @@ std::optional<FinishedRun> ExperimentCheckpoint::finished(const RunKey& key,
   if (!is_run(entry, key)) return std::nullopt;
   FinishedRun run{training_summary_from_json(object_from_json(entry, "summary")),
                   vector_from_json(entry, "parameters", parameter_count)};
-  if (run.summary.termination.empty() || run.summary.termination == "interrupted") {
+  if (!run.summary.termination ||
+      *run.summary.termination == TrainingTermination::kInterrupted) {
     throw Error("checkpoint: " + key.describe() + " is listed as finished but has termination '" +
-                run.summary.termination + "'");
+                (run.summary.termination ? to_string(*run.summary.termination) : "") + "'");
   }
   return run;
 }

@@ -12,6 +12,16 @@
 namespace physgrad::experiments {
 namespace {
 
+// "(x₀, x₁)" with 4 significant digits.
+std::string point(const Vector& x) {
+  std::string text = "(";
+  text += format_value(x(0));
+  text += ", ";
+  text += format_value(x(1));
+  text += ")";
+  return text;
+}
+
 using Kind = OptionSpec::Kind;
 
 class Comparison final : public Experiment {
@@ -27,7 +37,9 @@ class Comparison final : public Experiment {
             .one_of({"analytic", "lbfgs", "gn"}),
     };
   }
-  std::vector<std::string> optimizer_choices() const override { return direct_optimizer_ids(); }
+  std::vector<std::string> optimizer_choices() const override {
+    return rule_ids(RuleKind::kDirect);
+  }
   std::vector<std::string> default_optimizers() const override {
     return {"gd", "adam", "newton", "ig", "pg"};
   }
@@ -52,8 +64,9 @@ class Comparison final : public Experiment {
       for (const std::string& method : settings.texts("pg-inverse")) {
         RuleSetup pg = rule;
         pg.settings.inverse = parse_inverse_method(method);
-        pg.label = "PG (" + std::string(method == "analytic" ? "analytic" : optimizer_label(method)) +
-                   " inverse)";
+        const std::string inverse =
+            method == "analytic" ? "analytic" : find_rule(RuleKind::kDirect, method).label;
+        pg.label = "PG (" + inverse + " inverse)";
         pg.extra_params["inverse"] = method;
         rules.push_back(pg);
       }
@@ -83,8 +96,7 @@ class Comparison final : public Experiment {
       }
       table.rows.push_back({r.rule.label,
                             step_size_text(r.rule),
-                            "(" + format_value(r.summary.x(0)) + ", " +
-                                format_value(r.summary.x(1)) + ")",
+                            point(r.summary.x),
                             format_value(r.summary.x.norm()), format_value(r.summary.loss),
                             diagonal});
     }

@@ -11,7 +11,7 @@ std::vector<RuleSetup> selected_rules(const Settings& settings,
                                       const std::map<std::string, double>& default_lr) {
   std::vector<RuleSetup> rules;
   for (const std::string& id : settings.texts("optimizers")) {
-    RuleSetup rule{id, optimizer_label(id), {}, nlohmann::json::object()};
+    RuleSetup rule{id, find_rule(RuleKind::kDirect, id).label, {}, nlohmann::json::object()};
     if (settings.has("lr")) {
       rule.settings.lr = settings.real("lr");
     } else if (const auto it = default_lr.find(id); it != default_lr.end()) {

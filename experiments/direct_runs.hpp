@@ -10,7 +10,7 @@
 
 #include "experiment.hpp"
 #include "physgrad/optim/minimize.hpp"
-#include "physgrad/optim/registry.hpp"
+#include "physgrad/catalogue.hpp"
 #include "physgrad/report/svg_plot.hpp"
 
 namespace physgrad::experiments {
@@ -19,7 +19,7 @@ namespace physgrad::experiments {
 struct RuleSetup {
   std::string id;
   std::string label;
-  OptimizerSettings settings;
+  RuleSettings settings;
   nlohmann::json extra_params = nlohmann::json::object();  // e.g. {"inverse": "lbfgs"}
 };
 

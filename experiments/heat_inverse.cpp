@@ -94,7 +94,9 @@ class HeatInverse final : public Experiment {
     }
     return options;
   }
-  std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }
+  std::vector<std::string> optimizer_choices() const override {
+    return rule_ids(RuleKind::kLearning);
+  }
   std::vector<std::string> default_optimizers() const override { return {"sip", "adam"}; }
   long long default_iterations() const override { return 0; }
 
@@ -177,11 +179,11 @@ class HeatInverse final : public Experiment {
   // B·n² rows and ~8n⁴ columns): batch 4, lr 1, τ 1e-6 as in the HIG paper. SGD (optional):
   // lr 0.1.
   inline static const std::map<std::string, RuleDefaults> kDefaults = {
-      {"sgd", {0.1, 128}},
-      {"adam", {1e-3, 128}},
-      {"gn", {1.0, 4}},
-      {"hig", {1.0, 4}},
-      {"sip", {1e-3, 128, 1e-6, 1.0}}};
+      {"sgd", {{.lr = 0.1}, 128}},
+      {"adam", {{.lr = 1e-3}, 128}},
+      {"gn", {{.lr = 1.0}, 4}},
+      {"hig", {{.lr = 1.0}, 4}},
+      {"sip", {{.lr = 1e-3}, 128}}};
 
   static void add_line_reconstructions(
       RunContext& context, const HeatData& test,

@@ -24,8 +24,8 @@ constexpr Index kHidden = 7;
 // 0.03, 0.1, 0.3, 1), HIG 1 as in the HIG paper. docs/results.md lists the sweep.
 const std::map<std::string, RuleDefaults>& rule_defaults() {
   static const std::map<std::string, RuleDefaults> defaults = {
-      {"sgd", {0.1, 128}}, {"adam", {0.01, 128}}, {"gn", {0.1, 128}}, {"hig", {1.0, 128}},
-      {"sip", {0.01, 128}}};
+      {"sgd", {{.lr = 0.1}, 128}}, {"adam", {{.lr = 0.01}, 128}}, {"gn", {{.lr = 0.1}, 128}},
+      {"hig", {{.lr = 1.0}, 128}}, {"sip", {{.lr = 0.01}, 128}}};
   return defaults;
 }
 
@@ -85,7 +85,9 @@ class HigToy final : public Experiment {
     for (OptionSpec& spec : learning_options("", "200")) options.push_back(std::move(spec));
     return options;
   }
-  std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }
+  std::vector<std::string> optimizer_choices() const override {
+    return rule_ids(RuleKind::kLearning);
+  }
   std::vector<std::string> default_optimizers() const override { return {"adam", "gn", "hig"}; }
   long long default_iterations() const override { return 10000; }
 

@@ -15,12 +15,7 @@ namespace physgrad::experiments {
 namespace {
 
 std::string rule_label(const std::string& id) {
-  if (id == "sgd") return "SGD";
-  if (id == "adam") return "Adam";
-  if (id == "gn") return "Gauss-Newton";
-  if (id == "hig") return "HIG";
-  if (id == "sip") return "SIP";
-  return id;
+  return find_rule(RuleKind::kLearning, id).label;
 }
 
 double final_test_loss(const LearningResult& r) { return r.summary.history.back().test_loss; }
@@ -73,11 +68,10 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                                          std::function<void(const Mlp&, TrainingRecord&)> observe) {
   const auto found = defaults_.find(id);
   const RuleDefaults defaults = found == defaults_.end() ? RuleDefaults{} : found->second;
-  LearningUpdateSettings update_settings;
-  update_settings.lr = settings_.has("lr") ? settings_.real("lr") : defaults.lr;
-  update_settings.rcond = settings_.has("rcond") ? settings_.real("rcond") : defaults.rcond;
-  update_settings.sip_y_step = defaults.y_step;
-  const std::unique_ptr<LearningUpdate> update = make_learning_update(id, update_settings);
+  RuleSettings rule = defaults.settings;
+  if (settings_.has("lr")) rule.lr = settings_.real("lr");
+  if (settings_.has("rcond")) rule.rcond = settings_.real("rcond");
+  const std::unique_ptr<LearningUpdate> update = make_learning_update(id, rule);
 
   LearningResult result;
   result.id = id;
@@ -86,14 +80,19 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   result.seed = params.value("seed", 0LL);
 
   TrainerOptions options;
-  options.batch_size = settings_.has("batch") ? settings_.integer("batch") : defaults.batch;
+  options.batch_size = settings_.has("batch") ? settings_.integer("batch")
+                                               : defaults.batch.value_or(options.batch_size);
   if (settings_.has("iters")) options.max_iterations = settings_.integer("iters");
   if (settings_.has("epochs")) options.max_epochs = settings_.integer("epochs");
   if (settings_.has("time")) options.time_budget_seconds = settings_.real("time");
   if (settings_.has("eval-every")) options.eval_every = settings_.integer("eval-every");
   options.seed = static_cast<std::uint64_t>(result.seed);
   options.communicator = context_.communicator();
-  options.on_evaluate = std::move(observe);
+  if (observe) {
+    options.on_evaluate = [&network, observe](const Network&, TrainingRecord& record) {
+      observe(network, record);
+    };
+  }
   options.on_progress = [&](const TrainingRecord& r) {
     context_.progress(context_.experiment_name() + ": " + result.label + " seed " +
                       std::to_string(result.seed) + ", iteration " +
@@ -110,6 +109,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
 
   nlohmann::json run_params = update->params();
   run_params["batch"] = options.batch_size;
+  result.params = run_params;
   for (const auto& [key, value] : params.items()) run_params[key] = value;
   for (const TrainingRecord& r : result.summary.history) {
     nlohmann::json row = {{"label", result.label},  {"optimizer", id},
@@ -133,7 +133,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                     {"iterations", s.iterations},
                     {"epochs", s.history.back().epoch},
                     {"wall_seconds", s.train_seconds},
-                    {"termination", s.termination},
+                    {"termination", to_string(*s.termination)},
                     {"message", s.message},
                     {"step_halvings", s.step_halvings},
                     {"seconds_per_part", {{"forward", s.forward_seconds},
@@ -169,7 +169,7 @@ TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Mlp& network,
     };
   }
   TrainingSummary summary = train(network, update, problem, train_set, test_set, options);
-  if (summary.termination == "interrupted") {
+  if (summary.termination == TrainingTermination::kInterrupted) {
     throw Interrupted(context_.experiment_name() + ": " + key.describe() + " " + summary.message);
   }
   if (checkpoint != nullptr) checkpoint->record_finished(key, summary, network.parameters());
@@ -266,7 +266,8 @@ void LearningSweep::add_tables() const {
         }
         values.push_back(final_test_loss(*r));
         row.push_back(format_value(values.back()) +
-                      (r->summary.termination == "numerical_failure" ? " (NaN stop)" : ""));
+                      (r->summary.termination == TrainingTermination::kNumericalFailure ? " (NaN stop)"
+                                                                                   : ""));
         if (has_saturation) {
           saturated.push_back(format_value(r->summary.history.back().extras["saturated_fraction"]));
         }

@@ -6,10 +6,13 @@
 #include <deque>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "experiment.hpp"
+#include "physgrad/catalogue.hpp"
+#include "physgrad/nn/mlp.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad::experiments {
@@ -21,16 +24,16 @@ struct LearningResult {
   std::string tag;    // the setting, e.g. "λ=0.01"
   std::string label;  // "HIG (λ=0.01)"
   long long seed = 0;
+  nlohmann::json params;  // the rule's params() and the batch size
   TrainingSummary summary;
 };
 
-// An experiment's default settings of one rule; --lr, --batch and --rcond override them for
+// An experiment's choices for one rule where they differ from the catalogue's defaults, and its
+// mini-batch size (unset: TrainerOptions' default); --lr, --rcond and --batch override them for
 // every rule.
 struct RuleDefaults {
-  double lr = 1e-3;
-  Index batch = 32;
-  double rcond = 1e-6;  // truncation τ of gn and hig
-  double y_step = 1.0;  // η of sip
+  RuleSettings settings;
+  std::optional<Index> batch;
 };
 
 // The options every learning experiment has, after the common ones: batch, rcond, epochs, time,

@@ -54,8 +54,11 @@ Dataset make_data(const Poisson& physics, Index count, std::uint64_t seed) {
 
 const std::map<std::string, RuleDefaults>& rule_defaults() {
   static const std::map<std::string, RuleDefaults> defaults = {
-      {"adam", {3e-4, 64}}, {"sgd", {1e-2, 64}}, {"gn", {0.16, 16, 1e-5}},
-      {"hig", {0.16, 16, 1e-5}}, {"sip", {1e-3, 64}}};
+      {"adam", {{.lr = 3e-4}, 64}},
+      {"sgd", {{.lr = 1e-2}, 64}},
+      {"gn", {{.lr = 0.16, .rcond = 1e-5}, 16}},
+      {"hig", {{.lr = 0.16, .rcond = 1e-5}, 16}},
+      {"sip", {{.lr = 1e-3}, 64}}};
   return defaults;
 }
 
@@ -74,7 +77,9 @@ class PoissonExperiment final : public Experiment {
     for (OptionSpec& spec : learning_options("30")) options.push_back(std::move(spec));
     return options;
   }
-  std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }
+  std::vector<std::string> optimizer_choices() const override {
+    return rule_ids(RuleKind::kLearning);
+  }
   std::vector<std::string> default_optimizers() const override { return {"adam", "hig"}; }
   long long default_iterations() const override { return 0; }
 

@@ -36,8 +36,10 @@ Mlp make_network(const QuantumDipole& physics, std::uint64_t seed) {
 
 const std::map<std::string, RuleDefaults>& rule_defaults() {
   static const std::map<std::string, RuleDefaults> defaults = {
-      {"adam", {5e-4, 256}}, {"sgd", {1e-2, 256}}, {"gn", {0.5, 16, 1e-5}},
-      {"hig", {0.5, 16, 1e-5}}};
+      {"adam", {{.lr = 5e-4}, 256}},
+      {"sgd", {{.lr = 1e-2}, 256}},
+      {"gn", {{.lr = 0.5, .rcond = 1e-5}, 16}},
+      {"hig", {{.lr = 0.5, .rcond = 1e-5}, 16}}};
   return defaults;
 }
 
@@ -57,7 +59,9 @@ class QuantumDipoleExperiment final : public Experiment {
     for (OptionSpec& spec : learning_options("30")) options.push_back(std::move(spec));
     return options;
   }
-  std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }
+  std::vector<std::string> optimizer_choices() const override {
+    return rule_ids(RuleKind::kLearning);
+  }
   std::vector<std::string> default_optimizers() const override { return {"adam", "hig"}; }
   long long default_iterations() const override { return 0; }
 

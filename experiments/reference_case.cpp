@@ -1,7 +1,5 @@
 #include "reference_case.hpp"
 
-#include <algorithm>
-
 #include "physgrad/error.hpp"
 
 namespace physgrad::experiments {
@@ -36,18 +34,11 @@ RuleDefaults rule_defaults(const ReferenceCase& reference, const std::string& id
 
 std::unique_ptr<LearningUpdate> make_reference_update(const ReferenceCase& reference,
                                                       const std::string& id) {
-  const auto& ids = learning_update_ids();
-  if (std::find(ids.begin(), ids.end(), id) == ids.end()) return make_learning_update(id);
-  const RuleDefaults defaults = rule_defaults(reference, id);
-  LearningUpdateSettings settings;
-  settings.lr = defaults.lr;
-  settings.rcond = defaults.rcond;
-  settings.sip_y_step = defaults.y_step;
-  return make_learning_update(id, settings);
+  return make_learning_update(id, rule_defaults(reference, id).settings);
 }
 
 Index reference_batch(const ReferenceCase& reference, const std::string& id) {
-  return rule_defaults(reference, id).batch;
+  return rule_defaults(reference, id).batch.value_or(TrainerOptions{}.batch_size);
 }
 
 }  // namespace physgrad::experiments

@@ -32,8 +32,12 @@ class ScaledToy final : public Experiment {
             .one_of({"relative", "absolute"}),
     };
   }
-  std::vector<std::string> optimizer_choices() const override { return direct_optimizer_ids(); }
-  std::vector<std::string> default_optimizers() const override { return direct_optimizer_ids(); }
+  std::vector<std::string> optimizer_choices() const override {
+    return rule_ids(RuleKind::kDirect);
+  }
+  std::vector<std::string> default_optimizers() const override {
+    return rule_ids(RuleKind::kDirect);
+  }
   long long default_iterations() const override { return 1000; }
 
   void validate(const Settings& settings) const override {

@@ -27,7 +27,9 @@ class Sensitivity final : public Experiment {
         real_option("tol", "1e-6", "convergence: stop at L(x) ≤ tol·L(x₀)").above(0).at_most(1),
     };
   }
-  std::vector<std::string> optimizer_choices() const override { return direct_optimizer_ids(); }
+  std::vector<std::string> optimizer_choices() const override {
+    return rule_ids(RuleKind::kDirect);
+  }
   std::vector<std::string> default_optimizers() const override { return {"gd", "newton", "ig"}; }
   long long default_iterations() const override { return 100; }
 

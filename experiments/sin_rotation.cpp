@@ -83,7 +83,9 @@ class SinRotationExperiment final : public Experiment {
     for (OptionSpec& spec : learning_options("8", "1000")) options.push_back(std::move(spec));
     return options;
   }
-  std::vector<std::string> optimizer_choices() const override { return learning_update_ids(); }
+  std::vector<std::string> optimizer_choices() const override {
+    return rule_ids(RuleKind::kLearning);
+  }
   std::vector<std::string> default_optimizers() const override { return {"sip", "adam", "sgd"}; }
   long long default_iterations() const override { return 0; }
 
@@ -123,8 +125,7 @@ class SinRotationExperiment final : public Experiment {
           const LearningResult& r = sweep.run(id, tag, {{"xi", xi}, {"phi", phi}, {"seed", seed}},
                                               network, problem, train_set, &test_set, observe);
           const TrainingRecord& last = r.summary.history.back();
-          rows.push_back({xi, id, settings.has("lr") ? settings.real("lr") : defaults.at(id).lr,
-                          last.test_loss, last.extras["x_distance"].get<double>(),
+          rows.push_back({xi, id, r.params.at("lr").get<double>(), last.test_loss, last.extras["x_distance"].get<double>(),
                           r.summary.train_seconds, r.summary.iterations});
         }
       }
@@ -189,11 +190,11 @@ class SinRotationExperiment final : public Experiment {
   // SGD's rate depends on ξ (see the note in run()); the rest as in E5 or the HIG paper.
   static std::map<std::string, RuleDefaults> rule_defaults(double xi, const std::string& form) {
     const double sgd = (form == "code" ? 3e-3 : 0.1) / (xi * xi);
-    return {{"sgd", {sgd, kBatch}},
-            {"adam", {1e-3, kBatch}},
-            {"gn", {0.1, 32, 1e-6}},
-            {"hig", {1.0, 32, 1e-6}},
-            {"sip", {1e-3, kBatch, 1e-6, 1.0}}};
+    return {{"sgd", {{.lr = sgd}, kBatch}},
+            {"adam", {{.lr = 1e-3}, kBatch}},
+            {"gn", {{.lr = 0.1}, 32}},
+            {"hig", {{.lr = 1.0}, 32}},
+            {"sip", {{.lr = 1e-3}, kBatch}}};
   }
 
 

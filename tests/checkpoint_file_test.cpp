@@ -17,6 +17,8 @@
 #include "physgrad/physics/diagonal_scale.hpp"
 #include "physgrad/serialize.hpp"
 #include "physgrad/train/checkpoint_file.hpp"
+#include "physgrad/catalogue.hpp"
+#include "physgrad/nn/mlp.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad {

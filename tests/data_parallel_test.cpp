@@ -1,6 +1,6 @@
 // Data-parallel training without MPI: the sharding arithmetic, the serial communicator, the
-// choice of what gn/hig exchange, and train() over K threads acting as ranks against the
-// one-process run of the same global batch (losses to 1e-10, θ bit-identical across ranks).
+// choice of what the normal path exchanges, and train() over K threads acting as ranks against
+// the one-process run of the same global batch (losses to 1e-10, θ bit-identical across ranks).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,8 +10,11 @@
 #include <thread>
 
 #include "physgrad/error.hpp"
+#include "physgrad/catalogue.hpp"
+#include "physgrad/learn/sharded_jacobian.hpp"
+#include "physgrad/nn/mlp.hpp"
 #include "physgrad/physics/comparison_toy.hpp"
-#include "physgrad/train/data_parallel.hpp"
+#include "physgrad/train/trainer.hpp"
 #include "thread_communicator.hpp"
 
 namespace physgrad {
@@ -95,20 +98,14 @@ TEST(ThreadCommunicator, SumsGathersAndBroadcastsAcrossThreads) {
   }
 }
 
-TEST(ChooseExchange, FollowsThePathAndTheExchangedVolume) {
-  const PowerPinvOptions hig{0.5, 1e-6, PinvBackend::kAuto};
-  // B·m ≤ |θ|: the Gram path.
-  EXPECT_EQ(choose_exchange(128, 4, 192, 4972, hig), JacobianExchange::kGatherGram);
-  // τ below the Gram floor: the SVD path, which needs J itself.
-  EXPECT_EQ(choose_exchange(32, 4, 48, 2000, {0.5, 1e-10, PinvBackend::kAuto}),
-            JacobianExchange::kGatherJacobian);
-  // Normal path: gathering B·m·n = 512 vs summing 2·(30·31/2 + 30) = 990: gather.
-  EXPECT_EQ(choose_exchange(128, 2, 2, 30, hig), JacobianExchange::kGatherJacobian);
+TEST(ShardedJacobian, SumsTheNormalEquationsOnlyWhenThatMovesLessThanHalfTheData) {
+  // Gathering B·m·n = 128·2·2 = 512 vs summing 2·(30·31/2 + 30) = 990: gather.
+  EXPECT_FALSE(sums_normal_equations(128, 2, 2, 30));
   // B·m·n = 4096·2·2 = 16384 > 990: sum Jᵀ J.
-  EXPECT_EQ(choose_exchange(4096, 2, 2, 30, hig), JacobianExchange::kSumNormal);
+  EXPECT_TRUE(sums_normal_equations(4096, 2, 2, 30));
 }
 
-// The problem of the trainer tests: a 2 → 6 → 2 tanh network (|θ| = 32) in front of
+// A problem like the trainer tests': a 2 → 6 → 2 tanh network (|θ| = 32) in front of
 // P(x) = (x₀, x₁²).
 struct Problem {
   ComparisonToy physics;
@@ -137,7 +134,7 @@ struct Outcome {
 };
 
 Outcome train_once(const Problem& p, const std::string& rule,
-                   const LearningUpdateSettings& settings, TrainerOptions options,
+                   const RuleSettings& settings, TrainerOptions options,
                    std::shared_ptr<Communicator> communicator) {
   Outcome outcome;
   Mlp network = p.network;
@@ -150,7 +147,7 @@ Outcome train_once(const Problem& p, const std::string& rule,
 
 // train() on `ranks` threads; every thread's history and θ.
 std::vector<Outcome> train_on_threads(const Problem& p, const std::string& rule,
-                                      const LearningUpdateSettings& settings,
+                                      const RuleSettings& settings,
                                       const TrainerOptions& options, int ranks) {
   testing::ThreadHub hub(ranks);
   std::vector<Outcome> outcomes(static_cast<std::size_t>(ranks));
@@ -201,7 +198,7 @@ class ThreadRanks : public ::testing::TestWithParam<Case> {};
 TEST_P(ThreadRanks, MatchOneProcessAndKeepParametersIdentical) {
   const Case& c = GetParam();
   const Problem p(c.batch > 64 ? 320 : 40);
-  LearningUpdateSettings settings;
+  RuleSettings settings;
   settings.rcond = c.rcond;
   if (c.rule == "hig") settings.lr = 0.3;
   if (c.rule == "gn") settings.lr = 0.1;
@@ -212,11 +209,11 @@ TEST_P(ThreadRanks, MatchOneProcessAndKeepParametersIdentical) {
   options.seed = 7;
 
   const Outcome single = train_once(p, c.rule, settings, options, nullptr);
-  ASSERT_EQ(single.summary.termination, "max_iterations") << single.summary.message;
+  ASSERT_EQ(single.summary.termination, TrainingTermination::kMaxIterations) << single.summary.message;
   EXPECT_LT(single.summary.history.back().train_loss, single.summary.history.front().train_loss);
   const std::vector<Outcome> ranks = train_on_threads(p, c.rule, settings, options, c.ranks);
   for (const Outcome& rank : ranks) {
-    EXPECT_EQ(rank.summary.termination, "max_iterations") << rank.summary.message;
+    EXPECT_EQ(rank.summary.termination, TrainingTermination::kMaxIterations) << rank.summary.message;
     EXPECT_LE(largest_loss_difference(single.summary, rank.summary), c.tolerance);
     // Bit-identical parameters on every rank.
     EXPECT_EQ(hash_doubles(rank.theta.data(), static_cast<std::size_t>(rank.theta.size())),
@@ -237,28 +234,6 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{"hig", 320, 1e-2, 2, 1e-9}),
     case_name);
 
-// A StackedJacobian given the output cotangents (as data-parallel runs gather them) is the one
-// that computes them: the same J and J Jᵀ, bit for bit.
-TEST(DataParallel, StackedJacobianFromGivenCotangents) {
-  const Problem p(12);
-  MlpCache cache;
-  const Matrix x = p.network.forward(p.data.inputs, cache);
-  const StackedJacobian computed(p.network, cache, p.physics, x, Matrix());
-  std::vector<Matrix> cotangents;
-  for (Index k = 0; k < 2; ++k) {
-    Matrix unit = Matrix::Zero(2, x.cols());
-    unit.row(k).setOnes();
-    cotangents.push_back(p.physics.vjp_batch(x, Matrix(), unit));
-  }
-  const StackedJacobian given(p.network, cache, p.physics, x, Matrix(), cotangents);
-  EXPECT_EQ(given.materialize(), computed.materialize());
-  EXPECT_EQ(given.gram(), computed.gram());
-  EXPECT_THROW(StackedJacobian(p.network, cache, p.physics, x, Matrix(), {cotangents[0]}), Error);
-  EXPECT_THROW(StackedJacobian(p.network, cache, p.physics, x, Matrix(),
-                               {cotangents[0], Matrix::Zero(2, 3)}),
-               Error);
-}
-
 // The doubles one step exchanges, as docs/distributed.md counts them (B = 8, m = 2, n = 2,
 // |θ| = 32): the batch loss (1), then ∇θ (|θ|) for adam; ∂L/∂y (B·m), the output cotangents
 // (B·m·n) and the Jᵀc cotangents (B·n) for hig on the Gram path.
@@ -273,13 +248,13 @@ TEST(DataParallel, ExchangesWhatTheModelCounts) {
     std::vector<std::thread> threads;
     for (int r = 0; r < kRanks; ++r) {
       threads.emplace_back([&, r] {
-        DataParallel parallel(std::make_shared<testing::ThreadCommunicator>(hub, r));
+        const Shard shard(std::make_shared<testing::ThreadCommunicator>(hub, r));
         const auto update = make_learning_update(rule);
         MlpCache cache;
-        const BatchState batch =
-            parallel.evaluate(p.network, p.problem, p.data, indices, update->need(), cache);
-        deltas[static_cast<std::size_t>(r)] = parallel.step(*update, batch).delta;
-        exchanged[static_cast<std::size_t>(r)] = parallel.exchanged_doubles();
+        const BatchState batch = evaluate_batch(p.network, p.problem, p.data.select(indices),
+                                                update->need(), cache, shard);
+        deltas[static_cast<std::size_t>(r)] = update->step(batch).delta;
+        exchanged[static_cast<std::size_t>(r)] = shard.exchanged_doubles();
       });
     }
     for (std::thread& t : threads) t.join();
@@ -310,8 +285,8 @@ TEST(DataParallel, OneRankIsTheOneProcessPath) {
     EXPECT_EQ(alone.theta, serial.theta) << rule;
     EXPECT_EQ(largest_loss_difference(alone.summary, serial.summary), 0.0) << rule;
   }
-  EXPECT_FALSE(DataParallel(std::make_shared<SerialCommunicator>()).active());
-  EXPECT_FALSE(DataParallel(nullptr).active());
+  EXPECT_FALSE(Shard(std::make_shared<SerialCommunicator>()).active());
+  EXPECT_FALSE(Shard().active());
 }
 
 }  // namespace

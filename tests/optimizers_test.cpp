@@ -15,7 +15,7 @@
 #include "physgrad/optim/momentum.hpp"
 #include "physgrad/optim/newton.hpp"
 #include "physgrad/optim/physical_gradient.hpp"
-#include "physgrad/optim/registry.hpp"
+#include "physgrad/catalogue.hpp"
 #include "physgrad/physics/comparison_toy.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
 #include "test_problems.hpp"
@@ -208,10 +208,7 @@ void expect_matches_notebook(const std::string& id, double lr, const double (&pr
   const ComparisonToy physics;
   const L2Loss loss(2.0);
   const Objective objective(physics, loss, Vector::Zero(2));
-  OptimizerSettings settings;
-  settings.lr = lr;
-  settings.inverse = inverse;
-  const auto optimizer = make_optimizer(id, settings);
+  const auto optimizer = make_optimizer(id, {.lr = lr, .inverse = inverse});
   const std::vector<Vector> xs = iterates(*optimizer, objective, Vector{{3.0, 3.0}}, 10);
   ASSERT_EQ(xs.size(), 11u);
   for (int k = 0; k < 10; ++k) {
@@ -240,7 +237,7 @@ TEST(ScaleInvariance, InvertedRulesAreIndependentOfAlphaAndGdIsNot) {
   const auto trajectory = [&](const std::string& id, double lr, double alpha) {
     const DiagonalScale physics(Vector{{1.0, alpha}});
     const Objective objective(physics, loss, Vector::Zero(2));
-    OptimizerSettings settings;
+    RuleSettings settings;
     if (lr > 0) settings.lr = lr;
     const auto optimizer = make_optimizer(id, settings);
     return iterates(*optimizer, objective, x0, 8);
@@ -306,11 +303,9 @@ TEST(Minimize, ConvergesStationaryAndCallbackStop) {
   EXPECT_THROW(minimize(gd, p.objective, Vector::Zero(3), {0, 0.0, nullptr}), Error);
 }
 
-TEST(Registry, BuildsEveryRuleAndRejectsUnknownIds) {
-  for (const std::string& id : direct_optimizer_ids()) {
-    const auto optimizer = make_optimizer(id);
-    EXPECT_EQ(optimizer->id(), id);
-    EXPECT_FALSE(describe_optimizer(id).empty());
+TEST(Catalogue, BuildsEveryDirectRuleAndRejectsUnknownIdsAndBadValues) {
+  for (const std::string& id : rule_ids(RuleKind::kDirect)) {
+    EXPECT_EQ(make_optimizer(id)->id(), id);
   }
   try {
     make_optimizer("sgdd");
@@ -318,9 +313,24 @@ TEST(Registry, BuildsEveryRuleAndRejectsUnknownIds) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("'sgdd'"), std::string::npos);
   }
-  OptimizerSettings bad;
-  bad.lr = -0.1;
-  EXPECT_THROW(make_optimizer("adam", bad), Error);
+  EXPECT_THROW(make_optimizer("adam", {.lr = -0.1}), Error);
+}
+
+// Numerical trouble inside a rule (a non-finite Hessian, curvature matrix or Jacobian) ends the
+// run with kNumericalFailure naming the rule and the iteration; nothing escapes minimize(). (lm
+// rejects such trials itself and reports kFailed.)
+TEST(Minimize, ANumericalErrorInsideARuleEndsTheRun) {
+  const testing::CubeRoot physics;
+  const L2Loss loss;
+  const Objective objective(physics, loss, Vector::Ones(1));
+  for (const std::string id : {"newton", "gn", "ig"}) {
+    const auto optimizer = make_optimizer(id);
+    MinimizeSummary s;
+    ASSERT_NO_THROW(s = minimize(*optimizer, objective, Vector::Zero(1))) << id;
+    EXPECT_EQ(s.termination, Termination::kNumericalFailure) << id << ": " << s.message;
+    EXPECT_EQ(s.message.rfind("iteration 1 of " + id + ": ", 0), 0u) << s.message;
+    EXPECT_EQ(s.x, Vector::Zero(1)) << id;
+  }
 }
 
 }  // namespace

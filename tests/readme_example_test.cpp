@@ -1,9 +1,9 @@
 // The library example of README.md, kept compiling and true.
 #include <gtest/gtest.h>
 
+#include "physgrad/catalogue.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/optim/minimize.hpp"
-#include "physgrad/optim/registry.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
 
 TEST(ReadmeExample, PhysicalGradientSolvesTheScaledToy) {

@@ -1,7 +1,8 @@
-// Test problems — small simulators with known minimizers for the optimizer tests.
-// Rosenbrock P(x) = (10(x₂ − x₁²), 1 − x₁): L2Loss(2) makes L = 100(x₂ − x₁²)² + (1 − x₁)².
+// Test problems — small simulators with known minimizers or known numerical trouble: Rosenbrock
+// P(x) = (10(x₂ − x₁²), 1 − x₁), a linear map, the cube root, and the identity that breaks at a bound.
 #pragma once
 
+#include <cmath>
 #include <string>
 #include <utility>
 
@@ -67,6 +68,36 @@ class LinearSimulator final : public Simulator {
 
  private:
   Matrix a_;
+};
+
+// P(x) = ∛x: finite everywhere, but its derivative (and Hessian) is infinite at 0.
+class CubeRoot final : public Simulator {
+ public:
+  std::string name() const override { return "cube_root"; }
+  Index input_dim() const override { return 1; }
+  Index output_dim() const override { return 1; }
+  Matrix forward_batch(const Matrix& x, const Matrix&) const override {
+    return x.unaryExpr([](double v) { return std::cbrt(v); });
+  }
+  Matrix vjp_batch(const Matrix& x, const Matrix&, const Matrix& gy) const override {
+    return gy.cwiseQuotient(x.unaryExpr([](double v) { return 3 * std::cbrt(v) * std::cbrt(v); }));
+  }
+};
+
+// P(x) = x in one dimension, except NaN where x exceeds `bound`.
+class Bounded final : public Simulator {
+ public:
+  explicit Bounded(double bound) : bound_(bound) {}
+  std::string name() const override { return "bounded"; }
+  Index input_dim() const override { return 1; }
+  Index output_dim() const override { return 1; }
+  Matrix forward_batch(const Matrix& x, const Matrix&) const override {
+    return x.unaryExpr([this](double v) { return v > bound_ ? NAN : v; });
+  }
+  Matrix vjp_batch(const Matrix&, const Matrix&, const Matrix& gy) const override { return gy; }
+
+ private:
+  double bound_;
 };
 
 }  // namespace physgrad::testing

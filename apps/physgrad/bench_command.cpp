@@ -67,7 +67,9 @@ BenchCommand::BenchCommand(CLI::App& app)
   }
   command_->add_option("NAME", name_, "reference experiment: " + names)->required();
   std::string rules;
-  for (const std::string& id : learning_update_ids()) rules += (rules.empty() ? "" : ", ") + id;
+  for (const std::string& id : rule_ids(RuleKind::kLearning)) {
+    rules += (rules.empty() ? "" : ", ") + id;
+  }
   command_->add_option("--optimizer", optimizer_, "update rule: " + rules)
       ->default_str(optimizer_);
   command_->add_option("--batch", batch_, "batch size (default: the rule's own in NAME)")
@@ -90,10 +92,7 @@ void BenchCommand::run(std::ostream& out) const {
   if (std::find(names.begin(), names.end(), name_) == names.end()) {
     ex::reference_case(name_, 1);  // throws, naming the known configurations
   }
-  const auto& ids = learning_update_ids();
-  if (std::find(ids.begin(), ids.end(), optimizer_) == ids.end()) {
-    make_learning_update(optimizer_);  // throws, naming the known rules
-  }
+  find_rule(RuleKind::kLearning, optimizer_);  // throws for an unknown rule, naming the known ones
   if (std::getenv("OPENBLAS_NUM_THREADS") == nullptr && std::getenv("OMP_NUM_THREADS") == nullptr) {
     set_blas_threads(1);
   }
@@ -108,33 +107,27 @@ void BenchCommand::run(std::ostream& out) const {
   Mlp& network = reference.network;
 
   std::vector<double> total, jacobian, inverse, rule, other;
-  MlpCache cache;
+  StepState step_state;
   for (long long s = 0; s < warmup + steps; ++s) {
-    const auto start = Clock::now();
-    BatchTiming timing;
-    const BatchState state =
-        evaluate_batch(network, problem, reference.batch, update->need(), cache, &timing);
-    const auto step_start = Clock::now();
-    const UpdateStep step = update->step(state);
-    const double step_seconds = seconds_since(step_start);
-    if (!all_finite(step.delta)) {
+    const StepReport report =
+        train_step(network, *update, problem, reference.batch, step_state);
+    if (!report.applied()) {
       throw Error("bench: step " + std::to_string(s + 1) + " of " + optimizer_ + " on " + name_ +
-                  " is not finite");
+                  ": " + describe_failure(report, s));
     }
-    network.parameters() += step.delta;
-    const double seconds = seconds_since(start);
     if (s < warmup) continue;
-    total.push_back(seconds);
-    jacobian.push_back(timing.derivatives + step.jacobian_seconds);
-    inverse.push_back(step.inversion_seconds);
-    rule.push_back(std::max(0.0, step_seconds - step.jacobian_seconds - step.inversion_seconds));
-    other.push_back(std::max(0.0, seconds - timing.derivatives - step_seconds));
+    total.push_back(report.total_seconds);
+    jacobian.push_back(report.derivative_seconds);
+    inverse.push_back(report.inversion_seconds);
+    rule.push_back(report.update_seconds);
+    other.push_back(std::max(0.0, report.total_seconds - report.derivative_seconds -
+                                      report.inversion_seconds - report.update_seconds));
   }
 
   const Index rows = reference.batch.size() * reference.physics->output_dim();
   std::string backend = "none";
   nlohmann::json rank = nullptr;
-  if (const auto* inverse_rule = dynamic_cast<const JacobianInverseUpdate*>(update.get())) {
+  if (const auto* inverse_rule = dynamic_cast<const HigUpdate*>(update.get())) {
     backend = to_string(inverse_rule->last_info().backend);
     rank = inverse_rule->last_info().rank;
   } else if (optimizer_ == "sip") {

@@ -20,8 +20,9 @@
 #include "config_file.hpp"
 #include "experiment.hpp"
 #include "interrupt.hpp"
-#include "physgrad/train/checkpoint_file.hpp"
+#include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
+#include "physgrad/train/checkpoint_file.hpp"
 #include "physgrad/threads.hpp"
 #include "ranks.hpp"
 #include "run_folder.hpp"
@@ -106,6 +107,26 @@ void print_table(const ex::RunContext::Table& table) {
   print_row(table.header);
   for (const auto& row : table.rows) print_row(row);
   std::cout << '\n';
+}
+
+// The rule catalogue, one table per kind.
+void print_rules(bool markdown) {
+  using physgrad::RuleKind;
+  for (const auto& [kind, title] :
+       {std::pair{RuleKind::kDirect, "Direct optimization (Optimizer, minimize)"},
+        std::pair{RuleKind::kLearning, "Learning (LearningUpdate, train_step, train)"}}) {
+    if (markdown) {
+      std::cout << physgrad::rule_table_markdown(kind) << '\n';
+      continue;
+    }
+    ex::RunContext::Table table{title, {"id", "rule", "update", "options (defaults)"}, {}};
+    for (const physgrad::RuleInfo& rule : physgrad::rule_catalogue()) {
+      if (rule.kind != kind) continue;
+      table.rows.push_back(
+          {rule.id, rule.label, rule.formula, physgrad::rule_defaults_text(rule)});
+    }
+    print_table(table);
+  }
 }
 
 // Runs `experiment` into its run folder; `resumed` is the checkpoint of an interrupted run to
@@ -208,6 +229,10 @@ int main(int argc, char** argv) {
       "resume", "continue an interrupted run from the checkpoint in its folder");
   std::string resume_folder;
   resume->add_option("DIR", resume_folder, "the run folder (its --out)")->required();
+  CLI::App* rules =
+      app.add_subcommand("rules", "the update rules: id, update, options and their defaults");
+  bool rules_markdown = false;
+  rules->add_flag("--markdown", rules_markdown, "as the Markdown tables of docs/update_rules.md");
   const physgrad::cli::BenchCommand bench(app);
 
   // Each experiment is a subcommand of `run` with its own options, all read as text and
@@ -252,6 +277,10 @@ int main(int argc, char** argv) {
         std::cout << std::left << std::setw(static_cast<int>(width + 2)) << experiment->name()
                   << experiment->description() << '\n';
       }
+      return 0;
+    }
+    if (rules->parsed()) {
+      print_rules(rules_markdown);
       return 0;
     }
     if (bench.parsed()) {

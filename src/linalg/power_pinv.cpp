@@ -40,8 +40,8 @@ void check_operands(const Matrix& a, const Vector& g, const char* what) {
         << " entries";
     throw Error(msg.str());
   }
-  if (!all_finite(a)) throw Error(std::string(what) + ": non-finite entry in the matrix");
-  if (!all_finite(g)) throw Error(std::string(what) + ": non-finite entry in the vector");
+  if (!all_finite(a)) throw NumericalError(std::string(what) + ": non-finite entry in the matrix");
+  if (!all_finite(g)) throw NumericalError(std::string(what) + ": non-finite entry in the vector");
 }
 
 lapack_int lapack_dim(Index n) {
@@ -53,7 +53,7 @@ lapack_int lapack_dim(Index n) {
 
 void check_lapack(lapack_int status, const char* routine) {
   if (status != 0) {
-    throw Error(std::string("power_pinv_apply: LAPACK ") + routine + " failed (info = " +
+    throw NumericalError(std::string("power_pinv_apply: LAPACK ") + routine + " failed (info = " +
                 std::to_string(status) + ")");
   }
 }

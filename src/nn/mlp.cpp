@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "physgrad/error.hpp"
+#include "physgrad/nn/dense_layer_gram.hpp"
 
 namespace physgrad {
 
@@ -43,6 +44,12 @@ void check_input(const Mlp& mlp, const Matrix& x) {
     throw Error(std::string("Mlp::forward: input x is ") + shape(x.rows(), x.cols()) +
                 ", expected " + std::to_string(mlp.input_dim()) + " rows");
   }
+}
+
+const MlpCache& mlp_cache(const NetworkCache& cache) {
+  const auto* own = dynamic_cast<const MlpCache*>(&cache);
+  if (own == nullptr) throw Error("Mlp: the cache comes from another kind of network");
+  return *own;
 }
 
 // Checks that `cache` comes from forward() on this network and gy matches it; returns B.
@@ -121,14 +128,6 @@ Mlp::Mlp(std::vector<Index> widths, Activation hidden, Activation output)
   theta_ = Vector::Zero(offsets_.back());
 }
 
-void Mlp::set_parameters(const Vector& theta) {
-  if (theta.size() != num_parameters()) {
-    throw Error(std::string("Mlp::set_parameters: got ") + std::to_string(theta.size()) +
-                " parameters, the network has " + std::to_string(num_parameters()));
-  }
-  theta_ = theta;  // same size: Eigen copies into the existing storage
-}
-
 Activation Mlp::activation(Index layer) const {
   return layer + 1 == num_layers() ? output_ : hidden_;
 }
@@ -179,7 +178,12 @@ Matrix Mlp::forward(const Matrix& x) const {
   return a;
 }
 
-Matrix Mlp::forward(const Matrix& x, MlpCache& cache) const {
+std::unique_ptr<NetworkCache> Mlp::new_cache() const { return std::make_unique<MlpCache>(); }
+
+Matrix Mlp::forward(const Matrix& x, NetworkCache& network_cache) const {
+  auto* own = dynamic_cast<MlpCache*>(&network_cache);
+  if (own == nullptr) throw Error("Mlp::forward: the cache comes from another kind of network");
+  MlpCache& cache = *own;
   check_input(*this, x);
   cache.activations.resize(widths_.size());
   cache.derivatives.resize(widths_.size() - 1);
@@ -195,7 +199,12 @@ Matrix Mlp::forward(const Matrix& x, MlpCache& cache) const {
   return cache.activations.back();
 }
 
-Vector Mlp::backward(const MlpCache& cache, const Matrix& gy, Matrix* gx) const {
+Vector Mlp::backward(const NetworkCache& cache, const Matrix& gy) const {
+  return backward(cache, gy, nullptr);
+}
+
+Vector Mlp::backward(const NetworkCache& network_cache, const Matrix& gy, Matrix* gx) const {
+  const MlpCache& cache = mlp_cache(network_cache);
   check_cache(*this, cache, gy);
   Vector grad(num_parameters());
   backpropagate(*this, cache, gy, [&](Index l, const Matrix& delta) {
@@ -209,22 +218,9 @@ Vector Mlp::backward(const MlpCache& cache, const Matrix& gy, Matrix* gx) const 
   return grad;
 }
 
-std::vector<Matrix> Mlp::layer_deltas(const MlpCache& cache, const Matrix& gy) const {
-  check_cache(*this, cache, gy);
-  std::vector<Matrix> deltas(static_cast<std::size_t>(num_layers()));
-  backpropagate(*this, cache, gy,
-                [&](Index l, const Matrix& delta) { deltas[static_cast<std::size_t>(l)] = delta; });
-  return deltas;
-}
-
-Matrix Mlp::per_sample_gradients(const MlpCache& cache, const Matrix& gy) const {
-  Matrix out(gy.cols(), num_parameters());
-  per_sample_gradients(cache, gy, out);
-  return out;
-}
-
-void Mlp::per_sample_gradients(const MlpCache& cache, const Matrix& gy,
+void Mlp::per_sample_gradients(const NetworkCache& network_cache, const Matrix& gy,
                                StridedMatrixRef out) const {
+  const MlpCache& cache = mlp_cache(network_cache);
   const Index batch = check_cache(*this, cache, gy);
   if (out.rows() != batch || out.cols() != num_parameters()) {
     throw Error(std::string("Mlp::per_sample_gradients: output block is ") +
@@ -242,6 +238,34 @@ void Mlp::per_sample_gradients(const MlpCache& cache, const Matrix& gy,
     }
     out.middleCols(offsets_[l] + widths_[l] * rows, rows) = delta_t;
   });
+}
+
+Matrix Mlp::per_sample_gram(const NetworkCache& network_cache,
+                            const std::vector<Matrix>& cotangents) const {
+  const MlpCache& cache = mlp_cache(network_cache);
+  for (const Matrix& block : cotangents) check_cache(*this, cache, block);
+  const Index batch = cache.activations[0].cols();
+  const auto blocks = static_cast<Index>(cotangents.size());
+  // δ_l of all K·B cotangents in one sweep (column k·B + i for block k, sample i); each layer's
+  // σ' applies to column k·B + i as to sample i.
+  const auto times_slope = [&](Matrix& delta, const Matrix& slope) {
+    for (Index k = 0; k < blocks; ++k) delta.middleCols(k * batch, batch).array() *= slope.array();
+  };
+  Matrix delta(output_dim(), blocks * batch);
+  for (Index k = 0; k < blocks; ++k) {
+    delta.middleCols(k * batch, batch) = cotangents[static_cast<std::size_t>(k)];
+  }
+  times_slope(delta, cache.derivatives.back());
+  DenseLayerGram gram(delta.cols(), batch);
+  Matrix next;
+  for (Index l = num_layers() - 1;; --l) {
+    gram.add(delta, cache.activations[static_cast<std::size_t>(l)]);
+    if (l == 0) break;
+    next.noalias() = weight(l).transpose() * delta;
+    times_slope(next, cache.derivatives[static_cast<std::size_t>(l - 1)]);
+    delta.swap(next);
+  }
+  return gram.finish();
 }
 
 }  // namespace physgrad

@@ -50,9 +50,16 @@ void AdamState::restore(const nlohmann::json& state, Index size) {
   t_ = t;
 }
 
-nlohmann::json Adam::params() const {
-  const auto& o = state_.options();
-  return {{"lr", o.lr}, {"beta1", o.beta1}, {"beta2", o.beta2}, {"epsilon", o.epsilon}};
+nlohmann::json AdamState::params() const {
+  return {{"lr", options_.lr},
+          {"beta1", options_.beta1},
+          {"beta2", options_.beta2},
+          {"epsilon", options_.epsilon}};
+}
+
+void AdamState::set_learning_rate(double lr) {
+  require_positive("adam: lr", lr);
+  options_.lr = lr;
 }
 
 Step Adam::step(const Objective& objective, const Vector& x) {

@@ -2,8 +2,6 @@
 
 namespace physgrad {
 
-Bfgs::Bfgs() : Bfgs(Options{}) {}
-
 Bfgs::Bfgs(Options options) : QuasiNewton(options.initial_step, options.line_search) {
   require_positive("bfgs: initial_step", options.initial_step);
 }

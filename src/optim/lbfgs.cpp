@@ -6,8 +6,6 @@
 
 namespace physgrad {
 
-Lbfgs::Lbfgs() : Lbfgs(Options{}) {}
-
 Lbfgs::Lbfgs(Options options)
     : QuasiNewton(options.initial_step, options.line_search), memory_(options.memory) {
   if (memory_ < 1) throw Error("lbfgs: memory must be ≥ 1, got " + std::to_string(memory_));

@@ -74,6 +74,9 @@ LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, co
     return result;
   }
   const MinimizeSummary summary = minimize(*solver, misfit, x0, run);
+  if (summary.termination == Termination::kNumericalFailure) {
+    throw NumericalError("local inverse (" + to_string(method) + "): " + summary.message);
+  }
   result.x = summary.x;
   result.residual = std::sqrt(2 * summary.loss);
   result.iterations = summary.iterations;

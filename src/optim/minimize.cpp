@@ -56,7 +56,15 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
     }
     if (summary.iterations >= options.max_iterations) break;
 
-    Step step = optimizer.step(objective, summary.x);
+    Step step;
+    try {
+      step = optimizer.step(objective, summary.x);
+    } catch (const NumericalError& e) {
+      summary.termination = Termination::kNumericalFailure;
+      summary.message = "iteration " + std::to_string(summary.iterations + 1) + " of " +
+                        optimizer.id() + ": " + e.what();
+      break;
+    }
     evaluations += step.evaluations;
     if (step.status == Step::Status::kFailed) {
       summary.termination = Termination::kFailed;

@@ -12,6 +12,7 @@ nlohmann::json PhysicalGradient::params() const {
   nlohmann::json params = {{"lr", options_.lr}, {"inverse", to_string(options_.inverse.method)}};
   if (options_.inverse.method != InverseMethod::kAnalytic) {
     params["inverse_tolerance"] = options_.inverse.tolerance;
+    params["inverse_iterations"] = options_.inverse.max_iterations;
   }
   return params;
 }

@@ -3,6 +3,7 @@
 #include <numeric>
 #include <random>
 #include <sstream>
+#include <string>
 
 #include "physgrad/error.hpp"
 
@@ -33,6 +34,17 @@ Dataset Dataset::select(const std::vector<Index>& indices) const {
     return out;
   };
   return {pick(inputs), pick(targets), pick(context)};
+}
+
+Dataset Dataset::columns(Index begin, Index count) const {
+  if (begin < 0 || count < 0 || begin + count > size()) {
+    throw Error("Dataset::columns: samples [" + std::to_string(begin) + ", " +
+                std::to_string(begin + count) + ") of " + std::to_string(size()));
+  }
+  const auto part = [&](const Matrix& m) {
+    return m.size() == 0 ? Matrix() : Matrix(m.middleCols(begin, count));
+  };
+  return {part(inputs), part(targets), part(context)};
 }
 
 std::vector<Index> shuffled_indices(Index n, std::uint64_t seed) {

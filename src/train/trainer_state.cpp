@@ -36,7 +36,8 @@ nlohmann::json training_summary_to_json(const TrainingSummary& s) {
   nlohmann::json history = nlohmann::json::array();
   for (const TrainingRecord& r : s.history) history.push_back(record_to_json(r));
   return {{"history", history},
-          {"termination", s.termination},
+          {"termination", s.termination ? nlohmann::json(to_string(*s.termination))
+                                        : nlohmann::json(nullptr)},
           {"message", s.message},
           {"iterations", s.iterations},
           {"train_seconds", s.train_seconds},
@@ -49,7 +50,19 @@ nlohmann::json training_summary_to_json(const TrainingSummary& s) {
 
 TrainingSummary training_summary_from_json(const nlohmann::json& document) {
   TrainingSummary summary;
-  summary.termination = string_from_json(document, "termination");
+  // null (or "", as files of earlier versions have it) while the run is in progress.
+  if (!document.contains("termination") ||
+      !(document.at("termination").is_null() || document.at("termination").is_string())) {
+    throw Error("checkpoint field 'termination': expected a text or null");
+  }
+  const nlohmann::json& termination = document.at("termination");
+  if (termination.is_string() && !termination.get<std::string>().empty()) {
+    try {
+      summary.termination = parse_training_termination(termination.get<std::string>());
+    } catch (const Error& e) {
+      throw Error(std::string("checkpoint field 'termination': ") + e.what());
+    }
+  }
   summary.message = string_from_json(document, "message");
   summary.iterations = integer_from_json(document, "iterations");
   const std::pair<const char*, double*> times[] = {
@@ -108,7 +121,7 @@ TrainerState trainer_state_from_json(const nlohmann::json& document, Index param
   }
   state.update_state = document.at("update_state");
   state.summary = training_summary_from_json(object_from_json(document, "summary"));
-  if (!state.summary.termination.empty()) {
+  if (state.summary.termination) {
     throw Error("checkpoint field 'termination': a state to resume belongs to a run in progress");
   }
   return state;

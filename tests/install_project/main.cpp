@@ -2,10 +2,10 @@
 // a pseudo-inverse through LAPACK, so every link dependency is needed.
 #include <cstdio>
 
+#include "physgrad/catalogue.hpp"
 #include "physgrad/linalg/power_pinv.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/optim/minimize.hpp"
-#include "physgrad/optim/registry.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
 
 int main() {

@@ -47,7 +47,8 @@ struct PowerPinvInfo {
 PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions& options);
 
 // J^{−κ} g for J with rows() == g.size(); an empty J gives the zero vector of size cols().
-// Throws Error on mismatched sizes, non-finite entries, rcond outside [0, 1) or non-finite κ.
+// Throws Error on mismatched sizes, rcond outside [0, 1) or non-finite κ, and NumericalError on
+// non-finite entries of J or g or a LAPACK routine that fails to converge.
 Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions& options = {},
                         PowerPinvInfo* info = nullptr);
 
@@ -66,6 +67,6 @@ Vector power_pinv_apply_normal(Matrix normal, const Vector& jt_g,
 
 // Truncated pseudo-inverse of a symmetric positive semi-definite matrix applied to g:
 // A⁺ g over the eigenvalues λᵢ > rcond·λ_max (the normal-equation solve of Gauss-Newton).
-Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, double rcond = 1e-12);
+Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, double rcond);
 
 }  // namespace physgrad

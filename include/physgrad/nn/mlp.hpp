@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "physgrad/nn/activation.hpp"
+#include "physgrad/nn/network.hpp"
 #include "physgrad/types.hpp"
 
 namespace physgrad {
@@ -17,16 +18,13 @@ enum class Init { kGlorotUniform, kHeUniform };
 std::string to_string(Init init);  // "glorot", "he"
 Init parse_init(const std::string& text);
 
-// What forward() keeps for backward(), one sample per column.
-struct MlpCache {
+// What forward() keeps for the derivatives, one sample per column.
+struct MlpCache final : NetworkCache {
   std::vector<Matrix> activations;  // [0] = input, [l + 1] = a_l, the output of layer l
   std::vector<Matrix> derivatives;  // [l] = σ_l'(z_l)
 };
 
-// A writable matrix view with any strides, e.g. every m-th row of a bigger matrix.
-using StridedMatrixRef = Eigen::Ref<Matrix, 0, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>>;
-
-class Mlp {
+class Mlp final : public Network {
  public:
   // widths = {input, hidden…, output}: at least 2 entries, each ≥ 1. σ is `hidden` for every
   // layer but the last, which uses `output`. Parameters start at zero; see initialize().
@@ -34,18 +32,17 @@ class Mlp {
                Activation output = Activation::kIdentity);
 
   Index num_layers() const { return static_cast<Index>(widths_.size()) - 1; }
-  Index input_dim() const { return widths_.front(); }
-  Index output_dim() const { return widths_.back(); }
-  Index num_parameters() const { return offsets_.back(); }
+  Index input_dim() const override { return widths_.front(); }
+  Index output_dim() const override { return widths_.back(); }
+  Index num_parameters() const override { return offsets_.back(); }
   const std::vector<Index>& widths() const { return widths_; }
   Activation hidden_activation() const { return hidden_; }
   Activation output_activation() const { return output_; }
 
-  // θ itself, so optimizers update it in place. Its size must stay num_parameters().
-  const Vector& parameters() const { return theta_; }
-  Vector& parameters() { return theta_; }
-  // Copies θ without reallocating, so weight()/bias() views stay valid.
-  void set_parameters(const Vector& theta);
+  // θ itself, so optimizers update it in place. Its size must stay num_parameters();
+  // set_parameters() copies without reallocating, so weight()/bias() views stay valid.
+  const Vector& parameters() const override { return theta_; }
+  Vector& parameters() override { return theta_; }
 
   // Views into θ: W_l (width[l+1] × width[l]) and b_l (width[l+1]), layer in [0, num_layers()).
   Eigen::Map<const Matrix> weight(Index layer) const;
@@ -56,26 +53,26 @@ class Mlp {
   // Draws every W_l from `init` with std::mt19937_64(seed) (same θ on every platform); b_l = 0.
   void initialize(std::uint64_t seed, Init init = Init::kGlorotUniform);
 
-  // f(x) for a batch x (input_dim × B); returns output_dim × B.
-  Matrix forward(const Matrix& x) const;
-  // Same, filling `cache` for backward(); the cache's storage is reused when shapes match.
-  Matrix forward(const Matrix& x, MlpCache& cache) const;
+  std::unique_ptr<NetworkCache> new_cache() const override;
+  // f(x) for a batch x (input_dim × B); returns output_dim × B. The cache (an MlpCache) keeps
+  // every layer's output and σ'; its storage is reused when shapes match.
+  Matrix forward(const Matrix& x) const override;
+  Matrix forward(const Matrix& x, NetworkCache& cache) const override;
 
   // ∇θ of Σ_b gy_bᵀ f(x_b), laid out like θ, for the batch cached by forward(); gy is
   // output_dim × B. If gx is given it receives the input cotangents (input_dim × B).
-  Vector backward(const MlpCache& cache, const Matrix& gy, Matrix* gx = nullptr) const;
+  Vector backward(const NetworkCache& cache, const Matrix& gy) const override;
+  Vector backward(const NetworkCache& cache, const Matrix& gy, Matrix* gx) const;
 
-  // δ_l = ∂(Σ_b gy_bᵀ f(x_b))/∂z_l for every layer l (width[l+1] × B), from one batched backward
-  // sweep. With the cached inputs a_{l−1} they factor each per-sample gradient: ∂/∂W_l is
-  // δ_l[:, b] a_{l−1}[:, b]ᵀ and ∂/∂b_l is δ_l[:, b].
-  std::vector<Matrix> layer_deltas(const MlpCache& cache, const Matrix& gy) const;
-
-  // B × num_parameters(): row b is ∇θ (gy_bᵀ f(x_b)) for sample b alone, from one batched
-  // backward sweep (per-sample outer products δ_l[:, b] a_{l−1}[:, b]ᵀ).
-  Matrix per_sample_gradients(const MlpCache& cache, const Matrix& gy) const;
-  // Same, written into a caller's B × num_parameters() view (e.g. every m-th row of a
-  // stacked Jacobian).
-  void per_sample_gradients(const MlpCache& cache, const Matrix& gy, StridedMatrixRef out) const;
+  // Row b is ∇θ (gy_bᵀ f(x_b)) for sample b alone, from one batched backward sweep (per-sample
+  // outer products δ_l[:, b] a_{l−1}[:, b]ᵀ).
+  using Network::per_sample_gradients;
+  void per_sample_gradients(const NetworkCache& cache, const Matrix& gy,
+                            StridedMatrixRef out) const override;
+  // From the layer factors (DenseLayerGram): one backward sweep over all K·B cotangents at once;
+  // the gradient rows are never formed.
+  Matrix per_sample_gram(const NetworkCache& cache,
+                         const std::vector<Matrix>& cotangents) const override;
 
  private:
   Activation activation(Index layer) const;

@@ -21,6 +21,8 @@ class AdamState {
   using Options = AdamOptions;
   explicit AdamState(Options options = {});
   const Options& options() const { return options_; }
+  nlohmann::json params() const;  // lr, beta1, beta2, epsilon
+  void set_learning_rate(double lr);
   void reset();
   Vector update(const Vector& gradient);  // returns Δ = −η m̂ / (√v̂ + ε)
   // The moments and step count, and their restoration (throws Error on a malformed state or
@@ -39,7 +41,7 @@ class Adam final : public Optimizer {
   using Options = AdamOptions;
   explicit Adam(Options options = {}) : state_(options) {}
   std::string id() const override { return "adam"; }
-  nlohmann::json params() const override;
+  nlohmann::json params() const override { return state_.params(); }
   void reset() override { state_.reset(); }
   Step step(const Objective& objective, const Vector& x) override;
 

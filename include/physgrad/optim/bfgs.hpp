@@ -6,17 +6,18 @@
 
 namespace physgrad {
 
+struct BfgsOptions {
+  double initial_step = 1.0;  // first trial α₀ of every line search (this rule's "lr"), > 0
+  LineSearchOptions line_search{};
+};
+
 // H starts as I; just before the first update it is rescaled to (yᵀs / yᵀy) I (N&W eq. 6.20).
 // Line search, restarts and the curvature test: see QuasiNewton.
 class Bfgs final : public QuasiNewton {
  public:
-  struct Options {
-    double initial_step = 1.0;  // first trial α₀ of every line search (this rule's "lr"), > 0
-    LineSearchOptions line_search;
-  };
+  using Options = BfgsOptions;
   // Throws Error naming the field when an option is out of range.
-  Bfgs();
-  explicit Bfgs(Options options);
+  explicit Bfgs(Options options = {});
 
   std::string id() const override { return "bfgs"; }
   nlohmann::json params() const override;

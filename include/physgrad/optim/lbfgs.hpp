@@ -8,17 +8,18 @@
 
 namespace physgrad {
 
+struct LbfgsOptions {
+  int memory = 10;            // m ≥ 1 curvature pairs kept
+  double initial_step = 1.0;  // first trial α₀ of every line search (this rule's "lr"), > 0
+  LineSearchOptions line_search{};
+};
+
 // Line search, restarts and the curvature test: see QuasiNewton.
 class Lbfgs final : public QuasiNewton {
  public:
-  struct Options {
-    int memory = 10;            // m ≥ 1 curvature pairs kept
-    double initial_step = 1.0;  // first trial α₀ of every line search (this rule's "lr"), > 0
-    LineSearchOptions line_search;
-  };
+  using Options = LbfgsOptions;
   // Throws Error naming the field when an option is out of range.
-  Lbfgs();
-  explicit Lbfgs(Options options);
+  explicit Lbfgs(Options options = {});
 
   std::string id() const override { return "lbfgs"; }
   nlohmann::json params() const override;

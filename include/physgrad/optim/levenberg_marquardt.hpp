@@ -16,7 +16,9 @@ class LevenbergMarquardt final : public Optimizer {
   using Options = LevenbergMarquardtOptions;
   explicit LevenbergMarquardt(Options options = {});
   std::string id() const override { return "lm"; }
-  nlohmann::json params() const override { return {{"initial_damping", options_.initial_damping}}; }
+  nlohmann::json params() const override {
+    return {{"initial_damping", options_.initial_damping}, {"min_damping", options_.min_damping}};
+  }
   void reset() override;
   double damping() const { return mu_; }
   Step step(const Objective& objective, const Vector& x) override;

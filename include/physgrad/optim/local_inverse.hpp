@@ -34,7 +34,8 @@ struct LocalInverseResult {
 
 // kAnalytic uses the simulator's own inverse (Error if it has none). When the misfit at x₀ is
 // not finite (a NaN from the simulator or in y) the numerical inverse cannot start: the result
-// is x = NaN, not converged, for the caller's numerical guard to see.
+// is x = NaN, not converged, for the caller's numerical guard to see. Numerical trouble inside
+// the numerical inverse (a non-finite Jacobian, say) throws NumericalError naming it.
 LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, const Vector& x0,
                                  const Vector& context, const LocalInverseOptions& options);
 

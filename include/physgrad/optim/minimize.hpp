@@ -14,7 +14,8 @@ enum class Termination {
   kConverged,         // loss ≤ loss_tolerance
   kMaxIterations,     // the iteration budget ran out
   kStationary,        // the rule proposed a zero step (gradient zero, nothing to do)
-  kNumericalFailure,  // Δx or L(x + Δx) was NaN/Inf; x keeps its last finite value
+  kNumericalFailure,  // Δx or L(x + Δx) was NaN/Inf, or the rule met a NumericalError; x keeps
+                      // its last finite value
   kFailed,            // the rule reported that it cannot continue
   kStopped,           // the callback asked to stop
 };

@@ -11,7 +11,7 @@ struct PhysicalGradientOptions {
   double lr = 1.0;  // η > 0
   // kAnalytic needs a simulator with has_inverse(); the numerical methods work for any
   // simulator with a VJP.
-  LocalInverseOptions inverse;
+  LocalInverseOptions inverse{};
 };
 
 class PhysicalGradient final : public Optimizer {

@@ -19,6 +19,8 @@ struct Dataset {
   void validate(const char* name) const;
   // The samples at `indices`, in that order.
   Dataset select(const std::vector<Index>& indices) const;
+  // The samples begin … begin + count − 1.
+  Dataset columns(Index begin, Index count) const;
 };
 
 // A deterministic permutation of 0..n−1 for a seed (Fisher-Yates on std::mt19937_64, the same

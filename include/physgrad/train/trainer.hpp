@@ -1,5 +1,5 @@
-// Trainer — minimizes mean_i L(P(f(inᵢ; θ); cᵢ), yᵢ*) over mini-batches with a LearningUpdate,
-// computing exactly what the update needs (∇θ by backprop, or the stacked Jacobian by m VJPs).
+// Trainer — minimizes mean_i L(P(f(inᵢ; θ); cᵢ), yᵢ*) over mini-batches with a LearningUpdate:
+// epochs of shuffled batches, one train_step() each, evaluations, limits and checkpoints.
 #pragma once
 
 #include <atomic>
@@ -8,20 +8,23 @@
 #include <string>
 #include <vector>
 
-#include "physgrad/loss/loss.hpp"
-#include "physgrad/nn/mlp.hpp"
-#include "physgrad/optim/learning_update.hpp"
 #include "physgrad/parallel/communicator.hpp"
-#include "physgrad/physics/simulator.hpp"
-#include "physgrad/train/dataset.hpp"
+#include "physgrad/train/step.hpp"
 
 namespace physgrad {
 
-// The physics after the network and the per-sample loss on its output.
-struct LearningProblem {
-  const Simulator* physics = nullptr;
-  const Loss* loss = nullptr;
+// Why training ended.
+enum class TrainingTermination {
+  kMaxIterations,     // TrainerOptions::max_iterations updates were made
+  kMaxEpochs,         // max_epochs epochs were completed
+  kTimeBudget,        // time_budget_seconds of training time were spent
+  kNumericalFailure,  // a step or an evaluation was not finite (see train())
+  kInterrupted,       // *TrainerOptions::stop became true; continue with `resume`
 };
+// "max_iterations", "max_epochs", "time_budget", "numerical_failure", "interrupted".
+std::string to_string(TrainingTermination termination);
+// Inverse of to_string; throws Error naming the text otherwise.
+TrainingTermination parse_training_termination(const std::string& text);
 
 struct TrainingRecord {
   long long iteration = 0;   // updates made so far
@@ -34,8 +37,7 @@ struct TrainingRecord {
 
 struct TrainingSummary {
   std::vector<TrainingRecord> history;  // history[0] is the untrained network
-  std::string termination;              // "max_iterations", "max_epochs", "time_budget",
-                                        // "numerical_failure", "interrupted"
+  std::optional<TrainingTermination> termination;  // unset while training goes on
   std::string message;
   long long iterations = 0;             // updates made
   double train_seconds = 0;
@@ -72,17 +74,17 @@ struct TrainerOptions {
   std::optional<long long> eval_every;
   bool shuffle = true;
   std::uint64_t seed = 0;  // shuffling order
-  // Data-parallel training: the ranks of this communicator share every mini-batch (see
-  // train/data_parallel.hpp); none, or one rank: this process alone.
+  // Data-parallel training: the ranks of this communicator share every mini-batch (Shard,
+  // evaluate_batch()); none, or one rank: this process alone.
   std::shared_ptr<Communicator> communicator;
   // Adds experiment-specific figures to a record at each evaluation.
-  std::function<void(const Mlp&, TrainingRecord&)> on_evaluate;
+  std::function<void(const Network&, TrainingRecord&)> on_evaluate;
   // Progress line after each evaluation.
   std::function<void(const TrainingRecord&)> on_progress;
 
   // Checkpoints: on_checkpoint receives the state every checkpoint_every iterations and/or
   // every checkpoint_seconds of wall time, and when *stop becomes true; training then ends
-  // with termination "interrupted" (no final evaluation), to be continued with `resume`.
+  // with termination kInterrupted (no final evaluation), to be continued with `resume`.
   std::function<void(const TrainerState&)> on_checkpoint;
   std::optional<long long> checkpoint_every;
   std::optional<double> checkpoint_seconds;
@@ -95,33 +97,14 @@ struct TrainerOptions {
   int max_step_halvings = 10;
 };
 
-// Mean loss of the network over a data set.
-double mean_loss(const Mlp& network, const LearningProblem& problem, const Dataset& data);
-
-// Seconds spent in the parts of evaluate_batch(), accumulated.
-struct BatchTiming {
-  double forward = 0;      // network, physics and loss
-  double derivatives = 0;  // ∇θ by backprop, or the stacked Jacobian
-};
-
-// Computes for one mini-batch exactly what `need` asks for: the mean loss and ∇θ by one
-// backward pass through physics and network; or the stacked Jacobian (row k·B + i =
-// ∂y_ik/∂θ) as a StackedJacobian after one batched VJP per physics output k, with
-// ∂(mean L)/∂y in the same order (the update forms J or J Jᵀ as it needs); or the network
-// outputs and a backprop. `cache` is reused between calls and must outlive the returned state.
-BatchState evaluate_batch(const Mlp& network, const LearningProblem& problem,
-                          const Dataset& batch, UpdateNeed need, MlpCache& cache,
-                          BatchTiming* timing = nullptr);
-
 // Trains `network` in place. Throws Error on mismatched dimensions, invalid options, a
 // resume state that does not fit, or an untrained network whose loss is not finite.
-// Numerical guard: a non-finite loss, derivative or step never reaches θ. When the batch after
-// an update is non-finite, a rule whose steps can be halved retries that update at half length
-// (up to max_step_halvings times); otherwise, or when that does not help, the update is undone
-// and training stops with termination "numerical_failure". An evaluation whose train or test
-// loss is not finite also stops training, with θ restored to the last evaluated parameters, so
+// Numerical guard (train_step()): a non-finite loss, derivative or step, or a NumericalError
+// below the rule, never reaches θ; a failed step ends training with kNumericalFailure and a
+// message naming the rule, the iteration and the place. An evaluation whose train or test loss
+// is not finite also stops training, with θ restored to the last evaluated parameters, so
 // neither θ nor the history ever holds a non-finite loss.
-TrainingSummary train(Mlp& network, LearningUpdate& update, const LearningProblem& problem,
+TrainingSummary train(Network& network, LearningUpdate& update, const LearningProblem& problem,
                       const Dataset& train_set, const Dataset* test_set,
                       const TrainerOptions& options);
 

@@ -1,0 +1,40 @@
+// HigUpdate — the κ-family of Jacobian updates: Δθ = −η J^{−κ} ∂(mean L)/∂y with the truncated
+// power-pseudo-inverse of the stacked Jacobian; κ = ½ half-inverse gradients, κ = 1 Gauss-Newton.
+#pragma once
+
+#include "physgrad/learn/learning_update.hpp"
+#include "physgrad/linalg/power_pinv.hpp"
+
+namespace physgrad {
+
+// J = U Σ Vᵀ, J^{−κ} = V Σ^{−κ} Uᵀ over σᵢ > rcond·σ_max (the others contribute nothing), as in
+// the HIG paper's code (experiments.md 1.11). The path (Gram, normal, SVD) follows J's shape
+// (linalg/power_pinv.hpp); on the Gram path J Jᵀ comes from the network's layer factors.
+struct HigOptions {
+  double lr = 1.0;      // η > 0
+  double kappa = 0.5;   // ½: HIG; 1: Gauss-Newton (id "gn")
+  double rcond = 1e-6;  // relative truncation τ, in [0, 1)
+  PinvBackend backend = PinvBackend::kAuto;
+};
+
+class HigUpdate final : public LearningUpdate {
+ public:
+  using Options = HigOptions;
+  explicit HigUpdate(Options options = {});
+  // "gn" for κ = 1, "hig" otherwise (params() lists κ).
+  std::string id() const override { return options_.kappa == 1.0 ? "gn" : "hig"; }
+  nlohmann::json params() const override;
+  UpdateNeed need() const override { return UpdateNeed::kStackedJacobian; }
+  UpdateStep step(const BatchState& batch) override;
+  double learning_rate() const override { return options_.lr; }
+  void set_learning_rate(double lr) override;
+  bool steps_can_be_halved() const override { return true; }
+  // Backend and kept rank of the last step.
+  const PowerPinvInfo& last_info() const { return info_; }
+
+ private:
+  Options options_;
+  PowerPinvInfo info_{};
+};
+
+}  // namespace physgrad

@@ -1,0 +1,76 @@
+// LearningUpdate — one update rule for network weights θ trained through a simulator: it declares
+// what it needs of a mini-batch (∇θ, the stacked Jacobian, or the network outputs) and returns Δθ.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+
+#include "physgrad/learn/stacked_jacobian.hpp"
+#include "physgrad/loss/loss.hpp"
+#include "physgrad/physics/simulator.hpp"
+
+namespace physgrad {
+
+enum class UpdateNeed {
+  kGradient,         // ∇θ of the batch-mean loss
+  kStackedJacobian,  // J = ∂(y₁…y_B)/∂θ stacked over samples and outputs, and ∂(mean L)/∂y
+  kNetworkOutputs,   // x = f(in; θ), y = P(x), the batch's targets and context, and a backprop
+                     // that maps a cotangent at x to ∇θ (for updates that build their own
+                     // loss in x, such as SIP)
+};
+
+// What evaluate_batch() computed for one mini-batch; only the fields the update needs are
+// filled. J and ∂L/∂y share one row order (output-major: row k·B + i for sample i, output k).
+// In a data-parallel run the sample-wise fields (x, y, targets, context) hold this rank's share
+// and batch_size the whole batch; everything else is the same on every rank.
+struct BatchState {
+  Index batch_size = 0;
+  double loss = 0;          // mean per-sample loss over the batch
+  Vector gradient;          // ∇θ (mean loss)                          [kGradient]
+  std::shared_ptr<const StackedJacobian> jacobian;  //                  [kStackedJacobian]
+  Vector loss_gradient_y;   // B·m, entry k·B + i = ∂(mean L)/∂y_ik    [kStackedJacobian]
+  // [kNetworkOutputs]
+  const Simulator* physics = nullptr;
+  const Loss* loss_function = nullptr;
+  Matrix x, y, targets, context;                  // one sample per column
+  std::function<Vector(const Matrix&)> backprop;  // cotangent at x (n × B) ↦ ∇θ
+};
+
+struct UpdateStep {
+  UpdateStep() = default;
+  explicit UpdateStep(Vector step) : delta(std::move(step)) {}
+
+  Vector delta;                   // Δθ
+  double inversion_seconds = 0;   // time spent in the (pseudo-)inversion, if any
+  double jacobian_seconds = 0;    // time spent forming J or J Jᵀ, if any
+  std::string problem;            // why delta is not finite, when the rule knows
+};
+
+class LearningUpdate {
+ public:
+  virtual ~LearningUpdate() = default;
+  virtual std::string id() const = 0;
+  // Every setting that distinguishes a run, for config and summary files.
+  virtual nlohmann::json params() const = 0;
+  virtual UpdateNeed need() const = 0;
+  // Forget the state of a run (moments); train() calls it before the first step.
+  virtual void reset() {}
+  // Δθ for the batch. Numerical trouble may surface as a non-finite Δθ or a NumericalError;
+  // train_step() turns both into a stopped run, never into a changed θ.
+  virtual UpdateStep step(const BatchState& batch) = 0;
+  // The step size η, readable and settable between steps (a schedule in one's own loop).
+  virtual double learning_rate() const = 0;
+  virtual void set_learning_rate(double lr) = 0;
+  // The state carried between steps (null for stateless rules), and its restoration for a
+  // network with `parameter_count` weights; throws Error on a malformed state.
+  virtual nlohmann::json state() const { return nullptr; }
+  virtual void restore(const nlohmann::json& /*state*/, Index /*parameter_count*/) {}
+  // True when a step may be scaled down after the fact without changing the rule's state, so a
+  // step that leads to a non-finite batch can be retried at half its length.
+  virtual bool steps_can_be_halved() const { return false; }
+};
+
+}  // namespace physgrad

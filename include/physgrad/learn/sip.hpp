@@ -1,0 +1,41 @@
+// SipUpdate — scale-invariant physics training: per sample x̃ᵢ = P⁻¹(yᵢ + η Δyᵢ; xᵢ), Δy the Newton
+// step of the loss in y (y* − y for L2), then Adam on the proxy loss mean ½‖xᵢ − x̃ᵢ‖², x̃ constant.
+#pragma once
+
+#include "physgrad/learn/learning_update.hpp"
+#include "physgrad/optim/adam.hpp"
+#include "physgrad/optim/local_inverse.hpp"
+
+namespace physgrad {
+
+struct SipOptions {
+  AdamOptions adam{};           // the first-order rule on the proxy loss (lr = η_NN)
+  double y_step = 1.0;          // η > 0: fraction of the Newton step in y
+  LocalInverseOptions inverse{};  // the simulator's own inverse when it has one (auto)
+};
+
+// The proxy gradient is the cotangent (xᵢ − x̃ᵢ)/B backpropagated through the network. A sample
+// whose local inverse fails (non-finite, or a NumericalError) gets a NaN cotangent, so the
+// whole step is non-finite on every rank and UpdateStep::problem says which sample and why.
+class SipUpdate final : public LearningUpdate {
+ public:
+  using Options = SipOptions;
+  explicit SipUpdate(Options options = {});
+  std::string id() const override { return "sip"; }
+  nlohmann::json params() const override;
+  UpdateNeed need() const override { return UpdateNeed::kNetworkOutputs; }
+  void reset() override { adam_.reset(); }
+  UpdateStep step(const BatchState& batch) override;
+  double learning_rate() const override { return adam_.options().lr; }
+  void set_learning_rate(double lr) override { adam_.set_learning_rate(lr); }
+  nlohmann::json state() const override { return adam_.state(); }
+  void restore(const nlohmann::json& state, Index parameter_count) override {
+    adam_.restore(state, parameter_count);
+  }
+
+ private:
+  Options options_;
+  AdamState adam_;
+};
+
+}  // namespace physgrad

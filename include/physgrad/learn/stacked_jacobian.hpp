@@ -1,0 +1,90 @@
+// StackedJacobian — J = ∂y_ik/∂θ of network + physics over a mini-batch (row k·B + i for sample i,
+// output k) in the forms the Jacobian rules use: J Jᵀ, Jᵀc, J, or JᵀJ with Jᵀg; and J^{−κ}g.
+#pragma once
+
+#include <vector>
+
+#include "physgrad/linalg/power_pinv.hpp"
+#include "physgrad/nn/network.hpp"
+#include "physgrad/physics/simulator.hpp"
+
+namespace physgrad {
+
+// An update rule sees only this interface, so the same rule runs on one process (LocalJacobian)
+// and on the ranks of a data-parallel run (ShardedJacobian, sharded_jacobian.hpp).
+class StackedJacobian {
+ public:
+  virtual ~StackedJacobian() = default;
+
+  virtual Index batch() const = 0;    // B
+  virtual Index outputs() const = 0;  // m, the physics outputs per sample
+  virtual Index cols() const = 0;     // |θ|
+  Index rows() const { return batch() * outputs(); }
+
+  // J Jᵀ (rows × rows).
+  virtual Matrix gram() const = 0;
+  // Jᵀ c for c in row space.
+  virtual Vector apply_transpose(const Vector& c) const = 0;
+  // J itself (rows × cols).
+  virtual Matrix materialize() const = 0;
+  // Jᵀ J (cols × cols; its lower triangle is what counts) and Jᵀ g.
+  struct Normal {
+    Matrix matrix;
+    Vector rhs;
+  };
+  virtual Normal normal(const Vector& g) const = 0;
+};
+
+// J of one process's batch. For a dense network J Jᵀ comes from the layer factors (the
+// network's per_sample_gram) and J is never formed; Jᵀc is one physics VJP and one backward.
+//
+// Holds references to the network, its cache (from forward() on this batch) and the simulator,
+// which must outlive it unchanged; x and the context are copied.
+class LocalJacobian final : public StackedJacobian {
+ public:
+  // m batched VJPs through the physics (one per output k) give each sample's cotangent at the
+  // network output, on jacobian_threads() threads (threads.hpp); an exception from a VJP is
+  // rethrown here.
+  LocalJacobian(const Network& network, const NetworkCache& cache, const Simulator& physics,
+                Matrix x, Matrix context);
+  // Same, with the m output cotangents (∂P/∂x)ᵀ e_k (n × B each) given, e.g. gathered from the
+  // ranks of a data-parallel run. Throws Error on a count or shape that does not fit.
+  LocalJacobian(const Network& network, const NetworkCache& cache, const Simulator& physics,
+                Matrix x, Matrix context, std::vector<Matrix> output_cotangents);
+
+  Index batch() const override { return x_.cols(); }
+  Index outputs() const override { return static_cast<Index>(output_cotangents_.size()); }
+  Index cols() const override { return network_->num_parameters(); }
+  Matrix gram() const override;
+  Vector apply_transpose(const Vector& c) const override;
+  Matrix materialize() const override;
+  Normal normal(const Vector& g) const override;
+
+ private:
+  const Network* network_;
+  const NetworkCache* cache_;
+  const Simulator* physics_;
+  Matrix x_;
+  Matrix context_;
+  std::vector<Matrix> output_cotangents_;  // [k]: n × B, (∂P/∂x)ᵀ e_k for every sample
+};
+
+// (∂P/∂x)ᵀ e_k of every sample for each physics output k (n × B each): m batched VJPs on
+// jacobian_threads() threads; output k's VJP writes only its own matrix, so the result does
+// not depend on the thread count.
+std::vector<Matrix> output_cotangents(const Simulator& physics, const Matrix& x,
+                                      const Matrix& context);
+
+// Where the time of a power_pinv_apply() on a stacked Jacobian went.
+struct JacobianTiming {
+  double forming_seconds = 0;    // J Jᵀ, J, or Jᵀ J
+  double inversion_seconds = 0;  // the factorization and the products around it
+};
+
+// J^{−κ} g (power_pinv.hpp) on the path resolve_pinv_backend() picks for J's shape: the Gram
+// path from gram() and apply_transpose(), the normal path from normal(), the SVD of
+// materialize(). Throws NumericalError when what it forms is not finite.
+Vector power_pinv_apply(const StackedJacobian& j, const Vector& g, const PowerPinvOptions& options,
+                        PowerPinvInfo* info = nullptr, JacobianTiming* timing = nullptr);
+
+}  // namespace physgrad

@@ -1,0 +1,69 @@
+#include "physgrad/learn/sip.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "physgrad/error.hpp"
+#include "physgrad/optim/optimizer.hpp"
+
+namespace physgrad {
+
+SipUpdate::SipUpdate(Options options) : options_(options), adam_(options.adam) {
+  require_positive("sip: y_step", options_.y_step);
+}
+
+nlohmann::json SipUpdate::params() const {
+  nlohmann::json params = adam_.params();
+  params["y_step"] = options_.y_step;
+  params["inverse"] = to_string(options_.inverse.method);
+  if (options_.inverse.method != InverseMethod::kAnalytic) {
+    params["inverse_tolerance"] = options_.inverse.tolerance;
+    params["inverse_iterations"] = options_.inverse.max_iterations;
+  }
+  return params;
+}
+
+UpdateStep SipUpdate::step(const BatchState& batch) {
+  if (batch.physics == nullptr || batch.loss_function == nullptr || !batch.backprop) {
+    throw Error("sip: the batch lacks the network outputs and backprop it needs");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const Index count = batch.x.cols();
+  // The mean is over the whole mini-batch, which in a data-parallel run (batch_size) spans
+  // more samples than this process's columns.
+  const auto divisor = static_cast<double>(std::max(batch.batch_size, count));
+  UpdateStep step;
+  Matrix cotangent(batch.x.rows(), count);
+  for (Index i = 0; i < count; ++i) {
+    const Vector y = batch.y.col(i), target = batch.targets.col(i), x = batch.x.col(i);
+    const Vector context = batch.context.size() == 0 ? Vector() : Vector(batch.context.col(i));
+    const Vector y_target = y + options_.y_step * batch.loss_function->newton_step(y, target);
+    Vector x_tilde;
+    try {
+      x_tilde = local_inverse(*batch.physics, y_target, x, context, options_.inverse).x;
+    } catch (const NumericalError& e) {
+      x_tilde = Vector::Constant(x.size(), NAN);
+      if (step.problem.empty()) step.problem = e.what();
+    }
+    if (!all_finite(x_tilde) && step.problem.empty()) {
+      step.problem = "the local inverse (" + to_string(options_.inverse.method) +
+                     ") gave no finite preimage";
+    }
+    cotangent.col(i) = (x - x_tilde) / divisor;
+  }
+  step.inversion_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // Every rank takes part in backprop's sum, also with a NaN cotangent, so no rank waits alone;
+  // a non-finite proxy gradient leaves Adam's moments as they were.
+  const Vector gradient = batch.backprop(cotangent);
+  if (!all_finite(gradient)) {
+    step.delta = Vector::Constant(gradient.size(), NAN);
+    if (step.problem.empty()) step.problem = "the proxy gradient is not finite";
+    return step;
+  }
+  step.delta = adam_.update(gradient);
+  return step;
+}
+
+}  // namespace physgrad

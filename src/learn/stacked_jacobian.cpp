@@ -1,0 +1,165 @@
+#include "physgrad/learn/stacked_jacobian.hpp"
+
+#include <cblas.h>
+
+#include <algorithm>
+#include <chrono>
+#include <exception>
+#include <string>
+#include <thread>
+
+#include "physgrad/error.hpp"
+#include "physgrad/threads.hpp"
+
+namespace physgrad {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// work(), with its duration added to `seconds`.
+template <typename Work>
+auto timed(double& seconds, const Work& work) {
+  const auto start = Clock::now();
+  auto result = work();
+  seconds += std::chrono::duration<double>(Clock::now() - start).count();
+  return result;
+}
+
+// Runs work(t, threads) for t = 0 … threads − 1, t > 0 on threads of their own; the first
+// exception any of them threw is rethrown after all have ended.
+template <typename Work>
+void on_threads(Index threads, const Work& work) {
+  if (threads <= 1) {
+    work(0, 1);
+    return;
+  }
+  std::vector<std::thread> workers;
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(threads));
+  try {
+    for (Index t = 1; t < threads; ++t) {
+      workers.emplace_back([&work, &errors, t, threads] {
+        try {
+          work(t, threads);
+        } catch (...) {
+          errors[static_cast<std::size_t>(t)] = std::current_exception();
+        }
+      });
+    }
+  } catch (...) {  // a thread could not be started: wait for the others, then report it
+    for (std::thread& worker : workers) worker.join();
+    throw;
+  }
+  try {
+    work(0, threads);
+  } catch (...) {
+    errors[0] = std::current_exception();
+  }
+  for (std::thread& worker : workers) worker.join();
+  for (const std::exception_ptr& error : errors) {
+    if (error) std::rethrow_exception(error);
+  }
+}
+
+}  // namespace
+
+std::vector<Matrix> output_cotangents(const Simulator& physics, const Matrix& x,
+                                      const Matrix& context) {
+  const Index outputs = physics.output_dim(), batch = x.cols();
+  std::vector<Matrix> cotangents(static_cast<std::size_t>(outputs));
+  // Worker t takes the outputs k ≡ t (mod threads).
+  on_threads(std::min<Index>(jacobian_threads(), outputs), [&](Index first, Index stride) {
+    Matrix unit(outputs, batch);
+    for (Index k = first; k < outputs; k += stride) {
+      unit.setZero();
+      unit.row(k).setOnes();
+      cotangents[static_cast<std::size_t>(k)] = physics.vjp_batch(x, context, unit);
+    }
+  });
+  return cotangents;
+}
+
+LocalJacobian::LocalJacobian(const Network& network, const NetworkCache& cache,
+                             const Simulator& physics, Matrix x, Matrix context)
+    : LocalJacobian(network, cache, physics, x, context, output_cotangents(physics, x, context)) {}
+
+LocalJacobian::LocalJacobian(const Network& network, const NetworkCache& cache,
+                             const Simulator& physics, Matrix x, Matrix context,
+                             std::vector<Matrix> cotangents)
+    : network_(&network),
+      cache_(&cache),
+      physics_(&physics),
+      x_(std::move(x)),
+      context_(std::move(context)),
+      output_cotangents_(std::move(cotangents)) {
+  if (outputs() != physics.output_dim()) {
+    throw Error("LocalJacobian: " + std::to_string(outputs()) +
+                " output cotangents for a simulator with " +
+                std::to_string(physics.output_dim()) + " outputs");
+  }
+  for (const Matrix& c : output_cotangents_) {
+    if (c.rows() != x_.rows() || c.cols() != x_.cols()) {
+      throw Error("LocalJacobian: an output cotangent is " + std::to_string(c.rows()) + "×" +
+                  std::to_string(c.cols()) + ", the network outputs are " +
+                  std::to_string(x_.rows()) + "×" + std::to_string(x_.cols()));
+    }
+  }
+}
+
+Matrix LocalJacobian::gram() const { return network_->per_sample_gram(*cache_, output_cotangents_); }
+
+Vector LocalJacobian::apply_transpose(const Vector& c) const {
+  // Σ_{i,k} c_{k·B+i} ∂y_ik/∂θ = ∇θ of Σ_i C_iᵀ y_i with C (m × B) holding c output by output.
+  const Matrix weights = c.reshaped(batch(), outputs()).transpose();
+  return network_->backward(*cache_, physics_->vjp_batch(x_, context_, weights));
+}
+
+Matrix LocalJacobian::materialize() const {
+  Matrix j(rows(), cols());
+  for (Index k = 0; k < outputs(); ++k) {
+    network_->per_sample_gradients(*cache_, output_cotangents_[static_cast<std::size_t>(k)],
+                                   j.middleRows(k * batch(), batch()));
+  }
+  return j;
+}
+
+StackedJacobian::Normal LocalJacobian::normal(const Vector& g) const {
+  const Matrix j = materialize();
+  const auto blas = [](Index n) { return static_cast<blasint>(n); };
+  Normal out{Matrix::Zero(cols(), cols()), Vector(j.transpose() * g)};
+  if (j.size() != 0) {
+    cblas_dsyrk(CblasColMajor, CblasLower, CblasTrans, blas(cols()), blas(rows()), 1.0, j.data(),
+                blas(rows()), 0.0, out.matrix.data(), blas(cols()));
+  }
+  return out;
+}
+
+Vector power_pinv_apply(const StackedJacobian& j, const Vector& g, const PowerPinvOptions& options,
+                        PowerPinvInfo* info, JacobianTiming* timing) {
+  JacobianTiming local;
+  JacobianTiming& time = timing != nullptr ? *timing : local;
+  switch (resolve_pinv_backend(j.rows(), j.cols(), options)) {
+    case PinvBackend::kGram: {
+      Matrix gram = timed(time.forming_seconds, [&] { return j.gram(); });
+      return timed(time.inversion_seconds, [&] {
+        return power_pinv_apply_gram(
+            std::move(gram), g, [&j](const Vector& c) { return j.apply_transpose(c); }, options,
+            info);
+      });
+    }
+    case PinvBackend::kNormal: {
+      StackedJacobian::Normal normal = timed(time.forming_seconds, [&] { return j.normal(g); });
+      return timed(time.inversion_seconds, [&] {
+        return power_pinv_apply_normal(std::move(normal.matrix), normal.rhs, options, info);
+      });
+    }
+    default: {
+      const Matrix formed = timed(time.forming_seconds, [&] { return j.materialize(); });
+      PowerPinvOptions svd = options;
+      svd.backend = PinvBackend::kSvd;
+      return timed(time.inversion_seconds, [&] { return power_pinv_apply(formed, g, svd, info); });
+    }
+  }
+}
+
+}  // namespace physgrad

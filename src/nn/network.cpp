@@ -1,0 +1,54 @@
+#include "physgrad/nn/network.hpp"
+
+#include <cblas.h>
+
+#include <string>
+
+#include "physgrad/error.hpp"
+
+namespace physgrad {
+
+void Network::set_parameters(const Vector& theta) {
+  if (theta.size() != num_parameters()) {
+    throw Error("set_parameters: got " + std::to_string(theta.size()) +
+                " parameters, the network has " + std::to_string(num_parameters()));
+  }
+  parameters() = theta;  // same size: Eigen copies into the existing storage
+}
+
+Matrix Network::forward(const Matrix& x) const {
+  const std::unique_ptr<NetworkCache> cache = new_cache();
+  return forward(x, *cache);
+}
+
+Matrix Network::per_sample_gradients(const NetworkCache& cache, const Matrix& gy) const {
+  Matrix out(gy.cols(), num_parameters());
+  per_sample_gradients(cache, gy, out);
+  return out;
+}
+
+Matrix Network::per_sample_gram(const NetworkCache& cache,
+                                const std::vector<Matrix>& cotangents) const {
+  // The rows of all K·B cotangents, then J Jᵀ of the lower triangle by dsyrk, mirrored.
+  const Index batch = cotangents.empty() ? 0 : cotangents.front().cols();
+  Matrix rows(batch * static_cast<Index>(cotangents.size()), num_parameters());
+  for (std::size_t k = 0; k < cotangents.size(); ++k) {
+    if (cotangents[k].cols() != batch) {
+      throw Error("per_sample_gram: cotangent block " + std::to_string(k) + " has " +
+                  std::to_string(cotangents[k].cols()) + " columns, block 0 has " +
+                  std::to_string(batch));
+    }
+    per_sample_gradients(cache, cotangents[k],
+                         rows.middleRows(static_cast<Index>(k) * batch, batch));
+  }
+  const auto n = static_cast<blasint>(rows.rows());
+  Matrix gram = Matrix::Zero(rows.rows(), rows.rows());
+  if (rows.size() != 0) {
+    cblas_dsyrk(CblasColMajor, CblasLower, CblasNoTrans, n, static_cast<blasint>(rows.cols()),
+                1.0, rows.data(), n, 0.0, gram.data(), n);
+  }
+  gram.triangularView<Eigen::StrictlyUpper>() = gram.transpose();
+  return gram;
+}
+
+}  // namespace physgrad

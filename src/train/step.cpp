@@ -1,0 +1,261 @@
+#include "physgrad/train/step.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "physgrad/error.hpp"
+#include "physgrad/learn/sharded_jacobian.hpp"
+
+namespace physgrad {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Dimension checks of check_problem() without reading the values.
+void check_shapes(const Network& network, const LearningProblem& problem, const Dataset& data,
+                  const char* name) {
+  if (problem.physics == nullptr || problem.loss == nullptr) {
+    throw Error("learning problem needs a simulator and a loss");
+  }
+  const Simulator& physics = *problem.physics;
+  std::ostringstream msg;
+  if (data.targets.cols() != data.inputs.cols() ||
+      (data.context.size() != 0 && data.context.cols() != data.inputs.cols())) {
+    msg << name << ": " << data.inputs.cols() << " inputs, " << data.targets.cols()
+        << " targets and " << data.context.cols() << " context columns";
+  } else if (data.inputs.rows() != network.input_dim()) {
+    msg << name << ": inputs have " << data.inputs.rows() << " rows, the network takes "
+        << network.input_dim();
+  } else if (network.output_dim() != physics.input_dim()) {
+    msg << "the network outputs " << network.output_dim() << " values, simulator '"
+        << physics.name() << "' takes " << physics.input_dim();
+  } else if (data.targets.rows() != physics.output_dim()) {
+    msg << name << ": targets have " << data.targets.rows() << " rows, simulator '"
+        << physics.name() << "' outputs " << physics.output_dim();
+  } else if (data.context.size() != 0 && data.context.rows() != physics.context_dim()) {
+    msg << name << ": context has " << data.context.rows() << " rows, simulator '"
+        << physics.name() << "' expects " << physics.context_dim();
+  } else {
+    return;
+  }
+  throw Error(msg.str());
+}
+
+// Σ of per-sample losses of the columns of y, and ∂L/∂y of each divided by `batch`.
+double loss_sum(const Loss& loss, const Matrix& y, const Matrix& targets, double batch,
+                Matrix* gradient_y) {
+  double total = 0;
+  if (gradient_y != nullptr) gradient_y->resize(y.rows(), y.cols());
+  for (Index i = 0; i < y.cols(); ++i) {
+    const Vector yi = y.col(i), ti = targets.col(i);
+    total += loss.value(yi, ti);
+    if (gradient_y != nullptr) gradient_y->col(i) = loss.gradient(yi, ti) / batch;
+  }
+  return total;
+}
+
+}  // namespace
+
+void check_problem(const Network& network, const LearningProblem& problem, const Dataset& data,
+                   const char* name) {
+  data.validate(name);
+  check_shapes(network, problem, data, name);
+}
+
+double mean_loss(const Network& network, const LearningProblem& problem, const Dataset& data,
+                 const Shard& shard) {
+  check_problem(network, problem, data, "data set");
+  const ColumnRange own = shard.columns(data.size());
+  double total = 0;
+  if (own.count > 0) {
+    const Dataset part = shard.active() ? data.columns(own.begin, own.count) : Dataset();
+    const Dataset& mine = shard.active() ? part : data;
+    const Matrix y = problem.physics->forward_batch(network.forward(mine.inputs), mine.context);
+    total = loss_sum(*problem.loss, y, mine.targets, 1.0, nullptr);
+  }
+  total = shard.sum(total);
+  // Every evaluation also checks that the ranks still hold bit-identical parameters.
+  shard.check_identical(network.parameters());
+  return total / static_cast<double>(data.size());
+}
+
+BatchState evaluate_batch(const Network& network, const LearningProblem& problem,
+                          const Dataset& batch, UpdateNeed need, NetworkCache& cache,
+                          const Shard& shard, BatchTiming* timing) {
+  const Simulator& physics = *problem.physics;
+  auto mark = Clock::now();
+  const auto lap = [&mark, timing](double BatchTiming::*part) {
+    const auto now = Clock::now();
+    if (timing != nullptr) timing->*part += std::chrono::duration<double>(now - mark).count();
+    mark = now;
+  };
+  const Index global = batch.size(), outputs = physics.output_dim();
+  const ColumnRange own = shard.columns(global);
+  const Dataset part = shard.active() ? batch.columns(own.begin, own.count) : Dataset();
+  const Dataset& mine = shard.active() ? part : batch;  // this rank's samples
+  const bool jacobian = need == UpdateNeed::kStackedJacobian;
+
+  BatchState state;
+  state.batch_size = global;
+  // The Jacobian rules run the (cheap) network on the whole batch on every rank, so each rank
+  // holds the one-process cache; the physics runs on this rank's share only.
+  Matrix whole_x, x(network.output_dim(), 0), y(outputs, 0), gradient_y(outputs, 0);
+  if (jacobian) {
+    whole_x = network.forward(batch.inputs, cache);
+    x = shard.active() ? Matrix(whole_x.middleCols(own.begin, own.count)) : std::move(whole_x);
+  } else if (own.count > 0) {
+    x = network.forward(mine.inputs, cache);
+  }
+  double total = 0;
+  if (own.count > 0) {
+    y = physics.forward_batch(x, mine.context);
+    total = loss_sum(*problem.loss, y, mine.targets, static_cast<double>(global), &gradient_y);
+  }
+  state.loss = shard.sum(total) / static_cast<double>(global);
+  lap(&BatchTiming::forward);
+
+  switch (need) {
+    case UpdateNeed::kGradient:
+      state.gradient = own.count > 0
+                           ? network.backward(cache, physics.vjp_batch(x, mine.context, gradient_y))
+                           : Vector::Zero(network.num_parameters());
+      shard.sum(state.gradient);
+      break;
+    case UpdateNeed::kNetworkOutputs:
+      state.physics = &physics;
+      state.loss_function = problem.loss;
+      state.targets = own.count > 0 ? mine.targets : Matrix(outputs, 0);
+      state.context = mine.context;
+      state.backprop = [&network, &cache, shard, count = own.count](const Matrix& gx) {
+        Vector g = count > 0 ? network.backward(cache, gx) : Vector::Zero(network.num_parameters());
+        shard.sum(g);
+        return g;
+      };
+      state.x = std::move(x);
+      state.y = std::move(y);
+      break;
+    case UpdateNeed::kStackedJacobian: {
+      // ∂L/∂y of the whole batch in the one-process order k·B + i (gathered as m × B columns).
+      state.loss_gradient_y =
+          shard.gather_columns({gradient_y}, outputs, global).front().transpose().reshaped();
+      if (!shard.active()) {
+        state.jacobian =
+            std::make_shared<LocalJacobian>(network, cache, physics, std::move(x), mine.context);
+        break;
+      }
+      std::vector<Matrix> cotangents =
+          own.count > 0 ? output_cotangents(physics, x, mine.context)
+                        : std::vector<Matrix>(static_cast<std::size_t>(outputs),
+                                              Matrix(network.output_dim(), 0));
+      state.jacobian = std::make_shared<ShardedJacobian>(
+          network, cache, physics, shard, global, mine.inputs, std::move(x), mine.context,
+          std::move(cotangents), std::move(whole_x), batch.context);
+      break;
+    }
+  }
+  lap(&BatchTiming::derivatives);
+  return state;
+}
+
+std::string to_string(StepFailure failure) {
+  switch (failure) {
+    case StepFailure::kNone: return "";
+    case StepFailure::kLoss: return "loss";
+    case StepFailure::kGradient: return "gradient";
+    case StepFailure::kLossGradient: return "loss gradient";
+    case StepFailure::kUpdate: return "update";
+  }
+  return "unknown";
+}
+
+StepReport train_step(Network& network, LearningUpdate& update, const LearningProblem& problem,
+                      const Dataset& batch, StepState& state, const StepOptions& options) {
+  check_shapes(network, problem, batch, "batch");
+  if (batch.size() == 0) throw Error("train_step: the batch has no samples");
+  if (!state.cache) state.cache = network.new_cache();
+  const auto start = Clock::now();
+  StepReport report;
+  UpdateStep step;
+  for (;;) {
+    BatchTiming timing;
+    const BatchState evaluated = evaluate_batch(network, problem, batch, update.need(),
+                                                *state.cache, options.shard, &timing);
+    report.forward_seconds += timing.forward;
+    report.derivative_seconds += timing.derivatives;
+    report.loss = evaluated.loss;
+    report.failure = !std::isfinite(evaluated.loss)           ? StepFailure::kLoss
+                     : !all_finite(evaluated.gradient)        ? StepFailure::kGradient
+                     : !all_finite(evaluated.loss_gradient_y) ? StepFailure::kLossGradient
+                                                              : StepFailure::kNone;
+    if (report.applied()) {
+      const auto update_start = Clock::now();
+      try {
+        step = update.step(evaluated);
+        if (!all_finite(step.delta)) {
+          report.failure = StepFailure::kUpdate;
+          report.detail = step.problem;
+        }
+      } catch (const NumericalError& e) {
+        step = {};
+        report.failure = StepFailure::kUpdate;
+        report.detail = e.what();
+      }
+      report.inversion_seconds += step.inversion_seconds;
+      report.derivative_seconds += step.jacobian_seconds;
+      report.update_seconds +=
+          seconds_since(update_start) - step.inversion_seconds - step.jacobian_seconds;
+    }
+    if (report.applied()) break;
+    // The batch at θ is broken. If θ came from a step that can be halved, try half of it.
+    if (!state.last_step_halvable || state.last_step.size() == 0 ||
+        report.halvings == options.max_step_halvings) {
+      break;
+    }
+    state.last_step *= 0.5;
+    network.parameters() = state.before_last_step + state.last_step;
+    ++report.halvings;
+  }
+  report.total_seconds = seconds_since(start);
+  if (!report.applied()) {
+    // A non-finite Δθ is never applied. A non-finite loss or derivative means the last applied
+    // step already broke θ: it is undone, back to the θ whose batch was finite.
+    report.loss = NAN;
+    report.undone = state.last_step.size() != 0 &&
+                    (report.failure != StepFailure::kUpdate || report.halvings > 0);
+    if (report.undone) {
+      network.set_parameters(state.before_last_step);
+      state.last_step.resize(0);
+      state.before_last_step.resize(0);
+    }
+    return report;
+  }
+  state.before_last_step = network.parameters();
+  state.last_step = std::move(step.delta);
+  state.last_step_halvable = update.steps_can_be_halved();
+  network.parameters() += state.last_step;
+  return report;
+}
+
+std::string describe_failure(const StepReport& report, long long iteration) {
+  if (report.applied()) return {};
+  const std::string previous = std::to_string(iteration);
+  std::string text = "non-finite " + to_string(report.failure) + " at iteration " +
+                     std::to_string(iteration + 1);
+  if (!report.detail.empty()) text += " (" + report.detail + ")";
+  if (report.halvings > 0) {
+    text += ", also after halving update " + previous + " " + std::to_string(report.halvings) +
+            " times";
+  }
+  text += report.undone
+              ? "; update " + previous + " undone, parameters restored to those before it"
+              : std::string("; the step was not applied");
+  return text;
+}
+
+}  // namespace physgrad

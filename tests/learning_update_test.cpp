@@ -1,0 +1,154 @@
+// The rule catalogue and the factories: one table of ids, labels, colours and defaults, every
+// option reachable by id through RuleSettings, the docs' option tables generated from it; and the
+// first-order learning rules (sgd, adam) with their step-size setters.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "learning_fixture.hpp"
+#include "physgrad/error.hpp"
+#include "physgrad/learn/adam.hpp"
+
+namespace physgrad {
+namespace {
+
+using testing::NetworkThroughPhysics;
+
+TEST(Catalogue, EveryRuleHasOneEntryWithLabelFormulaAndColour) {
+  std::set<std::pair<int, std::string>> seen;
+  const std::regex colour("#[0-9a-f]{6}");
+  for (const RuleInfo& rule : rule_catalogue()) {
+    EXPECT_TRUE(seen.insert({static_cast<int>(rule.kind), rule.id}).second) << rule.id;
+    EXPECT_FALSE(rule.label.empty()) << rule.id;
+    EXPECT_FALSE(rule.formula.empty()) << rule.id;
+    EXPECT_TRUE(std::regex_match(rule.colour, colour)) << rule.id << " " << rule.colour;
+    // The factory of the rule's kind builds it, and the rule reports the catalogue's id.
+    if (rule.kind == RuleKind::kDirect) {
+      EXPECT_EQ(make_optimizer(rule.id)->id(), rule.id);
+      EXPECT_EQ(make_optimizer(rule.defaults)->id(), rule.id);
+    } else {
+      EXPECT_EQ(make_learning_update(rule.id)->id(), rule.id);
+      EXPECT_EQ(make_learning_update(rule.defaults)->id(), rule.id);
+    }
+  }
+  EXPECT_EQ(rule_ids(RuleKind::kLearning),
+            (std::vector<std::string>{"sgd", "adam", "gn", "hig", "sip"}));
+  EXPECT_EQ(rule_ids(RuleKind::kDirect).size(), 10u);
+  // A rule present in both kinds is drawn in one colour.
+  EXPECT_EQ(find_rule(RuleKind::kDirect, "adam").colour,
+            find_rule(RuleKind::kLearning, "adam").colour);
+}
+
+TEST(Catalogue, UnknownIdsAndOptionsOfTheOtherKindAreErrorsNamingThem) {
+  try {
+    make_learning_update("lbfgs");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown learning update 'lbfgs' (known: sgd, adam"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(make_optimizer("hig"), Error);
+  EXPECT_THROW(make_optimizer(SipOptions{}), Error);
+  EXPECT_THROW(make_learning_update(NewtonOptions{}), Error);
+  // AdamOptions make either kind.
+  EXPECT_NE(dynamic_cast<AdamUpdate*>(make_learning_update(AdamOptions{}).get()), nullptr);
+  EXPECT_EQ(make_optimizer(AdamOptions{})->id(), "adam");
+}
+
+// Every option params() reports can be set by id through RuleSettings.
+TEST(Catalogue, SettingsReachEveryOptionTheRulesReport) {
+  const RuleSettings settings{.lr = 0.123,
+                              .beta = 0.5,
+                              .beta1 = 0.8,
+                              .beta2 = 0.95,
+                              .epsilon = 1e-5,
+                              .rcond = 1e-4,
+                              .kappa = 0.25,
+                              .backend = PinvBackend::kNormal,
+                              .memory = 4,
+                              .c1 = 1e-3,
+                              .c2 = 0.5,
+                              .initial_damping = 0.01,
+                              .min_damping = 1e-12,
+                              .inverse = InverseMethod::kGaussNewton,
+                              .inverse_tolerance = 1e-7,
+                              .inverse_iterations = 17,
+                              .y_step = 0.75};
+  const nlohmann::json expected = {
+      {"lr", 0.123},        {"initial_step", 0.123},       {"beta", 0.5},
+      {"beta1", 0.8},       {"beta2", 0.95},               {"epsilon", 1e-5},
+      {"rcond", 1e-4},      {"kappa", 0.25},               {"backend", "normal"},
+      {"memory", 4},        {"c1", 1e-3},                  {"c2", 0.5},
+      {"initial_damping", 0.01}, {"min_damping", 1e-12},   {"inverse", "gn"},
+      {"inverse_tolerance", 1e-7}, {"inverse_iterations", 17}, {"y_step", 0.75}};
+  for (const RuleInfo& rule : rule_catalogue()) {
+    const nlohmann::json params =
+        rule.kind == RuleKind::kDirect ? make_optimizer(rule.id, settings)->params()
+                                       : make_learning_update(rule.id, settings)->params();
+    ASSERT_FALSE(params.empty()) << rule.id;
+    for (const auto& [name, value] : params.items()) {
+      ASSERT_TRUE(expected.contains(name)) << rule.id << ": option " << name << " has no setting";
+      EXPECT_EQ(value, expected.at(name)) << rule.id << ": " << name;
+    }
+  }
+  // Unset settings leave the catalogue's defaults.
+  EXPECT_EQ(make_learning_update("hig")->params().at("rcond"), 1e-6);
+  EXPECT_EQ(make_learning_update("gn")->params().at("kappa"), 1.0);
+}
+
+// docs/update_rules.md shows the option tables the catalogue generates, verbatim.
+TEST(Catalogue, TheDocsShowTheGeneratedOptionTables) {
+  std::ifstream file(std::string(PHYSGRAD_SOURCE_DIR) + "/docs/update_rules.md");
+  ASSERT_TRUE(file) << "docs/update_rules.md";
+  std::stringstream text;
+  text << file.rdbuf();
+  const std::string doc = text.str();
+  for (const auto& [kind, name] :
+       {std::pair{RuleKind::kDirect, "direct"}, std::pair{RuleKind::kLearning, "learning"}}) {
+    const std::string begin = std::string("<!-- rules:") + name + ":begin -->\n";
+    const std::string end = std::string("<!-- rules:") + name + ":end -->";
+    const std::size_t from = doc.find(begin), to = doc.find(end);
+    ASSERT_NE(from, std::string::npos) << begin;
+    ASSERT_NE(to, std::string::npos) << end;
+    EXPECT_EQ(doc.substr(from + begin.size(), to - from - begin.size()), rule_table_markdown(kind))
+        << "regenerate with: physgrad rules --markdown";
+  }
+}
+
+TEST(FirstOrderUpdates, SgdAndAdamStepOnTheBatchGradient) {
+  const NetworkThroughPhysics s;
+  MlpCache cache;
+  const BatchState state = s.evaluate(UpdateNeed::kGradient, cache);
+  const auto sgd = make_learning_update("sgd", {.lr = 0.3});
+  EXPECT_EQ(sgd->need(), UpdateNeed::kGradient);
+  EXPECT_EQ(sgd->step(state).delta, Vector(-0.3 * state.gradient));
+  // Adam's first step: −η g/(|g| + ε) per component (bias-corrected moments g and g²).
+  const auto adam = make_learning_update("adam", {.lr = 0.01});
+  const Vector expected =
+      -0.01 * state.gradient.array() / (state.gradient.array().abs() + 1e-8);
+  EXPECT_LT((adam->step(state).delta - expected).cwiseAbs().maxCoeff(), 1e-15);
+}
+
+TEST(FirstOrderUpdates, TheStepSizeCanBeChangedBetweenSteps) {
+  const NetworkThroughPhysics s;
+  MlpCache cache;
+  const BatchState state = s.evaluate(UpdateNeed::kGradient, cache);
+  for (const std::string id : {"sgd", "adam", "sip"}) {
+    const auto rule = make_learning_update(id);
+    rule->set_learning_rate(0.5);
+    EXPECT_EQ(rule->learning_rate(), 0.5) << id;
+    EXPECT_EQ(rule->params().at("lr"), 0.5) << id;
+    EXPECT_THROW(rule->set_learning_rate(0.0), Error) << id;
+  }
+  const auto sgd = make_learning_update("sgd", {.lr = 1.0});
+  const Vector full = sgd->step(state).delta;
+  sgd->set_learning_rate(0.25);
+  EXPECT_EQ(sgd->step(state).delta, Vector(0.25 * full));
+}
+
+}  // namespace
+}  // namespace physgrad

@@ -1,0 +1,141 @@
+// The stacked Jacobian of network + physics: J, J Jᵀ, Jᵀc and JᵀJ from evaluate_batch() against
+// finite differences and each other, the Gram matrix of a network from its layer factors
+// (DenseLayerGram) against the formed gradient rows, and the physics VJPs on several threads.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <utility>
+
+#include "learning_fixture.hpp"
+#include "physgrad/autodiff/finite_difference.hpp"
+#include "physgrad/error.hpp"
+#include "physgrad/nn/dense_layer_gram.hpp"
+#include "physgrad/threads.hpp"
+
+namespace physgrad {
+namespace {
+
+using testing::NetworkThroughPhysics;
+
+TEST(StackedJacobian, MatchesFiniteDifferences) {
+  const NetworkThroughPhysics s;
+  MlpCache cache;
+  const BatchState state = s.evaluate(UpdateNeed::kStackedJacobian, cache);
+  const Matrix expected = finite_difference_jacobian(
+      [&](const Vector& theta) { return s.stacked_outputs(theta); }, s.network.parameters());
+  const Matrix j = state.jacobian->materialize();
+  ASSERT_EQ(j.rows(), 2 * s.data.size());
+  ASSERT_EQ(state.jacobian->rows(), j.rows());
+  EXPECT_LT((j - expected).cwiseAbs().maxCoeff(), 1e-7);
+}
+
+// J Jᵀ from the layer factors, Jᵀc by one backward and JᵀJ, Jᵀg agree with the formed J.
+TEST(StackedJacobian, EveryFormAgreesWithTheFormedJacobian) {
+  const NetworkThroughPhysics s(7);
+  MlpCache cache;
+  const BatchState state = s.evaluate(UpdateNeed::kStackedJacobian, cache);
+  const StackedJacobian& jacobian = *state.jacobian;
+  const Matrix j = jacobian.materialize();
+  const Matrix gram = j * j.transpose();
+  EXPECT_LT((jacobian.gram() - gram).cwiseAbs().maxCoeff(), 1e-13 * gram.cwiseAbs().maxCoeff());
+  const Vector c = Vector::LinSpaced(j.rows(), -1.0, 2.0);
+  EXPECT_LT((jacobian.apply_transpose(c) - j.transpose() * c).norm(),
+            1e-13 * (j.transpose() * c).norm());
+  const StackedJacobian::Normal normal = jacobian.normal(c);
+  const Matrix expected = j.transpose() * j;
+  EXPECT_LT((Matrix(normal.matrix.triangularView<Eigen::Lower>()) -
+             Matrix(expected.triangularView<Eigen::Lower>()))
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-13 * expected.cwiseAbs().maxCoeff());
+  EXPECT_LT((normal.rhs - j.transpose() * c).norm(), 1e-13 * normal.rhs.norm());
+}
+
+// The physics VJPs on several threads give bit-identical results: each output's VJP is
+// computed by one thread into its own matrix.
+TEST(StackedJacobian, IsTheSameOnAnyNumberOfThreads) {
+  const NetworkThroughPhysics s(9);
+  const auto gram_and_transpose = [&](int threads) {
+    set_jacobian_threads(threads);
+    MlpCache cache;
+    const BatchState state = s.evaluate(UpdateNeed::kStackedJacobian, cache);
+    const Vector c = Vector::LinSpaced(state.jacobian->rows(), -1.0, 2.0);
+    return std::make_pair(state.jacobian->gram(), state.jacobian->apply_transpose(c));
+  };
+  const auto one = gram_and_transpose(1);
+  for (const int threads : {2, 3}) {
+    const auto many = gram_and_transpose(threads);
+    EXPECT_TRUE(many.first == one.first) << threads << " threads";
+    EXPECT_TRUE(many.second == one.second) << threads << " threads";
+  }
+  set_jacobian_threads(1);
+  EXPECT_GT(one.first.norm(), 0.0);
+}
+
+// A LocalJacobian given the output cotangents (as data-parallel runs gather them) is the one
+// that computes them, bit for bit.
+TEST(StackedJacobian, FromGivenCotangentsIsTheComputedOne) {
+  const NetworkThroughPhysics s(12);
+  MlpCache cache;
+  const Matrix x = s.network.forward(s.data.inputs, cache);
+  const LocalJacobian computed(s.network, cache, s.physics, x, Matrix());
+  const std::vector<Matrix> cotangents = output_cotangents(s.physics, x, Matrix());
+  const LocalJacobian given(s.network, cache, s.physics, x, Matrix(), cotangents);
+  EXPECT_EQ(given.materialize(), computed.materialize());
+  EXPECT_EQ(given.gram(), computed.gram());
+  EXPECT_THROW(LocalJacobian(s.network, cache, s.physics, x, Matrix(), {cotangents[0]}), Error);
+  EXPECT_THROW(LocalJacobian(s.network, cache, s.physics, x, Matrix(),
+                             {cotangents[0], Matrix::Zero(2, 3)}),
+               Error);
+}
+
+TEST(EvaluateBatch, GradientMatchesFiniteDifferencesAndTheJacobianPath) {
+  const NetworkThroughPhysics s;
+  MlpCache cache;
+  const BatchState with_gradient = s.evaluate(UpdateNeed::kGradient, cache);
+  const auto mean = [&](const Vector& theta) {
+    Mlp copy = s.network;
+    copy.set_parameters(theta);
+    return Vector::Constant(1, mean_loss(copy, s.problem, s.data));
+  };
+  const Matrix expected = finite_difference_jacobian(mean, s.network.parameters());
+  EXPECT_LT((with_gradient.gradient - expected.row(0).transpose()).cwiseAbs().maxCoeff(), 1e-8);
+  EXPECT_NEAR(with_gradient.loss, mean(s.network.parameters())(0), 1e-14);
+  // Jᵀ ∂(mean L)/∂y is the same gradient.
+  const BatchState with_jacobian = s.evaluate(UpdateNeed::kStackedJacobian, cache);
+  EXPECT_LT((with_jacobian.jacobian->materialize().transpose() * with_jacobian.loss_gradient_y -
+             with_gradient.gradient)
+                .norm(),
+            1e-12);
+}
+
+// Mlp's per_sample_gram() (layer factors, DenseLayerGram) equals the Network default, which forms
+// the gradient rows, for several cotangents per sample.
+TEST(DenseLayerGram, MlpGramFromLayerFactorsEqualsTheFormedRows) {
+  Mlp network({3, 5, 4, 2}, Activation::kTanh);
+  network.initialize(11);
+  MlpCache cache;
+  network.forward(Matrix::Random(3, 6), cache);
+  const std::vector<Matrix> cotangents = {Matrix::Random(2, 6), Matrix::Random(2, 6),
+                                          Matrix::Random(2, 6)};
+  const Matrix factored = network.per_sample_gram(cache, cotangents);
+  const Matrix formed = network.Network::per_sample_gram(cache, cotangents);
+  ASSERT_EQ(factored.rows(), 18);
+  EXPECT_LT((factored - formed).cwiseAbs().maxCoeff(), 1e-13 * formed.cwiseAbs().maxCoeff());
+  EXPECT_TRUE(factored.isApprox(factored.transpose(), 0.0));  // exactly symmetric
+  EXPECT_THROW(network.per_sample_gram(cache, {Matrix::Random(2, 5)}), Error);
+  EXPECT_EQ(network.per_sample_gram(cache, {}).size(), 0);
+}
+
+TEST(DenseLayerGram, RejectsShapesThatDoNotFitAndASecondFinish) {
+  EXPECT_THROW(DenseLayerGram(7, 3), Error);
+  DenseLayerGram gram(6, 3);
+  EXPECT_THROW(gram.add(Matrix::Zero(2, 5), Matrix::Zero(4, 3)), Error);
+  EXPECT_THROW(gram.add(Matrix::Zero(2, 6), Matrix::Zero(4, 2)), Error);
+  gram.add(Matrix::Ones(2, 6), Matrix::Zero(4, 3), false);
+  EXPECT_EQ(gram.finish(), Matrix::Zero(6, 6));  // inputs 0 and no bias: nothing
+  EXPECT_THROW(gram.finish(), Error);
+}
+
+}  // namespace
+}  // namespace physgrad
