@@ -39,6 +39,21 @@ TEST(ScaledToyExperiment, InvertedRulesNeedTheSameIterationsForEveryAlphaAndGdDo
   EXPECT_EQ(context.figures().size(), 1u + 2u * 4u);  // iterations vs α, landscape + loss per α
 }
 
+// A step size that breaks some rules numerically (η = 1e308: GN's normal matrix, IG's Jacobian
+// solve and PG's inverse see Inf) ends those runs as numerical failures naming the rule; the
+// experiment runs to the end and keeps every other result.
+TEST(ScaledToyExperiment, RulesThatFailNumericallyAreMarkedAndTheOthersKept) {
+  RunContext context;
+  ASSERT_NO_THROW(context = run_experiment("scaled-toy", {{"alpha", "1,100"}, {"lr", "1e308"}}));
+  EXPECT_EQ(context.runs().size(), 20u);  // 10 rules × 2 values of α
+  for (const std::string id : {"gd", "newton", "gn", "ig", "pg"}) {
+    const nlohmann::json& entry = find_run(context, id, 100.0);
+    EXPECT_EQ(entry["termination"], "numerical_failure") << id;
+    EXPECT_FALSE(entry["message"].get<std::string>().empty()) << id;
+  }
+  EXPECT_EQ(find_run(context, "lm", 100.0)["termination"], "converged");  // lm has no step size
+}
+
 TEST(SensitivityExperiment, GdStepGrowsWithAlphaSquaredInvertedStepsDoNot) {
   const RunContext context = run_experiment("sensitivity", {{"alpha", "0.1,1,10"}, {"iters", "1"}});
   const auto first_step = [&](const std::string& id, double alpha) {
