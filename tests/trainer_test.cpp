@@ -335,6 +335,34 @@ TEST(Trainer, StateFromJsonRejectsStatesThatDoNotFit) {
   EXPECT_THROW(train(s.network, *adam, s.problem, s.data, nullptr, resume), Error);
 }
 
+// With eval_seconds, a run limited by time is evaluated at least that much training time apart
+// (besides the iteration schedule, here too sparse to matter), and never does it otherwise.
+TEST(Trainer, EvaluatesByTrainingTimeWhenAsked) {
+  NetworkThroughPhysics s(32);
+  TrainerOptions options;
+  options.batch_size = 4;
+  options.time_budget_seconds = 0.2;
+  options.eval_every = 1'000'000'000;
+  options.eval_seconds = 0.02;
+  const auto update = make_learning_update("adam");
+  const TrainingSummary summary = train(s.network, *update, s.problem, s.data, nullptr, options);
+  EXPECT_EQ(summary.termination, TrainingTermination::kTimeBudget);
+  ASSERT_GE(summary.history.size(), 6u);
+  for (std::size_t k = 1; k + 1 < summary.history.size(); ++k) {
+    EXPECT_GE(summary.history[k].train_seconds - summary.history[k - 1].train_seconds, 0.02) << k;
+    EXPECT_GT(summary.history[k].iteration, summary.history[k - 1].iteration) << k;
+  }
+  EXPECT_EQ(summary.history.back().iteration, summary.iterations);
+
+  // Without eval_seconds only the start and the end are evaluated.
+  NetworkThroughPhysics t(32);
+  options.eval_seconds.reset();
+  const TrainingSummary plain = train(t.network, *update, t.problem, t.data, nullptr, options);
+  EXPECT_EQ(plain.history.size(), 2u);
+  options.eval_seconds = 0.0;
+  EXPECT_THROW(train(t.network, *update, t.problem, t.data, nullptr, options), Error);
+}
+
 TEST(Trainer, RejectsMismatchedDataAndMissingLimits) {
   NetworkThroughPhysics s;
   const auto update = make_learning_update("adam");

@@ -46,6 +46,9 @@ void check_options(const TrainerOptions& options) {
   if (options.time_budget_seconds && !(*options.time_budget_seconds > 0)) {
     throw Error("time budget must be > 0 seconds");
   }
+  if (options.eval_seconds && !(*options.eval_seconds > 0)) {
+    throw Error("eval_seconds must be > 0");
+  }
   if (options.checkpoint_seconds && !(*options.checkpoint_seconds >= 0)) {
     throw Error("checkpoint_seconds must be ≥ 0");
   }
@@ -74,12 +77,13 @@ class TrainingRun {
 
  private:
   void restore(const TrainerState& state);
-  // What ends training between two iterations besides the iteration limit: a stop request and
-  // the time budget, agreed by all ranks of a data-parallel run (any rank's counts), so that
-  // every rank stops at the same iteration.
+  // What happens between two iterations besides the iteration schedule: a stop request, the
+  // time budget and an evaluation due by time, agreed by all ranks of a data-parallel run (any
+  // rank's counts), so that every rank stops and evaluates at the same iteration.
   struct Requests {
     bool stop = false;
     bool time_out = false;
+    bool evaluate = false;
   };
   Requests requests() const;
   bool evaluate();
@@ -137,6 +141,7 @@ TrainingSummary TrainingRun::run() {
                            std::to_string(summary_.iterations);
         return summary_;
       }
+      if (pending.evaluate && !evaluate()) break;
       if (checkpoint_due()) checkpoint();
       if (options_.max_iterations && summary_.iterations >= *options_.max_iterations) {
         summary_.termination = TrainingTermination::kMaxIterations;
@@ -251,13 +256,17 @@ void TrainingRun::stop_for_numbers(const std::string& message) {
 }
 
 TrainingRun::Requests TrainingRun::requests() const {
-  double flags[2] = {
+  const bool evaluation_due =
+      options_.eval_seconds && !evaluated_ &&
+      summary_.train_seconds - summary_.history.back().train_seconds >= *options_.eval_seconds;
+  double flags[3] = {
       options_.stop != nullptr && options_.stop->load() ? 1.0 : 0.0,
       options_.time_budget_seconds && summary_.train_seconds >= *options_.time_budget_seconds
           ? 1.0
-          : 0.0};
-  step_options_.shard.sum(flags, 2);
-  return {flags[0] > 0, flags[1] > 0};
+          : 0.0,
+      evaluation_due ? 1.0 : 0.0};
+  step_options_.shard.sum(flags, 3);
+  return {flags[0] > 0, flags[1] > 0, flags[2] > 0};
 }
 
 bool TrainingRun::checkpoint_due() const {

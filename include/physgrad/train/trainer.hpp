@@ -72,6 +72,11 @@ struct TrainerOptions {
   std::optional<double> time_budget_seconds;  // training time, evaluations excluded
   // Evaluate every this many iterations; unset: at the start and after every epoch.
   std::optional<long long> eval_every;
+  // Also evaluate once this much training time has passed since the last evaluation (all
+  // ranks of a data-parallel run agree on it). Leave it unset in runs limited by iterations or
+  // epochs: which evaluations such a run makes then does not depend on timing, so a resumed or
+  // data-parallel run reproduces them exactly.
+  std::optional<double> eval_seconds;
   bool shuffle = true;
   std::uint64_t seed = 0;  // shuffling order
   // Data-parallel training: the ranks of this communicator share every mini-batch (Shard,
