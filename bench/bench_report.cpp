@@ -16,7 +16,8 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/report/atomic_file.hpp"
-#include "physgrad/report/svg_plot.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/line_plot.hpp"
 
 namespace {
 

@@ -123,6 +123,7 @@ class Comparison final : public Experiment {
     options.x_label = axis + "₀";
     options.y_label = axis + "₁";
     options.markers = {{0.0, 0.0, "minimum"}};
+    options.value_label = "loss L";
     const Grid2D grid = sample_grid(f, -0.2 * reach, 1.15 * reach, -0.2 * reach, 1.15 * reach, 81);
     context.add_figure({file, caption, landscape_svg(grid, paths, options)});
   }

@@ -3,7 +3,9 @@
 #include <cmath>
 #include <sstream>
 
-#include "physgrad/report/svg_plot.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/landscape.hpp"
+#include "physgrad/report/line_plot.hpp"
 
 namespace physgrad::experiments {
 
@@ -108,6 +110,14 @@ std::string loss_curves_svg(const std::vector<DirectResult>& results, const std:
     line.markers = line.x.size() <= 40;
     line.dashed = result.rule.extra_params.contains("inverse") &&
                   result.rule.extra_params["inverse"] != "analytic";
+    // A run that diverged is marked at its end instead of stretching the loss axis.
+    const MinimizeSummary& s = result.summary;
+    if (s.termination == Termination::kNumericalFailure || s.loss > result.initial_loss) {
+      line.sets_range = false;
+      line.end_label = iterations_cell(result);
+    } else if (s.termination == Termination::kFailed) {
+      line.end_label = iterations_cell(result);
+    }
     series.push_back(std::move(line));
   }
   LinePlotOptions options;

@@ -11,7 +11,9 @@
 #include "experiment.hpp"
 #include "physgrad/optim/minimize.hpp"
 #include "physgrad/catalogue.hpp"
-#include "physgrad/report/svg_plot.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/landscape.hpp"
+#include "physgrad/report/line_plot.hpp"
 
 namespace physgrad::experiments {
 

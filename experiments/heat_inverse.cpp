@@ -10,7 +10,9 @@
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/heat_diffusion.hpp"
-#include "physgrad/report/svg_plot.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/field_plot.hpp"
+#include "physgrad/report/line_plot.hpp"
 #include "sampling.hpp"
 
 namespace physgrad::experiments {
@@ -149,9 +151,9 @@ class HeatInverse final : public Experiment {
 
     std::vector<const LearningResult*> runs;
     for (const auto& entry : trained) runs.push_back(entry.first);
-    sweep.add_loss_figures(context, runs, tag, std::to_string(dims) + "d");
+    sweep.add_loss_figures(context, tag, std::to_string(dims) + "d");
     LearningSweep::add_metric_figure(
-        context, runs, "x_loss_vs_time_" + std::to_string(dims) + "d.svg",
+        context, sweep.rule_groups(tag), "x_loss_vs_time_" + std::to_string(dims) + "d.svg",
         "Reconstruction error ½‖x − x*‖² vs time (" + tag + ")", "mean x loss on the test set",
         [](const TrainingRecord& r) { return r.extras["x_loss"].get<double>(); });
     if (dims == 1) {
@@ -185,65 +187,73 @@ class HeatInverse final : public Experiment {
       {"hig", {{.lr = 1.0}, 4}},
       {"sip", {{.lr = 1e-3}, 128}}};
 
+  // Per shown test sample: x*, y* and every rule's reconstruction as steps over the cells
+  // [i, i + 1) of 0..n.
   static void add_line_reconstructions(
       RunContext& context, const HeatData& test,
       const std::vector<std::pair<const LearningResult*, Mlp>>& trained) {
     const Index count = std::min(kShownSamples, test.truth.cols());
     const Index n = test.truth.rows();
-    std::vector<double> cells(static_cast<std::size_t>(n));
-    for (Index i = 0; i < n; ++i) cells[static_cast<std::size_t>(i)] = static_cast<double>(i);
-    const auto column = [](const Matrix& m, Index k) {
-      return std::vector<double>(m.col(k).data(), m.col(k).data() + m.rows());
+    std::vector<double> edges(static_cast<std::size_t>(n) + 1);
+    for (Index i = 0; i <= n; ++i) edges[static_cast<std::size_t>(i)] = static_cast<double>(i);
+    // The cell values, the last one repeated at the right end of the last cell.
+    const auto cells = [](const Matrix& m, Index k) {
+      std::vector<double> v(m.col(k).data(), m.col(k).data() + m.rows());
+      v.push_back(v.back());
+      return v;
     };
     for (Index k = 0; k < count; ++k) {
       std::vector<Series> series = {
-          {"x* (true initial state)", cells, column(test.truth, k), "#d62728"},
-          {"y* = P(x*) (network input)", cells, column(test.set.inputs, k), "#9e9e9e", false,
+          {"x* (true initial state)", edges, cells(test.truth, k), "#d62728"},
+          {"y* = P(x*) (network input)", edges, cells(test.set.inputs, k), "#9e9e9e", false,
            true}};
+      std::string losses;
       for (const auto& [run, network] : trained) {
         const Matrix x = network.forward(test.set.inputs.col(k));
         const double x_loss = 0.5 * (x - test.truth.col(k)).squaredNorm();
-        series.push_back({run->label + ": x loss " + format_value(x_loss), cells, column(x, 0),
-                          color_for(run->id)});
+        series.push_back({run->label, edges, cells(x, 0), color_for(run->id)});
+        losses += (losses.empty() ? "" : ", ") + run->label + " " + format_value(x_loss);
       }
+      for (Series& s : series) s.steps = true;
       LinePlotOptions options;
+      options.x_range = {{0.0, static_cast<double>(n)}};
       options.title = "Test sample " + std::to_string(k + 1) + ": true and reconstructed x";
-      options.x_label = "cell";
+      options.x_label = "cell (periodic, " + std::to_string(n) + " cells)";
       options.y_label = "temperature";
       context.add_figure({"reconstruction_" + std::to_string(k + 1) + ".svg",
-                          options.title + " after training.", line_plot_svg(series, options)});
+                          options.title + " after training, one step per cell. x loss ½‖x − x*‖²: " +
+                              losses + ".",
+                          line_plot_svg(series, options)});
     }
   }
 
+  // Per shown test sample one row of panels in one colour range: x*, y* and every rule's x.
   static void add_field_reconstructions(
       RunContext& context, Index n, const HeatData& test,
       const std::vector<std::pair<const LearningResult*, Mlp>>& trained) {
-    const auto add = [&](const Vector& field, const std::string& what, const std::string& file) {
-      const int cells = static_cast<int>(n);
-      const double last = static_cast<double>(n - 1);
-      Grid2D grid{0, last, 0, last, cells, cells, {field.data(), field.data() + field.size()}};
-      LandscapeOptions options;
-      options.title = what + " (" + format_value(field.minCoeff()) + " to " +
-                      format_value(field.maxCoeff()) + ")";
-      options.x_label = "cell i";
-      options.y_label = "cell j";
-      options.levels = 0;
-      options.log_levels = false;
-      context.add_figure({file, options.title + "; colours span this field's own range.",
-                          landscape_svg(grid, {}, options)});
+    const auto grid = [n](const Vector& field) {
+      return cell_grid(static_cast<int>(n), {field.data(), field.data() + field.size()});
     };
     for (Index k = 0; k < std::min(kShownSamples, test.truth.cols()); ++k) {
-      const std::string sample = "Test sample " + std::to_string(k + 1);
-      const std::string file = "sample_" + std::to_string(k + 1) + "_";
-      add(test.truth.col(k), sample + ": x*", file + "true.svg");
-      add(test.set.inputs.col(k), sample + ": y* = P(x*)", file + "input.svg");
+      std::vector<FieldPanel> panels = {{"x* (true)", grid(test.truth.col(k))},
+                                        {"y* = P(x*)", grid(test.set.inputs.col(k))}};
+      std::string losses;
       for (const auto& [run, network] : trained) {
         const Vector x = network.forward(test.set.inputs.col(k)).col(0);
-        add(x,
-            sample + ": " + run->label + ", x loss " +
-                format_value(0.5 * (x - test.truth.col(k)).squaredNorm()),
-            file + run->id + ".svg");
+        panels.push_back({find_rule(RuleKind::kLearning, run->id).label, grid(x)});
+        losses += (losses.empty() ? "" : ", ") + run->label + " " +
+                  format_value(0.5 * (x - test.truth.col(k)).squaredNorm());
       }
+      FieldPanelsOptions options;
+      options.title = "Test sample " + std::to_string(k + 1) + ": true, diffused and reconstructed";
+      options.x_label = "cell i";
+      options.y_label = "cell j";
+      options.value_label = "temperature";
+      options.panel_width = 150;
+      context.add_figure({"sample_" + std::to_string(k + 1) + ".svg",
+                          options.title + " fields in one colour range. x loss ½‖x − x*‖²: " +
+                              losses + ".",
+                          field_panels_svg(panels, options)});
     }
   }
 

@@ -10,7 +10,8 @@
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
-#include "physgrad/report/svg_plot.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/line_plot.hpp"
 #include "sampling.hpp"
 
 namespace physgrad::experiments {
@@ -129,7 +130,7 @@ class HigToy final : public Experiment {
                           const std::string& tag) {
     const std::vector<const LearningResult*> runs = sweep.first_seed_runs(tag);
     const std::string file_tag = format_value(lambda);
-    sweep.add_loss_figures(context, runs, tag, "lambda_" + file_tag);
+    sweep.add_loss_figures(context, tag, "lambda_" + file_tag);
 
     std::vector<Series> bands;
     for (const LearningResult* run : runs) {

@@ -7,7 +7,9 @@
 #include "direct_runs.hpp"
 #include "interrupt.hpp"
 #include "physgrad/error.hpp"
-#include "physgrad/report/svg_plot.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/line_plot.hpp"
+#include "physgrad/report/seed_band.hpp"
 #include "physgrad/serialize.hpp"
 
 namespace physgrad::experiments {
@@ -18,6 +20,9 @@ std::string rule_label(const std::string& id) {
   return find_rule(RuleKind::kLearning, id).label;
 }
 
+// Evaluations by time in a run limited by --time alone: this many over the budget.
+constexpr double kEvaluationsOverTime = 40;
+
 double final_test_loss(const LearningResult& r) { return r.summary.history.back().test_loss; }
 
 std::string milliseconds(double seconds, long long steps) {
@@ -25,6 +30,15 @@ std::string milliseconds(double seconds, long long steps) {
 }
 
 }  // namespace
+
+Series held_controls(const std::string& label, const Vector& u, double dt,
+                     const std::string& color) {
+  Series s{label, {}, std::vector<double>(u.data(), u.data() + u.size()), color};
+  for (Index k = 0; k <= u.size(); ++k) s.x.push_back(dt * static_cast<double>(k));
+  if (u.size() > 0) s.y.push_back(s.y.back());
+  s.steps = true;
+  return s;
+}
 
 void require_training_limit(const Settings& settings, const std::string& experiment) {
   if (!settings.has("iters") && !settings.has("epochs") && !settings.has("time")) {
@@ -43,7 +57,8 @@ std::vector<OptionSpec> learning_options(const std::string& default_time,
       integer_option("epochs", "", "epochs per run").at_least(1),
       real_option("time", default_time,
                   "training-time budget per run in seconds, evaluations excluded (the first of "
-                  "--iters, --epochs, --time reached ends a run)")
+                  "--iters, --epochs, --time reached ends a run; a run limited by --time alone is "
+                  "also evaluated every 1/40 of it)")
           .above(0),
       integer_option("eval-every", default_eval_every,
                      "evaluate every N iterations (default: every epoch)")
@@ -85,6 +100,12 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   if (settings_.has("iters")) options.max_iterations = settings_.integer("iters");
   if (settings_.has("epochs")) options.max_epochs = settings_.integer("epochs");
   if (settings_.has("time")) options.time_budget_seconds = settings_.real("time");
+  // A run limited by time alone is also evaluated by time, so that slow rules get as many
+  // points as fast ones; runs with an iteration or epoch limit keep the iteration schedule
+  // alone, which a resumed or data-parallel run reproduces exactly.
+  if (settings_.has("time") && !settings_.has("iters") && !settings_.has("epochs")) {
+    options.eval_seconds = settings_.real("time") / kEvaluationsOverTime;
+  }
   if (settings_.has("eval-every")) options.eval_every = settings_.integer("eval-every");
   options.seed = static_cast<std::uint64_t>(result.seed);
   options.communicator = context_.communicator();
@@ -98,7 +119,9 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                       std::to_string(result.seed) + ", iteration " +
                       std::to_string(r.iteration) + ", test loss " + format_value(r.test_loss));
   };
-  result.summary = train_or_resume(RunKey{static_cast<long long>(results_.size()), id, tag,
+  // Runs are numbered across every sweep of the experiment (sin-rotation has one per ξ), so
+  // that a checkpoint's run i is the same run however the experiment groups them.
+  result.summary = train_or_resume(RunKey{static_cast<long long>(context_.runs().size()), id, tag,
                                           result.seed},
                                    network, *update, problem, train_set, test_set, options);
   context_.finish_progress();
@@ -186,43 +209,87 @@ std::vector<const LearningResult*> LearningSweep::first_seed_runs(const std::str
   return runs;
 }
 
+std::vector<std::vector<const LearningResult*>> LearningSweep::rule_groups(
+    const std::string& tag) const {
+  std::vector<std::vector<const LearningResult*>> groups;
+  for (const LearningResult& r : results_) {
+    if (r.tag != tag) continue;
+    const auto group = std::find_if(groups.begin(), groups.end(), [&](const auto& g) {
+      return g.front()->id == r.id;
+    });
+    if (group == groups.end()) {
+      groups.push_back({&r});
+    } else {
+      group->push_back(&r);
+    }
+  }
+  return groups;
+}
+
 void LearningSweep::add_metric_figure(RunContext& context,
-                                      const std::vector<const LearningResult*>& runs,
+                                      const std::vector<std::vector<const LearningResult*>>& groups,
                                       const std::string& file, const std::string& title,
                                       const std::string& y_label,
                                       const std::function<double(const TrainingRecord&)>& value,
-                                      bool by_time, bool by_epoch) {
+                                      Progress progress) {
   std::vector<Series> series;
-  for (const LearningResult* run : runs) {
-    Series s{run->label, {}, {}, color_for(run->id)};
-    for (const TrainingRecord& r : run->summary.history) {
-      s.x.push_back(by_time    ? r.train_seconds
-                    : by_epoch ? r.epoch
-                               : static_cast<double>(r.iteration));
-      s.y.push_back(value(r));
+  bool several_seeds = false;
+  for (const auto& group : groups) {
+    std::vector<Curve> curves;
+    long long stopped = 0;
+    for (const LearningResult* run : group) {
+      Curve& c = curves.emplace_back();
+      for (const TrainingRecord& r : run->summary.history) {
+        c.x.push_back(progress == Progress::kTime    ? r.train_seconds
+                      : progress == Progress::kEpoch ? r.epoch
+                                                     : static_cast<double>(r.iteration));
+        c.y.push_back(value(r));
+      }
+      stopped += run->summary.termination == TrainingTermination::kNumericalFailure ? 1 : 0;
+    }
+    const std::size_t n = group.size();
+    several_seeds = several_seeds || n > 1;
+    const LearningResult& first = *group.front();
+    Series s = median_band(first.label + (n > 1 ? ", median of " + std::to_string(n) : ""),
+                           curves, color_for(first.id), true);
+    s.markers = true;
+    if (stopped > 0) {
+      s.end_label = n > 1 ? std::to_string(stopped) + " of " + std::to_string(n) +
+                                " runs stopped: not finite"
+                          : "stopped: not finite after iteration " +
+                                std::to_string(first.summary.iterations);
     }
     series.push_back(std::move(s));
   }
   LinePlotOptions options;
   options.title = title;
-  options.x_label = by_time ? "training seconds" : by_epoch ? "epoch" : "iteration";
+  options.x_label = progress == Progress::kTime    ? "training time (s, evaluations excluded)"
+                    : progress == Progress::kEpoch ? "epoch"
+                                                   : "iteration";
   options.y_label = y_label;
   options.log_y = true;
-  context.add_figure({file, title + ".", line_plot_svg(series, options)});
+  const std::string caption =
+      title + ". " +
+      (several_seeds ? "Line: median over the seeds; band: their minimum to maximum. " : "") +
+      "Dots: evaluations.";
+  context.add_figure({file, caption, line_plot_svg(series, options)});
 }
 
-void LearningSweep::add_loss_figures(RunContext& context,
-                                     const std::vector<const LearningResult*>& runs,
-                                     const std::string& tag, const std::string& file_tag,
-                                     bool by_epoch) const {
-  const std::string progress = by_epoch ? "epoch" : "iteration";
+void LearningSweep::add_loss_figures(RunContext& context, const std::string& tag,
+                                     const std::string& file_tag, bool by_epoch,
+                                     const std::string& loss_label) const {
   const auto test_loss = [](const TrainingRecord& r) { return r.test_loss; };
-  for (const bool by_time : {false, true}) {
-    const std::string axis = by_time ? "time" : progress;
-    add_metric_figure(context, runs, "loss_vs_" + axis + "_" + file_tag + ".svg",
-                      "Test loss vs " + std::string(by_time ? "training time" : progress) +
-                          " (" + tag + ", first seed)",
-                      "mean test loss", test_loss, by_time, by_epoch);
+  const auto groups = rule_groups(tag);
+  for (const Progress progress :
+       {by_epoch ? Progress::kEpoch : Progress::kIteration, Progress::kTime}) {
+    const std::string axis = progress == Progress::kTime    ? "time"
+                             : progress == Progress::kEpoch ? "epoch"
+                                                            : "iteration";
+    add_metric_figure(context, groups, "loss_vs_" + axis + "_" + file_tag + ".svg",
+                      "Test loss vs " +
+                          std::string(progress == Progress::kTime ? "training time" : axis) +
+                          " (" + tag + ")",
+                      loss_label, test_loss, progress);
   }
 }
 
@@ -245,9 +312,13 @@ void LearningSweep::add_tables() const {
                                "saturated_fraction");
 
   for (const std::string& tag : tags) {
-    RunContext::Table losses{"Final test loss per seed (" + tag + ")", {"rule"}, {}};
-    RunContext::Table saturation{"Saturated hidden neurons at the end, fraction per seed (" +
-                                     tag + ")",
+    RunContext::Table losses{"Final test loss per seed (" + tag +
+                                 "): the mean loss over the test set after the last iteration, "
+                                 "with the median and the worst over the seeds",
+                             {"rule"}, {}};
+    RunContext::Table saturation{"Saturated hidden neurons at the end, per seed (" + tag +
+                                     "): the fraction (0 to 1) of hidden neurons with |tanh| > "
+                                     "0.99 on every test input",
                                  {"rule"}, {}};
     for (const long long seed : seeds) {
       losses.header.push_back("seed " + std::to_string(seed));
@@ -286,9 +357,11 @@ void LearningSweep::add_tables() const {
     if (has_saturation) context_.add_table(std::move(saturation));
   }
 
-  RunContext::Table timing{"Time per step in ms (mean over seeds)",
-                           {"rule", "setting", "network+physics+loss", "gradient or Jacobian",
-                            "inversion", "update", "total"},
+  RunContext::Table timing{"Time per training step in milliseconds, mean over seeds: the "
+                           "forward pass of network, physics and loss; the gradient or stacked "
+                           "Jacobian; the inversion inside gn/hig; the rest of the update",
+                           {"rule", "setting", "forward (ms)", "gradient or Jacobian (ms)",
+                            "inversion (ms)", "update (ms)", "total (ms)"},
                            {}};
   for (const std::string& tag : tags) {
     for (const std::string& id : ids) {

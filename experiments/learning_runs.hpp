@@ -13,6 +13,7 @@
 #include "experiment.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/nn/mlp.hpp"
+#include "physgrad/report/line_plot.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad::experiments {
@@ -44,6 +45,10 @@ std::vector<OptionSpec> learning_options(const std::string& default_time = "",
 // Throws Error unless --iters, --epochs or --time limits the training.
 void require_training_limit(const Settings& settings, const std::string& experiment);
 
+// Controls u₀ … u_{N−1}, each held for dt, as steps over [0, N·dt].
+Series held_controls(const std::string& label, const Vector& u, double dt,
+                     const std::string& color);
+
 // Reads the common and learning options; trains, records and tabulates the runs.
 class LearningSweep {
  public:
@@ -60,18 +65,24 @@ class LearningSweep {
 
   // The first-seed run of every rule for `tag`, in the order they ran.
   std::vector<const LearningResult*> first_seed_runs(const std::string& tag) const;
-  // A per-evaluation value of `runs` (log y) against training time, or against the iteration
-  // (epoch with `by_epoch`) when `by_time` is false.
+  // Every run (all seeds) of each rule for `tag`, one group per rule in the order they ran.
+  std::vector<std::vector<const LearningResult*>> rule_groups(const std::string& tag) const;
+
+  // What the x axis of a training-progress figure counts.
+  enum class Progress { kTime, kIteration, kEpoch };
+  // A per-evaluation value (log y) of each rule against `progress`: the median over the group's
+  // runs (seeds) with their min–max band, a dot at every evaluation, and runs that stopped on
+  // non-finite numbers marked at their end.
   static void add_metric_figure(RunContext& context,
-                                const std::vector<const LearningResult*>& runs,
+                                const std::vector<std::vector<const LearningResult*>>& groups,
                                 const std::string& file, const std::string& title,
                                 const std::string& y_label,
                                 const std::function<double(const TrainingRecord&)>& value,
-                                bool by_time = true, bool by_epoch = false);
-  // Test loss vs iteration (or epoch) and vs training time (log y) of `runs`.
-  void add_loss_figures(RunContext& context, const std::vector<const LearningResult*>& runs,
-                        const std::string& tag, const std::string& file_tag,
-                        bool by_epoch = false) const;
+                                Progress progress = Progress::kTime);
+  // Test loss vs iteration (or epoch) and vs training time of every rule's runs for `tag`.
+  void add_loss_figures(RunContext& context, const std::string& tag, const std::string& file_tag,
+                        bool by_epoch = false,
+                        const std::string& loss_label = "mean test loss") const;
   // Per setting: final test loss per seed with median and worst; the saturated-neuron
   // fraction when recorded; the time split per step of every rule.
   void add_tables() const;

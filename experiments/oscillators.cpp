@@ -1,12 +1,16 @@
 // oscillators: a network maps a target state y* (= the initial state s₀) to the controls that
 // bring a chain of coupled oscillators back to it after time T; trained through the RK4
 // simulator with Adam, Gauss-Newton, HIG or SIP (experiments.md E10 book, E11 paper).
+#include <cmath>
+
 #include "experiment_list.hpp"
 #include "learning_runs.hpp"
 #include "reference_case.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/line_plot.hpp"
 #include "sampling.hpp"
 
 namespace physgrad::experiments {
@@ -56,6 +60,76 @@ Mlp make_network(const CoupledOscillators& physics, Activation activation, std::
   return network;
 }
 
+// Column k: the state after the first k steps (k = 0 … Nt) under the controls u from s₀.
+Matrix state_history(const OscillatorConfig& config, const Vector& u, const Vector& s0) {
+  Matrix states(s0.size(), config.steps + 1);
+  states.col(0) = s0;
+  for (Index k = 1; k <= config.steps; ++k) {
+    OscillatorConfig part = config;
+    part.steps = k;
+    states.col(k) = CoupledOscillators(part).forward_batch(u.head(k), s0);
+  }
+  return states;
+}
+
+// The positions of one test state's oscillators under each rule's trained controls, and the
+// controls themselves.
+void add_trajectory_figures(RunContext& context, const OscillatorConfig& config,
+                            const Vector& s0,
+                            const std::vector<std::pair<const LearningResult*, Mlp>>& trained) {
+  const Index n = config.oscillators, steps = config.steps;
+  std::vector<double> times(static_cast<std::size_t>(steps) + 1);
+  for (Index k = 0; k <= steps; ++k) {
+    times[static_cast<std::size_t>(k)] = config.dt * static_cast<double>(k);
+  }
+  std::vector<Series> positions, controls;
+  std::string losses;
+  for (const auto& [run, network] : trained) {
+    const Vector u = network.forward(s0).col(0);
+    const Matrix states = state_history(config, u, s0);
+    for (Index i = 0; i < n; ++i) {
+      Series s{run->label + ": x" + std::to_string(i + 1), times, {}, color_for(run->id)};
+      for (Index k = 0; k <= steps; ++k) s.y.push_back(states(i, k));
+      s.dashed = i > 0;
+      positions.push_back(std::move(s));
+    }
+    controls.push_back(held_controls(run->label, u, config.dt, color_for(run->id)));
+    losses += (losses.empty() ? "" : ", ") + run->label + " " +
+              format_value((states.col(steps) - s0).squaredNorm());
+  }
+  // The start (= target) positions as separate dots at t = 0 and t = T.
+  Series target{"start = target", {}, {}, "#000000", true};
+  for (const double t : {times.front(), times.back()}) {
+    for (Index i = 0; i < n; ++i) {
+      if (!target.x.empty()) {
+        target.x.push_back(NAN);
+        target.y.push_back(NAN);
+      }
+      target.x.push_back(t);
+      target.y.push_back(s0(i));
+    }
+  }
+  positions.push_back(std::move(target));
+
+  LinePlotOptions options;
+  options.x_range = {{0.0, times.back()}};
+  options.title = "Test state 1 under the trained controls";
+  options.x_label = "time t";
+  options.y_label = "position";
+  context.add_figure(
+      {"trajectory.svg",
+       "Positions of the " + std::to_string(n) + " oscillators (x1 solid, x2 dashed) of the first "
+       "test state under each rule's controls; the network must bring them back to where they "
+       "started (black dots at t = 0 and t = T). Loss Σ(s(T) − s(0))² of this state: " +
+           losses + ".",
+       line_plot_svg(positions, options)});
+  options.title = "Controls u(t) for test state 1";
+  options.y_label = "control u";
+  context.add_figure({"controls.svg",
+                      "The network's controls for the first test state, held within each step.",
+                      line_plot_svg(controls, options)});
+}
+
 class Oscillators final : public Experiment {
  public:
   std::string name() const override { return "oscillators"; }
@@ -100,13 +174,15 @@ class Oscillators final : public Experiment {
     LearningSweep sweep(settings, context, config.defaults);
     const std::vector<std::string> rules =
         settings.has("optimizers") ? settings.texts("optimizers") : config.rules;
+    std::vector<std::pair<const LearningResult*, Mlp>> trained;
     for (const std::string& id : rules) {
       Mlp network = make_network(physics, config.activation, seed);
-      sweep.run(id, config_name, {{"variant", config_name}, {"seed", seed}}, network, problem,
-                train_set, &test_set);
+      const LearningResult& r = sweep.run(id, config_name, {{"variant", config_name}, {"seed", seed}},
+                                          network, problem, train_set, &test_set);
+      trained.emplace_back(&r, std::move(network));
     }
-    sweep.add_loss_figures(context, sweep.first_seed_runs(config_name), config_name,
-                           config_name, true);
+    sweep.add_loss_figures(context, config_name, config_name, true);
+    add_trajectory_figures(context, config.physics, test_set.inputs.col(0), trained);
     sweep.add_tables();
     context.add_note(
         "Reference (experiments.md): zero controls give a mean loss of 0.726 (book) and 0.796 "

@@ -9,6 +9,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/poisson.hpp"
+#include "physgrad/report/field_plot.hpp"
 #include "sampling.hpp"
 
 namespace physgrad::experiments {
@@ -62,6 +63,32 @@ const std::map<std::string, RuleDefaults>& rule_defaults() {
   return defaults;
 }
 
+// The first test sample's true x* next to each rule's prediction f(y*), in one colour range.
+void add_field_figure(RunContext& context, Index n, const Vector& truth, const Vector& input,
+                      const std::vector<std::pair<const LearningResult*, Mlp>>& trained) {
+  const auto grid = [n](const Vector& field) {
+    return cell_grid(static_cast<int>(n), {field.data(), field.data() + field.size()});
+  };
+  std::vector<FieldPanel> panels = {{"x* (true)", grid(truth)}};
+  std::string errors;
+  for (const auto& [run, network] : trained) {
+    const Vector x = network.forward(input).col(0);
+    panels.push_back({find_rule(RuleKind::kLearning, run->id).label, grid(x)});
+    errors += (errors.empty() ? "" : ", ") + run->label + " " + format_value((x - truth).cwiseAbs().sum());
+  }
+  FieldPanelsOptions options;
+  options.title = "Test sample 1: true x* and predicted x from y* = ∇²x*";
+  options.x_label = "cell i";
+  options.y_label = "cell j";
+  options.value_label = "x";
+  options.diverging = true;
+  options.panel_width = 150;
+  context.add_figure({"fields.svg",
+                      options.title + ", one colour range (white = 0). Σ|x − x*| of this sample: " +
+                          errors + ".",
+                      field_panels_svg(panels, options)});
+}
+
 class PoissonExperiment final : public Experiment {
  public:
   std::string name() const override { return "poisson"; }
@@ -106,11 +133,15 @@ class PoissonExperiment final : public Experiment {
 
     const std::string tag = std::to_string(n) + "x" + std::to_string(n);
     LearningSweep sweep(settings, context, rule_defaults());
+    std::vector<std::pair<const LearningResult*, Mlp>> trained;
     for (const std::string& id : settings.texts("optimizers")) {
       Mlp network = make_network(n, seed);
-      sweep.run(id, tag, {{"seed", seed}}, network, problem, train_set, &test_set, observe);
+      const LearningResult& r =
+          sweep.run(id, tag, {{"seed", seed}}, network, problem, train_set, &test_set, observe);
+      trained.emplace_back(&r, std::move(network));
     }
-    sweep.add_loss_figures(context, sweep.first_seed_runs(tag), tag, "poisson");
+    sweep.add_loss_figures(context, tag, "poisson");
+    add_field_figure(context, n, x_test.col(0), y_test.col(0), trained);
     sweep.add_tables();
     context.add_note(
         "HIG's step is 0.01·B times the HIG paper's η because the rules here see the gradient "

@@ -1,6 +1,7 @@
 // quantum-dipole: a network maps a target superposition of the 2nd and 3rd eigenstates to the
 // 384 dipole controls that steer the ground state there (Crank-Nicolson Schrödinger solver,
 // fidelity loss 1 − |⟨ψ*|ψ(T)⟩|²): Adam vs HIG (experiments.md E12).
+#include <algorithm>
 #include <cmath>
 
 #include "experiment_list.hpp"
@@ -9,6 +10,8 @@
 #include "physgrad/error.hpp"
 #include "physgrad/loss/fidelity.hpp"
 #include "physgrad/physics/quantum_dipole.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/line_plot.hpp"
 #include "sampling.hpp"
 
 namespace physgrad::experiments {
@@ -41,6 +44,83 @@ const std::map<std::string, RuleDefaults>& rule_defaults() {
       {"gn", {{.lr = 0.5, .rcond = 1e-5}, 16}},
       {"hig", {{.lr = 0.5, .rcond = 1e-5}, 16}}};
   return defaults;
+}
+
+// |⟨a|b⟩|² of two states in the real layout [Re ψ, Im ψ].
+double overlap(const Vector& a, const Vector& b) {
+  const Index m = a.size() / 2;
+  const double re = a.head(m).dot(b.head(m)) + a.tail(m).dot(b.tail(m));
+  const double im = a.head(m).dot(b.tail(m)) - a.tail(m).dot(b.head(m));
+  return re * re + im * im;
+}
+
+// For one test target and each rule's trained controls: the infidelity 1 − |⟨ψ*|ψ(t)⟩|² along
+// the way, the density |ψ(x, T)|² against the target's, and the controls u(t).
+void add_state_figures(RunContext& context, const QuantumDipoleConfig& config,
+                       const Vector& target, const Vector& start,
+                       const std::vector<std::pair<const LearningResult*, Mlp>>& trained) {
+  const Index steps = config.steps, m = config.points - 2;
+  const Index every = std::max<Index>(1, steps / 96);
+  const double dx = config.length / static_cast<double>(config.points - 1);
+  std::vector<double> points;
+  for (Index j = 1; j <= m; ++j) points.push_back(dx * static_cast<double>(j));
+  const auto density = [m](const Vector& psi) {
+    std::vector<double> d;
+    for (Index j = 0; j < m; ++j) d.push_back(psi(j) * psi(j) + psi(m + j) * psi(m + j));
+    return d;
+  };
+  std::vector<Series> infidelity, densities = {{"target |ψ*|²", points, density(target),
+                                                "#000000", true, true}},
+                                  controls;
+  std::string finals;
+  for (const auto& [run, network] : trained) {
+    const Vector u = network.forward(target).col(0);
+    Series s{run->label, {}, {}, color_for(run->id)};
+    Vector psi = start;
+    for (Index k = 0; k <= steps; k += every) {
+      QuantumDipoleConfig part = config;
+      part.steps = k;
+      psi = k == 0 ? start : Vector(QuantumDipole(part).forward_batch(u.head(k), start).col(0));
+      s.x.push_back(config.dt * static_cast<double>(k));
+      s.y.push_back(1 - overlap(target, psi));
+    }
+    if (s.x.back() != config.dt * static_cast<double>(steps)) {
+      psi = QuantumDipole(config).forward_batch(u, start).col(0);
+      s.x.push_back(config.dt * static_cast<double>(steps));
+      s.y.push_back(1 - overlap(target, psi));
+    }
+    finals += (finals.empty() ? "" : ", ") + run->label + " " + format_value(s.y.back());
+    infidelity.push_back(std::move(s));
+    densities.push_back({run->label, points, density(psi), color_for(run->id), true});
+    controls.push_back(held_controls(run->label, u, config.dt, color_for(run->id)));
+  }
+  const double end_time = config.dt * static_cast<double>(steps);
+  const auto add = [&context](const std::string& file, const std::string& caption,
+                              const std::vector<Series>& series, const std::string& title,
+                              const std::string& x_label, double x_max,
+                              const std::string& y_label, bool log_y) {
+    LinePlotOptions options;
+    options.title = title;
+    options.x_label = x_label;
+    options.x_range = {{0.0, x_max}};
+    options.y_label = y_label;
+    options.log_y = log_y;
+    context.add_figure({file, caption, line_plot_svg(series, options)});
+  };
+  add("dipole_infidelity_vs_t.svg",
+      "How close the state is to the first test target while each rule's controls act; only "
+      "the value at T is trained. At T: " + finals + ".",
+      infidelity, "Test target 1: infidelity along the controlled evolution", "time t", end_time,
+      "infidelity 1 − |⟨ψ*|ψ(t)⟩|²", true);
+  add("dipole_density.svg",
+      "|ψ(x, T)|² at the interior grid points for each rule's controls, and the target's "
+      "|ψ*(x)|² (black, dashed); the state starts in the ground state.",
+      densities, "Test target 1: density at the end time T", "position x", config.length,
+      "|ψ(x, T)|²", false);
+  add("dipole_controls.svg",
+      "The network's " + std::to_string(steps) +
+          " controls for the first test target, held within each step.",
+      controls, "Test target 1: dipole controls u(t)", "time t", end_time, "control u", false);
 }
 
 class QuantumDipoleExperiment final : public Experiment {
@@ -84,13 +164,16 @@ class QuantumDipoleExperiment final : public Experiment {
     const Dataset test_set = make_targets(settings.integer("test-size"), config.points, 2 * seed + 1);
 
     LearningSweep sweep(settings, context, rule_defaults());
+    const std::string tag = "Nt=" + std::to_string(config.steps);
+    std::vector<std::pair<const LearningResult*, Mlp>> trained;
     for (const std::string& id : settings.texts("optimizers")) {
       Mlp network = make_network(physics, seed);
-      sweep.run(id, "Nt=" + std::to_string(config.steps), {{"seed", seed}}, network, problem,
-                train_set, &test_set);
+      const LearningResult& r =
+          sweep.run(id, tag, {{"seed", seed}}, network, problem, train_set, &test_set);
+      trained.emplace_back(&r, std::move(network));
     }
-    const std::string tag = "Nt=" + std::to_string(config.steps);
-    sweep.add_loss_figures(context, sweep.first_seed_runs(tag), tag, "dipole", true);
+    sweep.add_loss_figures(context, tag, "dipole", true, "mean test infidelity 1 − |⟨ψ*|ψ(T)⟩|²");
+    add_state_figures(context, config, test_set.inputs.col(0), test_set.context.col(0), trained);
     sweep.add_tables();
     context.add_note(
         "Reference (experiments.md E12): with u = 0 the infidelity is exactly 1. The paper ran "

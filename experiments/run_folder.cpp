@@ -10,10 +10,10 @@
 #include <system_error>
 
 #include "checkpoint.hpp"
+#include "report_page.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/report/atomic_file.hpp"
 #include "physgrad/report/csv.hpp"
-#include "physgrad/report/html_report.hpp"
 
 namespace physgrad::experiments {
 
@@ -52,56 +52,6 @@ std::string metrics_csv(const RunContext& context) {
     table.add_row(std::move(cells));
   }
   return table.str();
-}
-
-std::string format_number(const nlohmann::json& value) {
-  if (!value.is_number()) return value.is_null() ? "–" : value.dump();
-  std::ostringstream out;
-  out.precision(4);
-  out << value.get<double>();
-  return out.str();
-}
-
-HtmlTable runs_table(const RunContext& context) {
-  HtmlTable table{{"run", "settings", "initial loss", "final loss", "iterations", "end",
-                   "wall s"},
-                  {}};
-  for (const nlohmann::json& run : context.runs()) {
-    std::string params;
-    for (const auto& [key, value] : run.at("params").items()) {
-      params += (params.empty() ? "" : ", ") + key + " = " +
-                (value.is_string() ? value.get<std::string>() : format_number(value));
-    }
-    table.rows.push_back({run.at("label").get<std::string>(), params,
-                          format_number(run.at("initial").at("loss")),
-                          format_number(run.at("final").at("loss")),
-                          std::to_string(run.at("iterations").get<long long>()),
-                          run.value("termination", std::string()),
-                          format_number(run.at("wall_seconds"))});
-  }
-  return table;
-}
-
-std::string report_html(const Experiment& experiment, const Settings& settings,
-                        const RunContext& context, const std::string& command_line) {
-  std::vector<HtmlSection> sections;
-  HtmlSection results{"Results", "", {}, {}};
-  for (const RunContext::Table& table : context.tables()) {
-    results.tables.push_back({table.header, table.rows});
-  }
-  for (const std::string& note : context.notes()) results.text += note + "\n\n";
-  sections.push_back(std::move(results));
-
-  HtmlSection figures{"Figures", "", {}, {}};
-  for (const RunContext::Figure& figure : context.figures()) {
-    figures.figures.push_back({figure.caption, figure.svg});
-  }
-  sections.push_back(std::move(figures));
-  sections.push_back({"Every run", "Final figures per run; metrics.csv has every iterate.",
-                      {runs_table(context)}, {}});
-  sections.push_back({"Settings", "Command: " + command_line + "\n\n" + settings.json().dump(),
-                      {}, {}});
-  return html_report(experiment.name() + " — physgrad", experiment.description(), sections);
 }
 
 // Removes staging folders `prefix`PID left by processes that no longer exist (killed before
@@ -177,7 +127,7 @@ void write_run_folder(const fs::path& staging, const Experiment& experiment,
                       nlohmann::json{{"networks", context.networks()}}.dump() + "\n");
   }
   write_file_atomic(staging / "report.html",
-                    report_html(experiment, settings, context, command_line));
+                    report_page_html(experiment, settings, context, command_line));
 }
 
 void commit_run_folder(const fs::path& staging, const fs::path& out) {

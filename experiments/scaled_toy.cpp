@@ -111,18 +111,23 @@ class ScaledToy final : public Experiment {
       for (std::size_t a = 0; a < alphas.size(); ++a) {
         const MinimizeSummary& s = by_alpha[a][r].summary;
         line.x.push_back(alphas[a]);
-        line.y.push_back(s.termination == Termination::kConverged ? static_cast<double>(s.iterations) : NAN);
+        const bool converged = s.termination == Termination::kConverged;
+        line.y.push_back(converged ? static_cast<double>(s.iterations) : NAN);
+        if (!converged && line.end_label.empty()) {
+          line.end_label = "α = " + format_value(alphas[a]) + ": " + iterations_cell(by_alpha[a][r]);
+        }
       }
       series.push_back(std::move(line));
     }
     LinePlotOptions options;
-    options.title = "Iterations to converge vs α (missing: diverged or not converged)";
+    options.title = "Iterations to converge vs α";
     options.x_label = "α";
     options.y_label = "iterations";
     options.log_x = true;
     options.log_y = true;
     context.add_figure({"iterations_vs_alpha.svg",
-                        "Iterations to converge per α. Flat lines are scale-invariant rules.",
+                        "Iterations to converge per α. Flat lines are scale-invariant rules; a line "
+                        "that ends in × did not converge at the next α (labelled).",
                         line_plot_svg(series, options)});
   }
 
@@ -140,6 +145,7 @@ class ScaledToy final : public Experiment {
     options.x_label = "x₁";
     options.y_label = "x₂";
     options.markers = {{0.0, 0.0, "minimum"}};
+    options.value_label = "L = ½(x₁² + α²x₂²)";
     context.add_figure({"landscape_alpha_" + tag + ".svg",
                         "x-space trajectories for α = " + tag +
                             " over the isolines of L (log-spaced levels).",

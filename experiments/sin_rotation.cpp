@@ -9,7 +9,8 @@
 #include "learning_runs.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/sin_rotation.hpp"
-#include "physgrad/report/svg_plot.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/landscape.hpp"
 #include "sampling.hpp"
 
 namespace physgrad::experiments {
@@ -130,10 +131,10 @@ class SinRotationExperiment final : public Experiment {
         }
       }
       const std::vector<const LearningResult*> runs = sweep.first_seed_runs(tag);
-      sweep.add_loss_figures(context, runs, tag, "xi_" + format_value(xi));
+      sweep.add_loss_figures(context, tag, "xi_" + format_value(xi));
       LearningSweep::add_metric_figure(
-          context, runs, "x_distance_vs_time_xi_" + format_value(xi) + ".svg",
-          "x-distance to the nearest exact solution vs time (" + tag + ", first seed)",
+          context, sweep.rule_groups(tag), "x_distance_vs_time_xi_" + format_value(xi) + ".svg",
+          "x-distance to the nearest exact solution vs time (" + tag + ")",
           "mean |f(y*) − x_closest| on the test set",
           [](const TrainingRecord& r) { return r.extras["x_distance"].get<double>(); });
       if (xi == 1.0) add_landscape(context, phi, form, runs);
@@ -218,6 +219,8 @@ class SinRotationExperiment final : public Experiment {
     options.x_label = "x₁";
     options.y_label = "x₂";
     options.log_levels = false;
+    options.value_label = "L^0.2";
+    options.width = 680;
     // Preimages nearest a lattice of guesses over the view (and a bit beyond), deduplicated.
     for (double gx = -2 * kViewX; gx <= 2 * kViewX; gx += 0.1) {
       for (double gy = -2 * kViewY; gy <= 2 * kViewY; gy += 0.1) {

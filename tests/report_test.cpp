@@ -19,7 +19,13 @@
 #include "physgrad/report/atomic_file.hpp"
 #include "physgrad/report/csv.hpp"
 #include "physgrad/report/html_report.hpp"
-#include "physgrad/report/svg_plot.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/field_plot.hpp"
+#include "physgrad/report/isolines.hpp"
+#include "physgrad/report/landscape.hpp"
+#include "physgrad/report/line_plot.hpp"
+#include "physgrad/report/seed_band.hpp"
+#include "svg_check.hpp"
 
 namespace physgrad {
 namespace {
@@ -194,7 +200,7 @@ TEST(SvgLinePlot, HasHeaderLegendLabelsAndTitle) {
   EXPECT_EQ(svg.substr(svg.size() - 7), "</svg>\n");
 }
 
-TEST(SvgLinePlot, NonFiniteAndNonPositiveValuesOnLogAxisAreSkipped) {
+TEST(SvgLinePlot, NonFiniteValuesAreSkippedAndNonPositiveOnesSitOnTheLowerEdge) {
   const std::vector<Series> series{
       {"adam", {1, 2, 3, 4, 5, 6, 7}, {1, kNaN, 0.1, -1, 0.0, kInf, 1e-3}},
       {"all bad", {1, 2}, {kNaN, -kInf}}};
@@ -202,14 +208,14 @@ TEST(SvgLinePlot, NonFiniteAndNonPositiveValuesOnLogAxisAreSkipped) {
   options.log_y = true;
   const std::string svg = line_plot_svg(series, options);
   EXPECT_FALSE(has_non_finite_text(svg));
-  EXPECT_NE(svg.find(">adam<"), std::string::npos);
+  EXPECT_NE(svg.find(">adam (≤ 0 from 4 ▼)<"), std::string::npos) << svg;
   options.log_x = true;
   EXPECT_FALSE(has_non_finite_text(line_plot_svg(series, options)));
 }
 
 TEST(SvgLinePlot, BrokenPointsSplitTheLine) {
-  // Three usable runs separated by a NaN and a non-positive value: three subpaths.
-  const std::vector<Series> series{{"s", {1, 2, 3, 4, 5, 6, 7}, {1, 2, kNaN, 3, 4, -1, 5}}};
+  // Three finite runs separated by a NaN and an infinity: three subpaths.
+  const std::vector<Series> series{{"s", {1, 2, 3, 4, 5, 6, 7}, {1, 2, kNaN, 3, 4, kInf, 5}}};
   LinePlotOptions options;
   options.log_y = true;
   const std::string svg = line_plot_svg(series, options);
@@ -391,6 +397,222 @@ TEST(SvgLandscape, ClipPathIdsDifferBetweenFigures) {
     return svg.substr(start, svg.find('"', start) - start);
   };
   EXPECT_NE(id(a), id(b));
+}
+
+// ----- validity, divergence, zeros, legends ---------------------------------------------------
+
+// The points of the first path after the clip group opens (the first series' line or band).
+std::vector<std::pair<double, double>> first_path_points(const std::string& svg, std::size_t skip) {
+  std::size_t at = svg.find("<g clip-path");
+  for (std::size_t k = 0; k <= skip; ++k) at = svg.find("<path d=\"", at + 1);
+  const std::string d = svg.substr(at + 9, svg.find('"', at + 9) - at - 9);
+  std::vector<std::pair<double, double>> points;
+  std::vector<double> numbers;
+  std::string token;
+  for (const char c : d + " ") {
+    if (std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == '-') {
+      token += c;
+    } else if (!token.empty()) {
+      numbers.push_back(std::stod(token));
+      token.clear();
+    }
+  }
+  for (std::size_t k = 0; k + 1 < numbers.size(); k += 2) points.emplace_back(numbers[k], numbers[k + 1]);
+  return points;
+}
+
+// The legend's frame (x, y, width, height) when it sits inside the plot.
+std::vector<double> legend_frame(const std::string& svg) {
+  const std::size_t g = svg.find("<g class=\"legend\">");
+  const std::size_t rect = svg.find("<rect", g);
+  if (g == std::string::npos || rect != svg.find('<', g + 1)) return {};
+  std::vector<double> frame;
+  for (const char* key : {" x=\"", " y=\"", " width=\"", " height=\""}) {
+    const std::size_t at = svg.find(key, rect) + std::string(key).size();
+    frame.push_back(std::stod(svg.substr(at)));
+  }
+  return frame;
+}
+
+TEST(SvgCheck, FindsMalformedDocumentsAndStrayCoordinates) {
+  using testing::SvgChecker;
+  const std::string head = "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 100 50\">";
+  EXPECT_TRUE(SvgChecker::check(head + "<path d=\"M1 1L20 30h5v-2Z\"/><text x=\"3\" y=\"4\">a &amp; b</text></svg>").empty());
+  for (const std::string& bad :
+       {head + "<path d=\"M1 1 Lnan 2\"/></svg>", head + "<path d=\"M1 1 L200 2\"/></svg>",
+        head + "<path d=\"M1 1 l99.5 60\"/></svg>", head + "<path d=\"L1 1\"/></svg>",
+        head + "<path d=\"M1 1 C2 2 3 3 4 4\"/></svg>", head + "<path d=\"M1 1 L2\"/></svg>",
+        head + "<g><path d=\"M1 1\"/></svg>", head + "<text x=\"1\" y=\"2\">a & b</text></svg>",
+        head + "<rect x=\"inf\" y=\"0\" width=\"1\" height=\"1\"/></svg>",
+        head + "<circle cx=\"-5\" cy=\"3\" r=\"1\"/></svg>", head + "<path d=M1/></svg>",
+        std::string("<g></g>"), head + "</svg><svg viewBox=\"0 0 1 1\"></svg>"}) {
+    EXPECT_FALSE(SvgChecker::check(bad).empty()) << bad;
+  }
+}
+
+TEST(SvgLinePlot, EveryKindOfSeriesGivesValidSvgInsideItsViewBox) {
+  Series band{"median", {0, 1, 2, 3}, {1, 0.5, 0.2, 0.1}, "", true};
+  band.band_low = {0.5, 0.1, 1e-300, kNaN};
+  band.band_high = {2, 1e300, 0.4, 0.3};
+  Series steps{"steps", {0, 1, 2, 3}, {0.3, 0.6, 0.4, 0.4}};
+  steps.steps = true;
+  Series diverged{"diverged", {0, 1, 2, 3}, {1, 1e10, 1e300, kInf}};
+  diverged.sets_range = false;
+  Series zero{"zero", {0, 1, 2, 3}, {1, 0.1, 0, 0}};
+  for (const bool log : {false, true}) {
+    LinePlotOptions options;
+    options.log_y = log;
+    options.title = "all kinds";
+    for (const auto& series : std::vector<std::vector<Series>>{
+             {band, steps, diverged, zero}, {diverged}, {}, {{"one", {1}, {kNaN}}}}) {
+      const std::string svg = line_plot_svg(series, options);
+      const auto problems = testing::SvgChecker::check(svg);
+      EXPECT_TRUE(problems.empty()) << problems.front() << "\n" << svg;
+    }
+  }
+}
+
+TEST(SvgLinePlot, DivergedSeriesIsMarkedAndDoesNotStretchTheAxis) {
+  Series good{"converging", {0, 1, 2, 3}, {1, 0.1, 0.01, 0.001}};
+  Series bad{"gd", {0, 1, 2, 3}, {1, 1e100, 1e300, kInf}};
+  bad.sets_range = false;
+  bad.end_label = "diverged at 3";
+  LinePlotOptions options;
+  options.log_y = true;
+  const std::string svg = line_plot_svg({good, bad}, options);
+  EXPECT_NE(svg.find(">diverged at 3<"), std::string::npos);
+  EXPECT_NE(svg.find(">1<"), std::string::npos);  // the top decade of the converging series
+  EXPECT_EQ(svg.find(">1e100<"), std::string::npos);
+  EXPECT_EQ(svg.find(">1e300<"), std::string::npos);
+  // Without a label, a series ending in a non-finite value still gets a mark.
+  bad.end_label.clear();
+  EXPECT_NE(line_plot_svg({good, bad}, options).find(">not finite after x = 2<"),
+            std::string::npos);
+}
+
+TEST(SvgLinePlot, ZeroOnALogAxisIsMarkedOnTheLowerEdge) {
+  LinePlotOptions options;
+  options.log_y = true;
+  const std::string svg = line_plot_svg({{"lm", {0, 1, 2}, {1, 0.01, 0}}}, options);
+  EXPECT_NE(svg.find("lm (0 from 2 ▼)"), std::string::npos) << svg;
+  // The line reaches the lower edge of the frame: three points, the last on the bottom.
+  const auto points = first_path_points(svg, 0);
+  ASSERT_EQ(points.size(), 3u);
+  EXPECT_DOUBLE_EQ(points[2].second, 420 - 52);  // the frame's bottom
+}
+
+TEST(SvgLinePlot, StepsHoldEachValueUntilTheNextX) {
+  Series s{"cells", {0, 1, 2}, {1, 2, 2}};
+  s.steps = true;
+  const auto points = first_path_points(line_plot_svg({s}, {}), 0);
+  ASSERT_EQ(points.size(), 5u);  // (0,1) (1,1) (1,2) (2,2) (2,2)
+  EXPECT_EQ(points[0].second, points[1].second);
+  EXPECT_EQ(points[1].first, points[2].first);
+  EXPECT_EQ(points[2].second, points[3].second);
+}
+
+TEST(SvgLinePlot, LegendGoesWhereNoDataIsOrBelowThePlot) {
+  // A U: high at both ends, low in the middle, so the top corners hold data.
+  Series u{"u shape with a long label", {}, {}};
+  for (int k = 0; k <= 40; ++k) {
+    u.x.push_back(k);
+    u.y.push_back((k - 20) * (k - 20));
+  }
+  const std::string svg = line_plot_svg({u}, {});
+  const std::vector<double> frame = legend_frame(svg);
+  ASSERT_EQ(frame.size(), 4u) << svg;
+  const auto points = first_path_points(svg, 0);
+  ASSERT_EQ(points.size(), 41u);
+  for (std::size_t k = 1; k < points.size(); ++k) {
+    for (double t = 0; t <= 1; t += 0.05) {
+      const double x = points[k - 1].first + t * (points[k].first - points[k - 1].first);
+      const double y = points[k - 1].second + t * (points[k].second - points[k - 1].second);
+      EXPECT_FALSE(x >= frame[0] && x <= frame[0] + frame[2] && y >= frame[1] &&
+                   y <= frame[1] + frame[3])
+          << x << ", " << y;
+    }
+  }
+  // Data everywhere: the legend moves below and the figure grows.
+  Series zigzag{"zigzag", {}, {}};
+  for (int k = 0; k <= 200; ++k) {
+    zigzag.x.push_back(k);
+    zigzag.y.push_back(k % 2);
+  }
+  const std::string full = line_plot_svg({zigzag}, {});
+  EXPECT_TRUE(legend_frame(full).empty());
+  EXPECT_EQ(full.find("viewBox=\"0 0 640 420\""), std::string::npos);
+  EXPECT_NE(full.find(">zigzag<"), std::string::npos);
+}
+
+TEST(SvgLogAxis, NarrowRangesHaveSeveralLabels) {
+  LinePlotOptions options;
+  options.log_y = true;
+  for (const auto& [lo, hi] : {std::pair{0.93, 0.99}, std::pair{0.55, 1.0}, std::pair{2e-5, 9e-5}}) {
+    const std::string svg = line_plot_svg({{"s", {0, 1}, {lo, hi}}}, options);
+    const std::size_t labels = count(svg, "text-anchor=\"end\"");
+    EXPECT_GE(labels, 3u) << lo << " " << hi << "\n" << svg;
+  }
+}
+
+TEST(SeedBand, MedianAndMinMaxOverCurvesSampledAtDifferentX) {
+  const std::vector<Curve> curves{{{0, 1, 2}, {1, 2, 3}}, {{0, 1.5}, {4, 5}}, {{0, 2}, {7, 8}}};
+  const Series s = median_band("m", curves, "#000000", false);
+  EXPECT_EQ(s.x, (std::vector<double>{0, 1, 1.5, 2}));
+  EXPECT_EQ(s.y, (std::vector<double>{4, 4, 5, 5}));  // the second curve holds 5 after x = 1.5
+  EXPECT_EQ(s.band_low, (std::vector<double>{1, 2, 2, 3}));
+  EXPECT_EQ(s.band_high, (std::vector<double>{7, 7, 7, 8}));
+  // Two curves on a log axis: the geometric mean of the middle two; one curve: no band.
+  const Series even = median_band("e", {{{0}, {1e-4}}, {{0}, {1e-2}}}, "", true);
+  EXPECT_NEAR(even.y[0], 1e-3, 1e-15);
+  EXPECT_TRUE(median_band("one", {{{0, 1}, {3, 2}}}, "", true).band_low.empty());
+  EXPECT_THROW(median_band("bad", {{{0, 1}, {3}}}, "", true), Error);
+}
+
+TEST(FieldPanels, OneRowOneColourRangeOneColourBar) {
+  Grid2D a{0.5, 3.5, 0.5, 3.5, 4, 4, std::vector<double>(16, 1.0)};
+  Grid2D b = a;
+  for (int k = 0; k < 16; ++k) b.values[static_cast<std::size_t>(k)] = 10.0 * k / 15;
+  FieldPanelsOptions options;
+  options.value_label = "temperature";
+  const std::string svg = field_panels_svg({{"a", a}, {"b", b}}, options);
+  EXPECT_TRUE(testing::SvgChecker::check(svg).empty()) << svg;
+  EXPECT_EQ(count(svg, "class=\"colorbar\""), 1u);
+  EXPECT_NE(svg.find(">10<"), std::string::npos);  // the bar spans both panels' values
+  // The constant panel a (all 1) is one path in the colour of 1 on the shared 0..10 scale
+  // (shade 6 of 64), not in the middle of a range of its own.
+  const ColorScale scale = ColorScale::of({&a, &b}, false, false);
+  const std::size_t start = svg.find("<g shape-rendering=\"crispEdges\">");
+  const std::string panel_a = svg.substr(start, svg.find("</g>", start) - start);
+  EXPECT_EQ(count(panel_a, "<path"), 1u);
+  EXPECT_NE(panel_a.find("fill=\"" + scale.color(6.5 / 64) + "\""), std::string::npos) << panel_a;
+  EXPECT_NE(svg.find(">temperature<"), std::string::npos);
+  // Signed fields: white at 0 in the middle of a symmetric range.
+  const ColorScale signed_scale = ColorScale::of({&b}, false, true);
+  EXPECT_DOUBLE_EQ(signed_scale.lo, -10);
+  EXPECT_DOUBLE_EQ(signed_scale.unit(0), 0.5);
+  EXPECT_THROW(field_panels_svg({}, options), Error);
+}
+
+TEST(SvgLandscape, EqualAspectWithAColourBar) {
+  Grid2D grid{0, 2, 0, 1, 21, 11, {}};
+  for (int j = 0; j < 11; ++j) {
+    for (int i = 0; i < 21; ++i) grid.values.push_back(0.1 * i + j);
+  }
+  LandscapeOptions options;
+  options.value_label = "L";
+  options.title = "wide";
+  const std::string svg = landscape_svg(grid, {{"path", {0.1, 1.9}, {0.1, 0.9}, ""}}, options);
+  EXPECT_TRUE(testing::SvgChecker::check(svg).empty());
+  EXPECT_EQ(count(svg, "class=\"colorbar\""), 1u);
+  // The clip rectangle is the plot box: twice as wide as high.
+  const std::size_t clip = svg.find("<clipPath");
+  const double w = std::stod(svg.substr(svg.find("width=\"", clip) + 7));
+  const double h = std::stod(svg.substr(svg.find("height=\"", clip) + 8));
+  EXPECT_NEAR(w, 2 * h, 1.0);
+  options.equal_aspect = false;
+  const std::string stretched = landscape_svg(grid, {}, options);
+  const std::size_t clip2 = stretched.find("<clipPath");
+  EXPECT_GT(std::stod(stretched.substr(stretched.find("height=\"", clip2) + 8)), h + 50);
 }
 
 // ----- HTML -----------------------------------------------------------------------------------

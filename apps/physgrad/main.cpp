@@ -1,6 +1,6 @@
 // physgrad — command-line front end: `physgrad list`, `physgrad describe NAME`,
 // `physgrad run NAME [--config FILE.json] [options]`, `physgrad resume DIR`,
-// `physgrad bench NAME [options]`.
+// `physgrad bench NAME [options]`, `physgrad report DIR`.
 // Every error is one line on stderr and exit code 2; a run writes its folder only on success.
 // SIGINT/SIGTERM stop a run: learning runs leave a checkpoint in the run folder (exit 128 +
 // signal), other runs write nothing.
@@ -26,6 +26,7 @@
 #include "physgrad/threads.hpp"
 #include "ranks.hpp"
 #include "run_folder.hpp"
+#include "run_index.hpp"
 
 namespace {
 
@@ -234,6 +235,11 @@ int main(int argc, char** argv) {
   bool rules_markdown = false;
   rules->add_flag("--markdown", rules_markdown, "as the Markdown tables of docs/update_rules.md");
   const physgrad::cli::BenchCommand bench(app);
+  CLI::App* report = app.add_subcommand(
+      "report", "write DIR/index.html over the run folders in DIR: every run's results and the "
+                "loss curves of all runs overlaid");
+  std::string report_folder;
+  report->add_option("DIR", report_folder, "a folder of run folders, e.g. runs")->required();
 
   // Each experiment is a subcommand of `run` with its own options, all read as text and
   // validated by the experiment framework so every bad value gets the same kind of message.
@@ -285,6 +291,12 @@ int main(int argc, char** argv) {
     }
     if (bench.parsed()) {
       bench.run(std::cout);
+      return 0;
+    }
+    if (report->parsed()) {
+      const std::size_t folders = ex::write_run_index(report_folder);
+      std::cout << "index of " << folders << " run folders: "
+                << (fs::path(report_folder) / "index.html").string() << '\n';
       return 0;
     }
     if (describe->parsed()) {

@@ -71,4 +71,65 @@ std::string CsvTable::str() const {
   return out;
 }
 
+std::size_t CsvData::column(std::string_view name) const {
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    if (columns[k] == name) return k;
+  }
+  return columns.size();
+}
+
+CsvData parse_csv(std::string_view text) {
+  std::vector<std::vector<std::string>> lines;
+  std::vector<std::string> cells;
+  std::string cell;
+  std::size_t line = 1;
+  bool quoted = false, any = false;
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const char c = text[k];
+    any = true;
+    if (quoted) {
+      if (c == '"' && k + 1 < text.size() && text[k + 1] == '"') {
+        cell += '"';
+        ++k;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        if (c == '\n') ++line;
+        cell += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      cells.push_back(std::move(cell));
+      cell.clear();
+    } else if (c == '\n' || c == '\r') {
+      if (c == '\r' && k + 1 < text.size() && text[k + 1] == '\n') ++k;
+      cells.push_back(std::move(cell));
+      cell.clear();
+      lines.push_back(std::move(cells));
+      cells.clear();
+      any = false;
+      ++line;
+    } else {
+      cell += c;
+    }
+  }
+  if (quoted) throw Error("csv: a quote opened on or before line " + std::to_string(line) + " is never closed");
+  if (any) {
+    cells.push_back(std::move(cell));
+    lines.push_back(std::move(cells));
+  }
+  CsvData data;
+  if (lines.empty()) return data;
+  data.columns = std::move(lines.front());
+  for (std::size_t r = 1; r < lines.size(); ++r) {
+    if (lines[r].size() != data.columns.size()) {
+      throw Error("csv: row " + std::to_string(r + 1) + " has " + std::to_string(lines[r].size()) +
+                  " cells but the header has " + std::to_string(data.columns.size()));
+    }
+    data.rows.push_back(std::move(lines[r]));
+  }
+  return data;
+}
+
 }  // namespace physgrad

@@ -1,6 +1,6 @@
 #include "physgrad/report/html_report.hpp"
 
-#include "physgrad/report/svg_plot.hpp"
+#include "physgrad/report/svg_document.hpp"
 
 #include "physgrad/error.hpp"
 
@@ -9,15 +9,18 @@ namespace physgrad {
 namespace {
 
 constexpr const char* kStyle = R"(body{font-family:system-ui,sans-serif;color:#222;line-height:1.45;
-  max-width:1280px;margin:2em auto;padding:0 1em}
-h1{font-size:1.6em}
+  max-width:1280px;margin:1.5em auto;padding:0 .8em}
+h1{font-size:1.5em}
 h2{font-size:1.25em;margin-top:2em;border-bottom:1px solid #ddd;padding-bottom:.2em}
-table{border-collapse:collapse;margin:1em 0;font-size:.9em}
-th,td{border:1px solid #ccc;padding:.3em .7em;text-align:right}
+p{max-width:60em;overflow-wrap:anywhere}
+table{border-collapse:collapse;font-size:.9em}
+p.caption{font-weight:600;margin:1.2em 0 .3em}
+.table{overflow-x:auto;max-width:100%;margin:0 0 1em}
+th,td{border:1px solid #ccc;padding:.3em .7em;text-align:right;white-space:nowrap}
 th{background:#f3f3f3}
 th:first-child,td:first-child{text-align:left}
 .figures{display:flex;flex-wrap:wrap;gap:1.5em;align-items:flex-start}
-figure{margin:0}
+figure{margin:0;min-width:0;max-width:100%}
 figure svg{display:block;max-width:100%;height:auto}
 figcaption{font-size:.9em;color:#555;margin-top:.3em;max-width:640px}
 )";
@@ -49,21 +52,40 @@ std::string paragraphs(std::string_view text) {
 }
 
 std::string table_html(const HtmlTable& table, const std::string& where) {
-  std::string out = "<table>\n<thead><tr>";
+  const auto check = [&](std::size_t cells, std::size_t r, const char* what) {
+    if (cells != table.header.size()) {
+      throw Error("html_report: " + std::string(what) + " " + std::to_string(r + 1) +
+                  " of a table in " + where + " has " + std::to_string(cells) +
+                  " cells but the header has " + std::to_string(table.header.size()));
+    }
+  };
+  if (!table.links.empty() && table.links.size() != table.rows.size()) {
+    throw Error("html_report: a table in " + where + " has " + std::to_string(table.rows.size()) +
+                " rows but " + std::to_string(table.links.size()) + " rows of links");
+  }
+  // The caption sits above the scroll box, as wide as the text, however narrow the table.
+  std::string out;
+  if (!table.caption.empty()) {
+    out += "<p class=\"caption\">" + html_escape(table.caption) + "</p>\n";
+  }
+  out += "<div class=\"table\"><table>\n<thead><tr>";
   for (const std::string& h : table.header) out += "<th>" + html_escape(h) + "</th>";
   out += "</tr></thead>\n<tbody>\n";
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
     const auto& row = table.rows[r];
-    if (row.size() != table.header.size()) {
-      throw Error("html_report: row " + std::to_string(r + 1) + " of a table in " + where +
-                  " has " + std::to_string(row.size()) + " cells but the header has " +
-                  std::to_string(table.header.size()));
-    }
+    check(row.size(), r, "row");
+    if (!table.links.empty()) check(table.links[r].size(), r, "row of links");
     out += "<tr>";
-    for (const std::string& cell : row) out += "<td>" + html_escape(cell) + "</td>";
+    for (std::size_t c = 0; c < row.size(); ++c) {
+      const std::string link = table.links.empty() ? std::string() : table.links[r][c];
+      out += "<td>" +
+             (link.empty() ? html_escape(row[c])
+                           : "<a href=\"" + html_escape(link) + "\">" + html_escape(row[c]) + "</a>") +
+             "</td>";
+    }
     out += "</tr>\n";
   }
-  return out + "</tbody>\n</table>\n";
+  return out + "</tbody>\n</table></div>\n";
 }
 
 }  // namespace

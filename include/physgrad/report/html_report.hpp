@@ -1,5 +1,6 @@
-// html_report — one self-contained HTML5 page of sections with text, tables and inline SVG
-// figures; no external resources.
+// html_report — one self-contained HTML5 page of sections with text, captioned tables and inline
+// SVG figures; no external resources. Readable down to phone widths: wide tables scroll in their
+// own box and figures scale to the page.
 #pragma once
 
 #include <string>
@@ -11,6 +12,10 @@ namespace physgrad {
 struct HtmlTable {
   std::vector<std::string> header;
   std::vector<std::vector<std::string>> rows;  // each with header.size() cells
+  std::string caption{};                       // above the table: what it shows, its units
+  // Optional links: empty, or one row per row of `rows` whose non-empty cells make the cell a
+  // link to that address.
+  std::vector<std::vector<std::string>> links{};
 };
 
 struct HtmlFigure {
@@ -28,7 +33,7 @@ struct HtmlSection {
 // Escapes & < > " ' for use in HTML (and XML) text and attribute values.
 std::string html_escape(std::string_view text);
 
-// Throws Error when a table row's cell count differs from its header's.
+// Throws Error when a table row's cell count (or a row of its links) differs from its header's.
 std::string html_report(const std::string& title, const std::string& intro,
                         const std::vector<HtmlSection>& sections);
 

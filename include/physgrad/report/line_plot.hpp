@@ -1,0 +1,46 @@
+// Line plots (e.g. loss curves) on linear or log axes: lines, markers, shaded bands, steps,
+// and runs that diverged or reached 0 marked instead of stretching the axes. Returns SVG.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace physgrad {
+
+struct Series {
+  std::string label;
+  std::vector<double> x, y;
+  std::string color{};  // any SVG colour; empty = a palette colour chosen by position
+  bool markers = false;  // a dot at every point (e.g. the evaluations of a training run)
+  bool dashed = false;
+  // Optional shaded band (e.g. min–max over seeds) drawn under the line: both empty or both the
+  // size of x. Samples where a bound cannot be drawn are left out of the band.
+  std::vector<double> band_low{}, band_high{};
+  // Drawn as steps: y[k] holds from x[k] to x[k + 1] (repeat the last value at the right end).
+  bool steps = false;
+  // False for a run that diverged: the axes are fitted to the other series, this one is cut at
+  // the frame. (When no series sets the range, all do.)
+  bool sets_range = true;
+  // Written with a × at the series' last drawable point, e.g. "diverged at 77". A series whose
+  // last point is not finite gets "not finite after x = …" when this is empty.
+  std::string end_label{};
+};
+
+struct LinePlotOptions {
+  std::string title, x_label, y_label;
+  bool log_x = false, log_y = false;
+  int width = 640, height = 420;
+  // The x axis spans exactly this range (e.g. [0, T]); unset: the data's, widened to nice values.
+  std::optional<std::pair<double, double>> x_range{};
+};
+
+// Non-finite points are skipped and break the line. On a log y axis a value ≤ 0 is drawn on the
+// axis' lower edge with a ▼ and the legend says where the series reaches it; on a log x axis
+// such points are skipped. The legend goes where no data is (else below the plot, which makes
+// the figure taller). Throws Error when a series has x and y (or a band) of different lengths
+// or the size is below 200x150.
+std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptions& options);
+
+}  // namespace physgrad

@@ -1,0 +1,65 @@
+// Axes of every plot: data-to-pixel scales (linear or log10), tick positions and labels, the
+// frame with tick marks, grid lines, title and axis labels. One tick mechanism for all figures.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "physgrad/report/svg_document.hpp"
+
+namespace physgrad::plot {
+
+// Maps data to pixels: p0 + (t(v) − lo)/(hi − lo)·(p1 − p0) with t = log10 on a log axis (lo and
+// hi are then in log10 units). Values that cannot be drawn (non-finite, ≤ 0 on a log axis) map
+// to a non-finite pixel.
+struct Scale {
+  double lo, hi;
+  bool log;
+  double p0, p1;  // pixels of lo and hi
+  double operator()(double v) const;
+  // The data value at pixel p.
+  double value_at(double p) const;
+  // True when v can be drawn on this axis (finite, and > 0 on a log axis).
+  bool usable(double v) const;
+};
+
+struct Tick {
+  double value;
+  std::string label;  // empty for a minor tick
+};
+
+struct Axis {
+  Scale scale;
+  std::vector<Tick> ticks;
+};
+
+// True when v is finite and, on a log axis, positive.
+bool usable(double v, bool log);
+
+// An axis covering the data range [lo, hi] (found = false when there is no data), widened to
+// nice values: multiples of 1, 2 or 5 × 10^k (linear), whole decades when the range spans
+// several decades (log), else 1–9 × 10^k with every tick labelled, so that a range inside one
+// decade still has readable labels.
+Axis data_axis(double lo, double hi, bool found, bool log, double p0, double p1);
+// An axis spanning exactly [lo, hi] (log: lo, hi > 0 in data units), with the ticks inside it.
+Axis fixed_axis(double lo, double hi, bool log, double p0, double p1);
+
+// "0.25", "1e-06", "2e+05": the shortest label for a tick at v among ticks `step` apart.
+std::string tick_label(double v, double step);
+
+// Light grid lines at the labelled ticks inside the box.
+std::string grid_lines(const svg::Box& box, const Axis& ax, const Axis& ay);
+
+struct AxisTitles {
+  std::string title, x_label, y_label;
+};
+
+// Frame, tick marks (outside the box), tick labels, the title centred above the box and the axis
+// labels. `width` is the figure's width (the title is centred in it).
+std::string axes(int width, const svg::Box& box, const Axis& ax, const Axis& ay,
+                 const AxisTitles& titles);
+
+// Tick marks and labels of a vertical axis on the right of x = `left` (e.g. a colour bar).
+std::string right_ticks(double left, const svg::Box& box, const Axis& axis);
+
+}  // namespace physgrad::plot

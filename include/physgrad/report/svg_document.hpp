@@ -1,0 +1,54 @@
+// SVG building blocks shared by every figure: escaped text, pixel numbers, elements, the
+// document frame and clip groups. A pixel coordinate is written with at most two decimals.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace physgrad {
+
+// Text for XML (SVG and HTML): & < > " ' escaped, control characters (invalid in XML) dropped.
+std::string xml_escape(std::string_view text);
+
+namespace svg {
+
+struct Point {
+  double x, y;
+};
+using Polyline = std::vector<Point>;
+
+struct Box {  // in pixels, y grows downwards
+  double left, top, right, bottom;
+  double width() const { return right - left; }
+  double height() const { return bottom - top; }
+};
+
+// `b` grown by dx on the left and right and dy at the top and bottom.
+Box grow(const Box& b, double dx, double dy);
+bool inside(const Point& p, const Box& b);
+
+// A pixel coordinate with at most two decimals: "12.5", "-3", "0". Non-finite values, which
+// never belong in a figure, are written as 0.
+std::string num(double v);
+// Approximate width of `text` in pixels at `font_size`, counting UTF-8 code points.
+double text_width(std::string_view text, double font_size = 12);
+
+// <text x y attributes>content</text>
+std::string text(double x, double y, std::string_view content, std::string_view attributes = "");
+// <path d attributes/>, or nothing for empty path data.
+std::string path(const std::string& d, const std::string& attributes);
+// <rect> with the given box and attributes.
+std::string rect(const Box& b, const std::string& attributes);
+// Path data "M x y h0": a dot when stroked with round caps.
+std::string dot(const Point& p);
+
+// The document's opening tag (width × height, viewBox from 0) with a white background; close
+// it with "</svg>\n".
+std::string open(int width, int height);
+// `content` clipped to the box. The clip path's id derives from what it clips, so figures
+// embedded side by side in one HTML page do not pick up each other's clip paths.
+std::string clipped(const Box& b, const std::string& content);
+
+}  // namespace svg
+}  // namespace physgrad

@@ -1,0 +1,137 @@
+#include "physgrad/report/landscape.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "physgrad/error.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/isolines.hpp"
+#include "physgrad/report/plot_geometry.hpp"
+#include "physgrad/report/plot_legend.hpp"
+
+namespace physgrad {
+
+namespace {
+
+using plot::Box;
+using plot::Point;
+using plot::Polyline;
+using svg::num;
+
+std::string star(const Point& c, double r) {
+  std::string points;
+  for (int k = 0; k < 10; ++k) {
+    const double angle = k * std::acos(-1.0) / 5, radius = k % 2 == 0 ? r : 0.45 * r;
+    if (k > 0) points += " ";
+    points += num(c.x + radius * std::sin(angle)) + "," + num(c.y - radius * std::cos(angle));
+  }
+  return "<polygon points=\"" + points + "\" fill=\"white\" stroke=\"black\"/>\n";
+}
+
+void check_options(const Grid2D& grid, const std::vector<Trajectory>& trajectories,
+                   const LandscapeOptions& options) {
+  check_grid(grid);
+  if (options.width < 200 || options.height < 150) {
+    throw Error("landscape_svg: a figure of " + std::to_string(options.width) + "x" +
+                std::to_string(options.height) + " pixels is too small (at least 200x150)");
+  }
+  if (options.levels < 0) {
+    throw Error("landscape_svg: levels = " + std::to_string(options.levels) + " is negative");
+  }
+  for (const Trajectory& t : trajectories) {
+    if (t.x.size() != t.y.size()) {
+      throw Error("landscape_svg: trajectory '" + t.label + "' has " + std::to_string(t.x.size()) +
+                  " x values but " + std::to_string(t.y.size()) + " y values");
+    }
+  }
+}
+
+}  // namespace
+
+std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& trajectories,
+                          const LandscapeOptions& options) {
+  check_options(grid, trajectories, options);
+  const ColorScale scale =
+      ColorScale::of({&grid}, options.log_levels, false, options.value_range);
+  plot::Axis ax = plot::fixed_axis(grid.x_min, grid.x_max, false, 0, 1);
+  plot::Axis ay = plot::fixed_axis(grid.y_min, grid.y_max, false, 1, 0);
+  double widest = 0;
+  for (const plot::Tick& t : ay.ticks) widest = std::max(widest, svg::text_width(t.label));
+  const double right = plot::color_bar_width(scale, options.value_label) + 14;
+  const Box available{widest + (options.y_label.empty() ? 16 : 34),
+                      options.title.empty() ? 16.0 : 36.0, options.width - right,
+                      options.height - 52.0};
+  const Box box = options.equal_aspect
+                      ? plot::equal_aspect_box(available, grid.x_max - grid.x_min,
+                                               grid.y_max - grid.y_min)
+                      : available;
+  ax.scale.p0 = box.left;
+  ax.scale.p1 = box.right;
+  ay.scale.p0 = box.bottom;
+  ay.scale.p1 = box.top;
+  const Box bounds = plot::bounds_of(box);
+
+  std::string content = plot::shading(grid, ax.scale, ay.scale, scale);
+  for (int k = 1; k <= options.levels && scale.hi > scale.lo; ++k) {
+    std::vector<Polyline> lines;
+    for (const auto& line : isolines(grid, scale.level(k, options.levels))) {
+      Polyline& pixels = lines.emplace_back();
+      for (const auto& [x, y] : line) pixels.push_back({ax.scale(x), ay.scale(y)});
+    }
+    content += svg::path(plot::line_path(lines, bounds),
+                         "class=\"isoline\" fill=\"none\" stroke=\"white\" stroke-opacity=\"0.55\" "
+                         "stroke-width=\"0.8\"");
+  }
+
+  std::vector<plot::LegendEntry> entries;
+  for (std::size_t n = 0; n < trajectories.size(); ++n) {
+    const Trajectory& t = trajectories[n];
+    const std::string color = xml_escape(t.color.empty() ? palette_color(n) : t.color);
+    const std::vector<Polyline> pieces = plot::to_pixels(t.x, t.y, ax.scale, ay.scale, false);
+    const std::string d = plot::line_path(pieces, bounds);
+    content += svg::path(d,
+                         "fill=\"none\" stroke=\"white\" stroke-opacity=\"0.7\" "
+                         "stroke-width=\"3.6\" stroke-linejoin=\"round\" stroke-linecap=\"round\"");
+    content += svg::path(d, "fill=\"none\" stroke=\"" + color +
+                                "\" stroke-width=\"1.6\" stroke-linejoin=\"round\" "
+                                "stroke-linecap=\"round\"");
+    content += svg::path(plot::dot_path(pieces, bounds),
+                         "stroke=\"" + color + "\" stroke-width=\"3.6\" stroke-linecap=\"round\"");
+    if (!pieces.empty() && svg::inside(pieces[0].front(), bounds)) {
+      const Point& p = pieces[0].front();
+      content += "<circle cx=\"" + num(p.x) + "\" cy=\"" + num(p.y) +
+                 "\" r=\"4.5\" fill=\"white\" stroke=\"" + color + "\" stroke-width=\"1.8\"/>\n";
+    }
+    if (!pieces.empty() && svg::inside(pieces[0].back(), bounds)) {
+      const Point& p = pieces[0].back();
+      content += svg::rect({p.x - 4, p.y - 4, p.x + 4, p.y + 4},
+                           "fill=\"" + color + "\" stroke=\"white\"");
+    }
+    entries.push_back({t.label, color, true, false, true, false});
+  }
+  for (const Marker& m : options.markers) {
+    const Point p{ax.scale(m.x), ay.scale(m.y)};
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !svg::inside(p, bounds)) continue;
+    content += star(p, 8);
+    if (!m.label.empty()) {
+      const bool left = p.x > (box.left + box.right) / 2;
+      content += svg::text(left ? p.x - 9 : p.x + 9, p.y - 8, m.label,
+                           std::string(left ? "text-anchor=\"end\" " : "") +
+                               "fill=\"black\" stroke=\"white\" stroke-width=\"3\" "
+                               "paint-order=\"stroke\"");
+    }
+  }
+  const double title_width = svg::text_width(options.title, 14) + 20;
+  const int width = static_cast<int>(std::ceil(std::max(
+      {box.right + right, title_width, plot::legend_entry_width(entries)})));
+  const double below = box.bottom + 48;
+  const plot::LegendLayout legend =
+      plot::legend(entries, box, plot::Occupancy(box), below, width, false);
+  const int height = static_cast<int>(std::ceil(below + legend.height_below + 8));
+  const Box bar{box.right + 12, box.top, box.right + 26, box.bottom};
+  return svg::open(width, height) + svg::clipped(box, content) +
+         plot::axes(width, box, ax, ay, {options.title, options.x_label, options.y_label}) +
+         plot::color_bar(bar, scale, options.value_label) + legend.svg + "</svg>\n";
+}
+
+}  // namespace physgrad

@@ -1,0 +1,166 @@
+#include "physgrad/report/plot_geometry.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace physgrad::plot {
+
+namespace {
+
+void append_point(std::string& d, const Point& p) { d += svg::num(p.x) + " " + svg::num(p.y); }
+
+}  // namespace
+
+Box bounds_of(const Box& b) { return svg::grow(b, 6, 6); }
+
+bool clip_segment(Point& a, Point& b, const Box& box) {
+  const double dx = b.x - a.x, dy = b.y - a.y;
+  if (!std::isfinite(dx) || !std::isfinite(dy)) return false;
+  // Liang–Barsky, remembering which edge (left, right, top, bottom) cuts each end.
+  double t0 = 0, t1 = 1;
+  int edge0 = -1, edge1 = -1;
+  const std::array<std::array<double, 2>, 4> pq{
+      {{-dx, a.x - box.left}, {dx, box.right - a.x}, {-dy, a.y - box.top}, {dy, box.bottom - a.y}}};
+  for (int k = 0; k < 4; ++k) {
+    const auto [p, q] = pq[static_cast<std::size_t>(k)];
+    if (p == 0) {
+      if (q < 0) return false;
+      continue;
+    }
+    const double r = q / p;
+    if (p < 0 && r > t0) {
+      t0 = r;
+      edge0 = k;
+    } else if (p > 0 && r < t1) {
+      t1 = r;
+      edge1 = k;
+    }
+    if (t0 > t1) return false;
+  }
+  // A cut point lies on its edge exactly; its other coordinate follows from the slope, which
+  // stays accurate when an end is far outside (a diverged iterate at 1e300).
+  const Point start = a;
+  const auto on_edge = [&](int edge) -> Point {
+    const double x_edge = edge == 0 ? box.left : box.right;
+    const double y_edge = edge == 2 ? box.top : box.bottom;
+    if (edge < 2) {
+      return {x_edge, std::clamp(start.y + (x_edge - start.x) * (dy / dx), box.top, box.bottom)};
+    }
+    return {std::clamp(start.x + (y_edge - start.y) * (dx / dy), box.left, box.right), y_edge};
+  };
+  if (edge0 >= 0) a = on_edge(edge0);
+  if (edge1 >= 0) b = on_edge(edge1);
+  return true;
+}
+
+std::vector<Polyline> clip(const Polyline& line, const Box& box) {
+  std::vector<Polyline> pieces;
+  if (line.size() == 1 && svg::inside(line[0], box)) pieces.push_back(line);
+  bool continues = false;  // the last piece ends at an uncut vertex
+  for (std::size_t k = 1; k < line.size(); ++k) {
+    Point a = line[k - 1], b = line[k];
+    if (!clip_segment(a, b, box)) {
+      continues = false;
+      continue;
+    }
+    if (!continues) pieces.push_back({a});
+    pieces.back().push_back(b);
+    continues = b.x == line[k].x && b.y == line[k].y;
+  }
+  return pieces;
+}
+
+std::vector<Polyline> to_pixels(const std::vector<double>& x, const std::vector<double>& y,
+                                const Scale& sx, const Scale& sy, bool split) {
+  std::vector<Polyline> pieces(1);
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const Point p{sx(x[k]), sy(y[k])};
+    if (std::isfinite(p.x) && std::isfinite(p.y)) {
+      pieces.back().push_back(p);
+    } else if (split && !pieces.back().empty()) {
+      pieces.emplace_back();
+    }
+  }
+  if (pieces.back().empty()) pieces.pop_back();
+  return pieces;
+}
+
+std::string line_path(const std::vector<Polyline>& pieces, const Box& bounds) {
+  std::string d;
+  for (const Polyline& piece : pieces) {
+    for (const Polyline& part : clip(piece, bounds)) {
+      d += "M";
+      for (std::size_t k = 0; k < part.size(); ++k) {
+        if (k > 0) d += " ";
+        append_point(d, part[k]);
+      }
+      if (part.size() == 1) d += "h0";
+    }
+  }
+  return d;
+}
+
+std::string dot_path(const std::vector<Polyline>& pieces, const Box& bounds) {
+  std::string d;
+  for (const Polyline& piece : pieces) {
+    for (const Point& p : piece) {
+      if (svg::inside(p, bounds)) d += svg::dot(p);
+    }
+  }
+  return d;
+}
+
+Polyline clip_polygon(const Polyline& polygon, const Box& box) {
+  // Sutherland–Hodgman: cut by each of the four half-planes in turn.
+  Polyline out = polygon;
+  const auto cut = [&out](auto keep, auto meet) {
+    Polyline in;
+    in.swap(out);
+    for (std::size_t k = 0; k < in.size(); ++k) {
+      const Point& a = in[k];
+      const Point& b = in[(k + 1) % in.size()];
+      if (keep(a)) out.push_back(a);
+      if (keep(a) != keep(b)) out.push_back(meet(a, b));
+    }
+  };
+  const auto at_x = [](const Point& a, const Point& b, double x) {
+    return Point{x, a.y + (b.y - a.y) * (x - a.x) / (b.x - a.x)};
+  };
+  const auto at_y = [](const Point& a, const Point& b, double y) {
+    return Point{a.x + (b.x - a.x) * (y - a.y) / (b.y - a.y), y};
+  };
+  cut([&](const Point& p) { return p.x >= box.left; },
+      [&](const Point& a, const Point& b) { return at_x(a, b, box.left); });
+  cut([&](const Point& p) { return p.x <= box.right; },
+      [&](const Point& a, const Point& b) { return at_x(a, b, box.right); });
+  cut([&](const Point& p) { return p.y >= box.top; },
+      [&](const Point& a, const Point& b) { return at_y(a, b, box.top); });
+  cut([&](const Point& p) { return p.y <= box.bottom; },
+      [&](const Point& a, const Point& b) { return at_y(a, b, box.bottom); });
+  return out;
+}
+
+std::string band_path(const std::vector<double>& x, const std::vector<double>& low,
+                      const std::vector<double>& high, const Scale& sx, const Scale& sy,
+                      const Box& bounds) {
+  Polyline upper, lower;
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    const Point a{sx(x[k]), sy(high[k])}, b{sx(x[k]), sy(low[k])};
+    if (!(std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(b.y))) continue;
+    upper.push_back(a);
+    lower.push_back(b);
+  }
+  if (upper.size() < 2) return {};
+  upper.insert(upper.end(), lower.rbegin(), lower.rend());
+  const Polyline polygon = clip_polygon(upper, bounds);
+  if (polygon.size() < 3) return {};
+  std::string d = "M";
+  for (std::size_t k = 0; k < polygon.size(); ++k) {
+    if (k > 0) d += " ";
+    append_point(d, polygon[k]);
+  }
+  return d + "Z";
+}
+
+}  // namespace physgrad::plot

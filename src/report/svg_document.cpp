@@ -1,0 +1,104 @@
+#include "physgrad/report/svg_document.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+
+namespace physgrad {
+
+std::string xml_escape(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&#39;"; break;
+      default:
+        if (static_cast<unsigned char>(c) >= 0x20 || c == '\t' || c == '\n') out += c;
+    }
+  }
+  return out;
+}
+
+namespace svg {
+
+namespace {
+
+std::uint64_t fnv1a(std::string_view s) {
+  std::uint64_t h = 14695981039346656037ULL;
+  for (const unsigned char c : s) h = (h ^ c) * 1099511628211ULL;
+  return h;
+}
+
+}  // namespace
+
+Box grow(const Box& b, double dx, double dy) {
+  return {b.left - dx, b.top - dy, b.right + dx, b.bottom + dy};
+}
+
+bool inside(const Point& p, const Box& b) {
+  return p.x >= b.left && p.x <= b.right && p.y >= b.top && p.y <= b.bottom;
+}
+
+std::string num(double v) {
+  if (!std::isfinite(v)) v = 0;
+  std::array<char, 48> buf{};
+  std::snprintf(buf.data(), buf.size(), "%.2f", v);
+  std::string s(buf.data());
+  while (s.back() == '0') s.pop_back();
+  if (s.back() == '.') s.pop_back();
+  return s == "-0" ? "0" : s;
+}
+
+double text_width(std::string_view text, double font_size) {
+  const auto points = std::count_if(text.begin(), text.end(), [](char c) {
+    return (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+  });
+  return 0.6 * font_size * static_cast<double>(points);
+}
+
+std::string text(double x, double y, std::string_view content, std::string_view attributes) {
+  std::string out = "<text x=\"" + num(x) + "\" y=\"" + num(y) + "\"";
+  if (!attributes.empty()) {
+    out += ' ';
+    out += attributes;
+  }
+  return out + ">" + xml_escape(content) + "</text>\n";
+}
+
+std::string path(const std::string& d, const std::string& attributes) {
+  return d.empty() ? "" : "<path d=\"" + d + "\" " + attributes + "/>\n";
+}
+
+std::string rect(const Box& b, const std::string& attributes) {
+  return "<rect x=\"" + num(b.left) + "\" y=\"" + num(b.top) + "\" width=\"" +
+         num(b.width()) + "\" height=\"" + num(b.height()) + "\" " + attributes + "/>\n";
+}
+
+std::string dot(const Point& p) { return std::string("M") + num(p.x) + " " + num(p.y) + "h0"; }
+
+std::string open(int width, int height) {
+  const std::string w = std::to_string(width), h = std::to_string(height);
+  return "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + w + "\" height=\"" + h +
+         "\" viewBox=\"0 0 " + w + " " + h +
+         "\" font-family=\"Helvetica, Arial, sans-serif\" font-size=\"12\">\n"
+         "<rect width=\"" +
+         w + "\" height=\"" + h + "\" fill=\"white\"/>\n";
+}
+
+std::string clipped(const Box& b, const std::string& content) {
+  const std::string box = "x=\"" + num(b.left) + "\" y=\"" + num(b.top) + "\" width=\"" +
+                          num(b.width()) + "\" height=\"" + num(b.height()) + "\"";
+  std::array<char, 24> id{};
+  std::snprintf(id.data(), id.size(), "clip%016llx",
+                static_cast<unsigned long long>(fnv1a(box + content)));
+  return "<defs><clipPath id=\"" + std::string(id.data()) + "\"><rect " + box +
+         "/></clipPath></defs>\n<g clip-path=\"url(#" + id.data() + ")\">\n" + content + "</g>\n";
+}
+
+}  // namespace svg
+}  // namespace physgrad
