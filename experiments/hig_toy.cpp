@@ -131,6 +131,12 @@ class HigToy final : public Experiment {
     const std::vector<const LearningResult*> runs = sweep.first_seed_runs(tag);
     const std::string file_tag = format_value(lambda);
     sweep.add_loss_figures(context, tag, "lambda_" + file_tag);
+    LearningSweep::add_metric_figure(
+        context, sweep.rule_groups(tag), "saturation_lambda_" + file_tag + ".svg",
+        "Saturated hidden neurons vs iteration (" + tag + ")",
+        "fraction with |tanh| > 0.99 on every test input",
+        [](const TrainingRecord& r) { return r.extras["saturated_fraction"].get<double>(); },
+        LearningSweep::Progress::kIteration, false);
 
     std::vector<Series> bands;
     for (const LearningResult* run : runs) {

@@ -231,7 +231,7 @@ void LearningSweep::add_metric_figure(RunContext& context,
                                       const std::string& file, const std::string& title,
                                       const std::string& y_label,
                                       const std::function<double(const TrainingRecord&)>& value,
-                                      Progress progress) {
+                                      Progress progress, bool log_y) {
   std::vector<Series> series;
   bool several_seeds = false;
   for (const auto& group : groups) {
@@ -251,8 +251,16 @@ void LearningSweep::add_metric_figure(RunContext& context,
     several_seeds = several_seeds || n > 1;
     const LearningResult& first = *group.front();
     Series s = median_band(first.label + (n > 1 ? ", median of " + std::to_string(n) : ""),
-                           curves, color_for(first.id), true);
+                           curves, color_for(first.id), log_y);
     s.markers = true;
+    // Over time the seeds are evaluated at different moments: each holds its last value, so
+    // median and band change in steps.
+    s.steps = n > 1 && progress == Progress::kTime;
+    // A loss that ends above where it started (a diverging rule) does not set the axis range.
+    if (log_y && s.y.size() > 1 && s.y.back() > s.y.front()) {
+      s.sets_range = false;
+      s.end_label = "diverging: ends at ×" + format_value(s.y.back() / s.y.front()) + " its start";
+    }
     if (stopped > 0) {
       s.end_label = n > 1 ? std::to_string(stopped) + " of " + std::to_string(n) +
                                 " runs stopped: not finite"
@@ -267,7 +275,7 @@ void LearningSweep::add_metric_figure(RunContext& context,
                     : progress == Progress::kEpoch ? "epoch"
                                                    : "iteration";
   options.y_label = y_label;
-  options.log_y = true;
+  options.log_y = log_y;
   const std::string caption =
       title + ". " +
       (several_seeds ? "Line: median over the seeds; band: their minimum to maximum. " : "") +

@@ -70,15 +70,15 @@ class LearningSweep {
 
   // What the x axis of a training-progress figure counts.
   enum class Progress { kTime, kIteration, kEpoch };
-  // A per-evaluation value (log y) of each rule against `progress`: the median over the group's
-  // runs (seeds) with their min–max band, a dot at every evaluation, and runs that stopped on
+  // A per-evaluation value of each rule against `progress`: the median over the group's runs
+  // (seeds) with their min–max band, a dot at every evaluation, and runs that stopped on
   // non-finite numbers marked at their end.
   static void add_metric_figure(RunContext& context,
                                 const std::vector<std::vector<const LearningResult*>>& groups,
                                 const std::string& file, const std::string& title,
                                 const std::string& y_label,
                                 const std::function<double(const TrainingRecord&)>& value,
-                                Progress progress = Progress::kTime);
+                                Progress progress = Progress::kTime, bool log_y = true);
   // Test loss vs iteration (or epoch) and vs training time of every rule's runs for `tag`.
   void add_loss_figures(RunContext& context, const std::string& tag, const std::string& file_tag,
                         bool by_epoch = false,

@@ -82,7 +82,7 @@ void add_field_figure(RunContext& context, Index n, const Vector& truth, const V
   options.y_label = "cell j";
   options.value_label = "x";
   options.diverging = true;
-  options.panel_width = 150;
+  options.panel_width = 180;
   context.add_figure({"fields.svg",
                       options.title + ", one colour range (white = 0). Σ|x − x*| of this sample: " +
                           errors + ".",

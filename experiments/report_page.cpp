@@ -69,7 +69,7 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
 
   HtmlSection figures{"Figures", "", {}, {}};
   for (const RunContext::Figure& figure : context.figures()) {
-    figures.figures.push_back({figure.caption, figure.svg});
+    figures.figures.push_back({figure.caption, figure.svg, figure.file});
   }
   sections.push_back(std::move(figures));
   sections.push_back({"Every run", "metrics.csv in this folder has every evaluation of every run.",

@@ -6,6 +6,7 @@
 // page outside a table's scroll box.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -122,12 +123,32 @@ TEST_F(ReportPages, EverySvgIsWellFormedAndInsideItsViewBox) {
     // Every table has a caption above it.
     EXPECT_EQ(count(html, "<p class=\"caption\">"), count(html, "<table>")) << c.folder;
   }
+  // The messages: seeds as median and band; diverged GD marked, the axis left to the others.
+  const std::string seeds = read_file(dir_ / "hig-toy" / "loss_vs_time_lambda_0.01.svg");
+  EXPECT_NE(seeds.find("HIG (λ=0.01), median of 2"), std::string::npos);
+  EXPECT_NE(seeds.find("fill-opacity=\"0.18\""), std::string::npos);
+  const std::string diverged = read_file(dir_ / "scaled-toy" / "loss_alpha_100.svg");
+  EXPECT_NE(diverged.find(">diverged at 77<"), std::string::npos);
+  for (const char* label : {">1e10<", ">1e100<", ">1e300<"}) {
+    EXPECT_EQ(diverged.find(label), std::string::npos) << label;
+  }
   const std::string index = read_file(dir_ / "index.html");
   EXPECT_NE(index.find("href=\"hig-toy/report.html\""), std::string::npos);
   const std::vector<std::string> overlays = inline_svgs(index);
   EXPECT_GE(overlays.size(), 6u);  // one per learning experiment
   for (const std::string& svg : overlays) check(svg, "index.html");
   EXPECT_GT(checked, 60u);
+}
+
+TEST_F(ReportPages, ReportOfAFolderWithoutRunFoldersIsAOneLineError) {
+  fs::create_directories(dir_ / "empty" / "not-a-run");
+  for (const char* args : {"report empty", "report missing"}) {
+    const physgrad::testing::Outcome outcome = run(args);
+    EXPECT_EQ(outcome.exit_code, 2) << args;
+    EXPECT_EQ(std::count(outcome.err.begin(), outcome.err.end(), '\n'), 1) << outcome.err;
+    EXPECT_NE(outcome.err.find("physgrad: error: report: "), std::string::npos) << outcome.err;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "empty" / "index.html"));
 }
 
 TEST_F(ReportPages, ChromiumShowsThemWithoutErrorsAt420PixelsWide) {

@@ -126,6 +126,22 @@ TEST(Csv, DoublesRoundTripBitExact) {
   }
 }
 
+TEST(Csv, ParsesWhatItWritesAndRefusesRaggedRows) {
+  CsvTable table({"label", "x", "note"});
+  table.add_row({std::string("a,b"), 0.1, std::string("say \"hi\"\nagain")});
+  table.add_row({std::string(""), 3LL, std::string("plain")});
+  const CsvData data = parse_csv(table.str());
+  EXPECT_EQ(data.columns, (std::vector<std::string>{"label", "x", "note"}));
+  ASSERT_EQ(data.rows.size(), 2u);
+  EXPECT_EQ(data.rows[0], (std::vector<std::string>{"a,b", "0.1", "say \"hi\"\nagain"}));
+  EXPECT_EQ(data.rows[1], (std::vector<std::string>{"", "3", "plain"}));
+  EXPECT_EQ(data.column("note"), 2u);
+  EXPECT_EQ(data.column("missing"), 3u);
+  EXPECT_EQ(parse_csv("a,b\r\n1,2").rows.size(), 1u);
+  EXPECT_THROW(parse_csv("a,b\n1,2,3\n"), Error);
+  EXPECT_THROW(parse_csv("a,b\n\"1,2\n"), Error);
+}
+
 TEST(Csv, IntegersAndNonFiniteDoubles) {
   CsvTable table({"i", "a", "b", "c"});
   table.add_row({-42LL, kNaN, kInf, -kInf});
@@ -636,6 +652,24 @@ TEST(HtmlReport, EscapesTextAndEmbedsFiguresAndTables) {
     EXPECT_NE(html.find(cell), std::string::npos) << cell;
   }
   EXPECT_NE(html.find(">Loss curves</figcaption>"), std::string::npos);
+}
+
+TEST(HtmlReport, CaptionsAboveScrollBoxesLinksAndFigureAnchors) {
+  HtmlTable table{{"run", "loss"}, {{"a", "1"}, {"b", "2"}}, "Losses <test set>",
+                  {{"a/report.html", ""}, {"", ""}}};
+  const HtmlSection section{"S", "", {table}, {{"Caption", "<svg></svg>", "loss.svg"}}};
+  const std::string html = html_report("T", "", {section});
+  const std::size_t caption = html.find("<p class=\"caption\">Losses &lt;test set&gt;</p>");
+  ASSERT_NE(caption, std::string::npos) << html;
+  EXPECT_LT(caption, html.find("<div class=\"table\"><table>"));
+  EXPECT_NE(html.find("<td><a href=\"a/report.html\">a</a></td>"), std::string::npos);
+  EXPECT_NE(html.find("<td>b</td>"), std::string::npos);
+  EXPECT_NE(html.find("<figure id=\"loss.svg\">"), std::string::npos);
+  EXPECT_NE(html.find("overflow-x:auto"), std::string::npos);
+  table.links = {{"x", ""}};  // one row of links for two rows
+  EXPECT_THROW(html_report("T", "", {{"S", "", {table}, {}}}), Error);
+  table.links = {{"x"}, {"", ""}};  // a row of links of the wrong length
+  EXPECT_THROW(html_report("T", "", {{"S", "", {table}, {}}}), Error);
 }
 
 TEST(HtmlReport, RaggedTableRowThrows) {

@@ -109,7 +109,9 @@ std::string html_report(const std::string& title, const std::string& intro,
     if (!section.figures.empty()) {
       out += "<div class=\"figures\">\n";
       for (const HtmlFigure& figure : section.figures) {
-        out += "<figure>\n" + figure.svg;
+        out += (figure.id.empty() ? std::string("<figure>\n")
+                                  : "<figure id=\"" + html_escape(figure.id) + "\">\n") +
+               figure.svg;
         if (!figure.caption.empty()) {
           out += "<figcaption>" + html_escape(figure.caption) + "</figcaption>\n";
         }

@@ -66,19 +66,21 @@ Range data_range(const std::vector<Series>& series, const LinePlotOptions& optio
   return r;
 }
 
-// (x, y) of a series as drawn: a staircase for steps.
-void drawn_points(const Series& s, std::vector<double>& x, std::vector<double>& y) {
+// x and one of its value vectors as drawn: a staircase for steps (each value held until the
+// next x).
+void staircase(const Series& s, const std::vector<double>& values, std::vector<double>& x,
+               std::vector<double>& y) {
   x = s.x;
-  y = s.y;
+  y = values;
   if (!s.steps || s.x.size() < 2) return;
   x.clear();
   y.clear();
   for (std::size_t k = 0; k + 1 < s.x.size(); ++k) {
     x.insert(x.end(), {s.x[k], s.x[k + 1]});
-    y.insert(y.end(), {s.y[k], s.y[k]});
+    y.insert(y.end(), {values[k], values[k]});
   }
   x.push_back(s.x.back());
-  y.push_back(s.y.back());
+  y.push_back(values.back());
 }
 
 std::string short_number(double v) {
@@ -146,7 +148,7 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
     const Series& s = series[n];
     const std::string color = xml_escape(s.color.empty() ? palette_color(n) : s.color);
     std::vector<double> x, y;
-    drawn_points(s, x, y);
+    staircase(s, s.y, x, y);
     std::vector<Polyline> pieces(1);
     std::string zero_note;
     for (std::size_t k = 0; k < x.size(); ++k) {
@@ -163,11 +165,13 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
     }
     if (pieces.back().empty()) pieces.pop_back();
     if (has_band(s)) {
-      const std::string band = plot::band_path(s.x, s.band_low, s.band_high, ax.scale, sy, bounds);
+      std::vector<double> band_x, low, high;
+      staircase(s, s.band_low, band_x, low);
+      staircase(s, s.band_high, band_x, high);
+      const std::string band = plot::band_path(band_x, low, high, ax.scale, sy, bounds);
       content += svg::path(band, "fill=\"" + color + "\" fill-opacity=\"0.18\"");
-      for (std::size_t k = 0; k < s.x.size(); ++k) {
-        occupied.mark_segment({ax.scale(s.x[k]), sy(s.band_low[k])},
-                              {ax.scale(s.x[k]), sy(s.band_high[k])});
+      for (std::size_t k = 0; k < band_x.size(); ++k) {
+        occupied.mark_segment({ax.scale(band_x[k]), sy(low[k])}, {ax.scale(band_x[k]), sy(high[k])});
       }
     }
     content += svg::path(plot::line_path(pieces, bounds),

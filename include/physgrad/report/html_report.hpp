@@ -21,6 +21,7 @@ struct HtmlTable {
 struct HtmlFigure {
   std::string caption;
   std::string svg;  // an SVG document, embedded as is
+  std::string id{};  // the figure element's id (an anchor), e.g. its file name; empty: none
 };
 
 struct HtmlSection {

@@ -18,7 +18,8 @@ struct Series {
   // Optional shaded band (e.g. min–max over seeds) drawn under the line: both empty or both the
   // size of x. Samples where a bound cannot be drawn are left out of the band.
   std::vector<double> band_low{}, band_high{};
-  // Drawn as steps: y[k] holds from x[k] to x[k + 1] (repeat the last value at the right end).
+  // Drawn as steps: y[k] (and the band) holds from x[k] to x[k + 1] (repeat the last value at
+  // the right end).
   bool steps = false;
   // False for a run that diverged: the axes are fitted to the other series, this one is cut at
   // the frame. (When no series sets the range, all do.)
