@@ -235,8 +235,9 @@ std::string field_panels_svg(const std::vector<FieldPanel>& panels,
     row_bottom = std::max(row_bottom, box.bottom);
   }
   const svg::Box bar{x + 10, top, x + 10 + kBarWidth, row_bottom};
-  const int width =
-      static_cast<int>(std::ceil(bar.left + plot::color_bar_width(scale, options.value_label) + 4));
+  const int width = static_cast<int>(
+      std::ceil(std::max(bar.left + plot::color_bar_width(scale, options.value_label) + 4,
+                         svg::text_width(options.title, 14) + 20)));
   const int height = static_cast<int>(std::ceil(row_bottom + 52));
   std::string out = svg::open(width, height) + body + plot::color_bar(bar, scale, options.value_label);
   if (!options.title.empty()) {

@@ -158,6 +158,7 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
         if (options.log_y && y[k] <= 0 && zero_note.empty()) {
           zero_note = (y[k] == 0 ? " (0 from " : " (≤ 0 from ") + short_number(x[k]) + " ▼)";
           notes += down_triangle(p, color);
+          occupied.mark_box({p.x - 5, p.y - 8, p.x + 5, p.y});
         }
       } else if (!pieces.back().empty()) {
         pieces.emplace_back();

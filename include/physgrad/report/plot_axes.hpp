@@ -37,7 +37,8 @@ struct Axis {
 bool usable(double v, bool log);
 
 // An axis covering the data range [lo, hi] (found = false when there is no data), widened to
-// nice values: multiples of 1, 2 or 5 × 10^k (linear), whole decades when the range spans
+// nice values: multiples of 1, 2 or 5 × 10^k, the step that wastes least room past the data
+// with at most twelve intervals (linear); whole decades when the range spans
 // several decades (log), else 1–9 × 10^k with every tick labelled, so that a range inside one
 // decade still has readable labels.
 Axis data_axis(double lo, double hi, bool found, bool log, double p0, double p1);
