@@ -56,7 +56,7 @@ results: build
 	  $(BUILD_DIR)/physgrad run $$e --out $(RESULTS_DIR)/$$e > $(RESULTS_DIR)/$$e.txt || exit 1; \
 	done
 	scripts/results_index.sh $(RESULTS_DIR) $(EXPERIMENTS) > $(RESULTS_DIR)/README.md
-	rm -f $(RESULTS_DIR)/*/metrics.csv $(RESULTS_DIR)/*/report.html
+	rm -f $(RESULTS_DIR)/*/metrics.csv $(RESULTS_DIR)/*/report.html $(RESULTS_DIR)/*/networks.json
 
 # The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (any report fails it).
 test-sanitize: deps
