@@ -39,6 +39,7 @@ LocalInverseResult closed_form(const Simulator& simulator, InverseMethod method,
                   "' has no analytic inverse; use a numerical one (lbfgs or gn)");
     }
     result.x = simulator.inverse(y, x0, context);
+    result.evaluations = 2;
   } else {
     if (!simulator.has_time_reversal()) {
       throw Error("simulator '" + simulator.name() +
@@ -48,6 +49,7 @@ LocalInverseResult closed_form(const Simulator& simulator, InverseMethod method,
     // truncation error of a scheme that is not reversible) cancels to first order near x₀.
     const Vector y0 = simulator.forward(x0, context);
     result.x = x0 + (simulator.time_reversal(y, context) - simulator.time_reversal(y0, context));
+    result.evaluations = 4;
   }
   result.x = domain.project(result.x);
   result.residual = (simulator.forward(result.x, context) - y).norm();
@@ -115,6 +117,7 @@ LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, co
   const Objective misfit(simulator, half_squares, y, context);
   LocalInverseResult result;
   const double start = misfit.value(x0);
+  result.evaluations = 1;
   if (!std::isfinite(start)) {
     result.x = Vector::Constant(x0.size(), NAN);
     result.residual = NAN;
@@ -147,6 +150,7 @@ LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, co
   result.x = summary.x;
   result.residual = std::sqrt(2 * summary.loss);
   result.iterations = summary.iterations;
+  result.evaluations = 1 + summary.evaluations;
   result.converged = result.residual <= absolute || result.residual <= relative;
   return result;
 }

@@ -20,7 +20,7 @@ Step PhysicalGradient::propose(const Objective& objective, const Vector& x,
   const Vector y_target = y + y_step(objective, y, options_.lr);
   const LocalInverseResult inverse = local_inverse(objective.simulator(), y_target, x,
                                                    objective.context(), options_.inverse, domain);
-  return {inverse.x - x, Step::Status::kOk, {}, 1 + inverse.iterations};
+  return {inverse.x - x, Step::Status::kOk, {}, 1 + inverse.evaluations};
 }
 
 }  // namespace physgrad

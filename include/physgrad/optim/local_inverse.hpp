@@ -32,8 +32,9 @@ struct LocalInverseOptions {
   // a PG step of size Δy is solved to that fraction of Δy), in [0, 1); 0 disables.
   double relative_tolerance = 1e-8;
   // ... or once an iteration changes ½‖P(x) − y‖² by at most function_tolerance times its value
-  // (the solve stalls: y is out of reach), ≥ 0; 0 disables.
-  double function_tolerance = 1e-12;
+  // (the solve stalls: y is out of reach, or the rest of the misfit is below what rounding lets
+  // the steps resolve), ≥ 0; 0 disables. Ceres' default.
+  double function_tolerance = 1e-6;
   // gn: singular values σ ≤ rcond·σ_max of J are dropped from its pseudo-inverse, in [0, 1).
   double rcond = 1e-10;
 };
@@ -47,6 +48,9 @@ struct LocalInverseResult {
   Vector x;
   double residual = 0;  // ‖P(x) − y‖
   int iterations = 0;
+  // Simulator evaluations spent: forward (+ VJP) passes of the numerical inverse; for the
+  // closed forms the inverse or reversals and the forward pass of the residual.
+  int evaluations = 0;
   bool converged = false;  // the residual meets the absolute or the relative tolerance
 };
 
