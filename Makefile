@@ -11,7 +11,7 @@ SANITIZE_DIR ?= build-sanitize
 
 RESULTS_DIR ?= docs/results
 EXPERIMENTS  = scaled-toy sensitivity comparison hig-toy sin-rotation heat-inverse oscillators \
-               quantum-dipole poisson
+               quantum-dipole poisson time-reversal
 
 .PHONY: all deps build demo test test-sanitize bench bench-mpi results clean
 

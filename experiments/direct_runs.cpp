@@ -24,15 +24,43 @@ std::vector<RuleSetup> selected_rules(const Settings& settings,
   return rules;
 }
 
+std::vector<RuleSetup> with_pg_inverses(const std::vector<RuleSetup>& rules,
+                                        const std::vector<std::string>& methods) {
+  std::vector<RuleSetup> out;
+  for (const RuleSetup& rule : rules) {
+    if (rule.id != "pg") {
+      out.push_back(rule);
+      continue;
+    }
+    for (const std::string& method : methods) {
+      RuleSetup pg = rule;
+      pg.settings.inverse = parse_inverse_method(method);
+      if (method == "analytic") {
+        pg.label = "PG (analytic inverse)";
+      } else if (method == "time_reversal") {
+        pg.label = "PG (time reversal)";
+      } else {
+        pg.label = "PG (" + find_rule(RuleKind::kDirect, method).label + " inverse)";
+      }
+      pg.extra_params["inverse"] = method;
+      out.push_back(pg);
+    }
+  }
+  return out;
+}
+
 DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Objective& objective,
                         const Vector& x0, int iterations, double tolerance,
-                        const nlohmann::json& row_extras) {
+                        const nlohmann::json& row_extras,
+                        const std::function<nlohmann::json()>& sample) {
   const std::unique_ptr<Optimizer> optimizer = make_optimizer(rule.id, rule.settings);
   MinimizeOptions options;
   options.max_iterations = iterations;
   options.loss_tolerance = tolerance;
-  options.callback = [&context](const IterationRecord&) {
+  std::vector<nlohmann::json> samples;
+  options.callback = [&context, &sample, &samples](const IterationRecord&) {
     context.check_interrupt();
+    if (sample) samples.push_back(sample());
     return false;
   };
   DirectResult result{rule, minimize(*optimizer, objective, x0, options), 0};
@@ -46,6 +74,9 @@ DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Object
                           {"loss", record.loss},
                           {"step_norm", record.step_norm}};
     for (const auto& [key, value] : row_extras.items()) row[key] = value;
+    if (static_cast<std::size_t>(record.iteration) < samples.size()) {
+      for (const auto& [key, value] : samples[record.iteration].items()) row[key] = value;
+    }
     for (Index i = 0; i < record.x.size(); ++i) {
       std::string column = "x";
       column += std::to_string(i);
@@ -99,17 +130,24 @@ std::string step_size_text(const RuleSetup& rule) {
   return "–";
 }
 
-std::string loss_curves_svg(const std::vector<DirectResult>& results, const std::string& title) {
+std::string loss_curves_svg(const std::vector<DirectResult>& results, const std::string& title,
+                            const std::string& x_label,
+                            const std::function<double(std::size_t, std::size_t)>& x_of) {
   std::vector<Series> series;
-  for (const DirectResult& result : results) {
+  for (std::size_t r = 0; r < results.size(); ++r) {
+    const DirectResult& result = results[r];
     Series line{result.rule.label, {}, {}, color_for(result.rule.id), false, false};
-    for (const IterationRecord& record : result.summary.history) {
-      line.x.push_back(static_cast<double>(record.iteration));
-      line.y.push_back(record.loss);
+    const auto& history = result.summary.history;
+    for (std::size_t k = 0; k < history.size(); ++k) {
+      const double x = x_of ? x_of(r, k) : static_cast<double>(history[k].iteration);
+      if (std::isnan(x)) break;
+      line.x.push_back(x);
+      line.y.push_back(history[k].loss);
     }
     line.markers = line.x.size() <= 40;
-    line.dashed = result.rule.extra_params.contains("inverse") &&
-                  result.rule.extra_params["inverse"] != "analytic";
+    // Dashed: PG through a numerical local inverse (solid: analytic or time-reversal inverse).
+    const std::string inverse = result.rule.extra_params.value("inverse", std::string());
+    line.dashed = !inverse.empty() && inverse != "analytic" && inverse != "time_reversal";
     // A run that diverged is marked at its end instead of stretching the loss axis.
     const MinimizeSummary& s = result.summary;
     if (s.termination == Termination::kNumericalFailure || s.loss > result.initial_loss) {
@@ -122,7 +160,7 @@ std::string loss_curves_svg(const std::vector<DirectResult>& results, const std:
   }
   LinePlotOptions options;
   options.title = title;
-  options.x_label = "iteration";
+  options.x_label = x_label;
   options.y_label = "loss";
   options.log_y = true;
   return line_plot_svg(series, options);

@@ -30,6 +30,12 @@ struct RuleSetup {
 std::vector<RuleSetup> selected_rules(const Settings& settings,
                                       const std::map<std::string, double>& default_lr);
 
+// `rules` with every pg entry replaced by one run per local-inverse method ("analytic",
+// "time_reversal", "lbfgs", "gn"), labelled "PG (analytic inverse)", "PG (time reversal)",
+// "PG (L-BFGS inverse)", …, with the method in extra_params["inverse"].
+std::vector<RuleSetup> with_pg_inverses(const std::vector<RuleSetup>& rules,
+                                        const std::vector<std::string>& methods);
+
 struct DirectResult {
   RuleSetup rule;
   MinimizeSummary summary;
@@ -38,10 +44,12 @@ struct DirectResult {
 
 // Runs one rule from x0, records one metrics row per iterate (with `row_extras` columns) and
 // a summary entry (with `extra_params` merged into params). `tolerance` is the loss level
-// counted as converged.
+// counted as converged. `sample`, when given, is called at the start and after every iteration
+// while the run goes on; the columns it returns join that iterate's metrics row.
 DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Objective& objective,
                         const Vector& x0, int iterations, double tolerance,
-                        const nlohmann::json& row_extras = nlohmann::json::object());
+                        const nlohmann::json& row_extras = nlohmann::json::object(),
+                        const std::function<nlohmann::json()>& sample = nullptr);
 
 // "12" when converged, "diverged at 7" on numerical failure, "diverging (L ×…)" when the
 // budget ran out with the loss above its start, "> N" otherwise.
@@ -49,8 +57,12 @@ std::string iterations_cell(const DirectResult& result);
 // The step size a rule actually runs with: "0.5", "line search from 1", "adaptive μ from 0.001".
 std::string step_size_text(const RuleSetup& rule);
 
-// Loss vs iteration (log y) of several runs.
-std::string loss_curves_svg(const std::vector<DirectResult>& results, const std::string& title);
+// Loss (log y) of several runs against the iteration, or against x_of(run, iterate) (a NaN
+// ends that run's curve); a diverged run is marked at its end and does not set the axis range,
+// PG through a numerical local inverse is dashed.
+std::string loss_curves_svg(const std::vector<DirectResult>& results, const std::string& title,
+                            const std::string& x_label = "iteration",
+                            const std::function<double(std::size_t, std::size_t)>& x_of = {});
 
 // Samples f on an n×n grid over [x_min, x_max]×[y_min, y_max].
 Grid2D sample_grid(const std::function<double(double, double)>& f, double x_min, double x_max,

@@ -34,6 +34,7 @@ const std::vector<Case>& cases() {
       {"scaled-toy", "run scaled-toy --iters 200", {"loss_alpha_100.svg", "landscape_alpha_10.svg"}},
       {"sensitivity", "run sensitivity", {"step_vs_alpha.svg"}},
       {"comparison", "run comparison", {"trajectories_x.svg", "trajectories_y.svg"}},
+      {"time-reversal", "run time-reversal --iters 20", {"loss_vs_passes_fpu.svg"}},
       {"hig-toy",
        "run hig-toy --seeds 2 --iters 100 --eval-every 20 --train-size 32 --test-size 16",
        {"loss_vs_time_lambda_0.01.svg", "activations_lambda_0.01.svg"}},
