@@ -56,13 +56,15 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
     }
     if (summary.iterations >= options.max_iterations) break;
 
+    // Numerical failures name the iteration, the rule and the place.
+    const std::string where =
+        "iteration " + std::to_string(summary.iterations + 1) + " of " + optimizer.id() + ": ";
     Step step;
     try {
       step = optimizer.step(objective, summary.x);
     } catch (const NumericalError& e) {
       summary.termination = Termination::kNumericalFailure;
-      summary.message = "iteration " + std::to_string(summary.iterations + 1) + " of " +
-                        optimizer.id() + ": " + e.what();
+      summary.message = where + e.what();
       break;
     }
     evaluations += step.evaluations;
@@ -78,7 +80,7 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
     }
     if (!all_finite(step.dx)) {
       summary.termination = Termination::kNumericalFailure;
-      summary.message = "non-finite step at iteration " + std::to_string(summary.iterations + 1);
+      summary.message = where + "non-finite step";
       break;
     }
     const double step_norm = step.dx.norm();
@@ -93,7 +95,7 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
     if (!std::isfinite(loss_next)) {
       summary.termination = Termination::kNumericalFailure;
       std::ostringstream msg;
-      msg << "loss became " << loss_next << " at iteration " << summary.iterations + 1;
+      msg << where << "the loss at the new point is " << loss_next;
       summary.message = msg.str();
       break;
     }

@@ -1,7 +1,11 @@
 #include "physgrad/optim/quasi_newton.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <sstream>
 #include <utility>
+
+#include "physgrad/error.hpp"
 
 namespace physgrad {
 
@@ -25,6 +29,12 @@ LineSearchResult QuasiNewton::search(const Objective& objective, const Vector& x
                                      const Vector& p) const {
   const double first = has_curvature() ? initial_step_
                                        : initial_step_ * std::min(1.0, 1 / p.stableNorm());
+  if (!(first > 0 && std::isfinite(first))) {
+    std::ostringstream msg;
+    msg << "line search: the first trial step along a direction of norm " << p.stableNorm()
+        << " is " << first;
+    throw NumericalError(msg.str());
+  }
   return strong_wolfe_line_search(objective, x, value_, g_, p, first, line_search_);
 }
 
@@ -37,11 +47,7 @@ Step QuasiNewton::step(const Objective& objective, const Vector& x) {
     x_ = x;
     ++out.evaluations;
   }
-  if (!all_finite(g_)) {
-    out.status = Step::Status::kFailed;
-    out.message = id() + ": the gradient at x is not finite";
-    return out;
-  }
+  if (!all_finite(g_)) throw NumericalError("the gradient at x is not finite");
   if ((g_.array() == 0).all()) {  // stationary point: a zero step ends the run
     out.dx = Vector::Zero(n);
     return out;
@@ -56,6 +62,10 @@ Step QuasiNewton::step(const Objective& objective, const Vector& x) {
     p = -g_;
     result = search(objective, x, p);
     out.evaluations += result.evaluations;
+  }
+  if (!result.success && result.evaluations > 0 && result.non_finite == result.evaluations) {
+    throw NumericalError("line search: all " + std::to_string(result.evaluations) +
+                         " trial points gave a non-finite loss or gradient");
   }
   if (!result.success) {
     out.status = Step::Status::kFailed;
