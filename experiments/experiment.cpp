@@ -223,6 +223,7 @@ void RunContext::finish_progress() {
 
 void RunContext::check_interrupt() const {
   if (stop_ != nullptr && stop_->load()) {
+    stop_point_reached();
     throw Interrupted(experiment_name_ + ": stopped on request");
   }
 }
