@@ -3,9 +3,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <sstream>
 
@@ -54,17 +56,19 @@ std::string format_number(double value) {
 
 double parse_real(const OptionSpec& spec, const std::string& text) {
   const std::string item = trim(text);
-  double value = 0;
-  std::size_t used = 0;
-  try {
-    value = std::stod(item, &used);
-  } catch (const std::out_of_range&) {
-    throw Error(flag(spec) + ": '" + text + "' is out of the range of a double");
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (item.empty() || used != item.size()) {
+  // strtod, not stod: a value below the normal range (1e-310) is kept as the subnormal it is.
+  char* end = nullptr;
+  errno = 0;
+  const double value = std::strtod(item.c_str(), &end);
+  const bool range = errno == ERANGE;
+  if (item.empty() || end != item.c_str() + item.size()) {
     throw Error(flag(spec) + ": '" + text + "' is not a number");
+  }
+  if (range && std::isinf(value)) {
+    throw Error(flag(spec) + ": '" + text + "' is out of the range of a double");
+  }
+  if (range && value == 0) {
+    throw Error(flag(spec) + ": '" + text + "' is too close to 0 for a double (it would read 0)");
   }
   if (!std::isfinite(value)) throw Error(flag(spec) + ": must be finite, got '" + text + "'");
   const bool below = spec.min_exclusive ? !(value > spec.min) : !(value >= spec.min);
@@ -78,16 +82,19 @@ long long parse_integer(const OptionSpec& spec, const std::string& text) {
   const std::string item = trim(text);
   long long value = 0;
   std::size_t used = 0;
+  bool beyond = false;  // a whole number beyond ±9.2e18
   try {
     value = std::stoll(item, &used);
+  } catch (const std::out_of_range&) {
+    beyond = item.find_first_not_of("+-0123456789") == std::string::npos;
   } catch (const std::exception&) {
     used = 0;
   }
-  if (item.empty() || used != item.size()) {
+  if (!beyond && (item.empty() || used != item.size())) {
     throw Error(flag(spec) + ": '" + text + "' is not a whole number");
   }
   const auto as_double = static_cast<double>(value);
-  if (as_double < spec.min || as_double > spec.max || (spec.nonzero && value == 0)) {
+  if (beyond || as_double < spec.min || as_double > spec.max || (spec.nonzero && value == 0)) {
     throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got '" + text + "'");
   }
   return value;

@@ -232,7 +232,12 @@ TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Mlp& network,
       checkpoint->save_progress(key, s);
     };
   }
-  TrainingSummary summary = train(network, update, problem, train_set, test_set, options);
+  TrainingSummary summary;
+  try {
+    summary = train(network, update, problem, train_set, test_set, options);
+  } catch (const Error& e) {
+    throw Error(key.describe() + ": " + e.what());  // names the setting (λ=…, ξ=…) and seed
+  }
   if (summary.termination == TrainingTermination::kInterrupted) {
     stop_point_reached();
     throw Interrupted(context_.experiment_name() + ": " + key.describe() + " " + summary.message);

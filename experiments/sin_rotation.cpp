@@ -72,7 +72,7 @@ class SinRotationExperiment final : public Experiment {
     std::vector<OptionSpec> options = {
         real_list_option("xi", "1,32", "conditioning ξ (Jacobian singular values differ by ξ²)")
             .above(0),
-        real_option("phi", "15", "coupling angle φ in degrees"),
+        real_option("phi", "15", "coupling angle φ in degrees").at_least(-360).at_most(360),
         text_option("form", "book",
                     "book: P = (sin(x̂₁)/ξ, ξx̂₂), x̂ = R_φx; code: the SIP "
                     "repository's x̂ = diag(10/ξ, 10ξ)R_φx, P = (sin x̂₁, x̂₂)")

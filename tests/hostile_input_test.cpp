@@ -205,6 +205,23 @@ TEST_F(Hostile, SizesBeyondMemoryOrRangeAreRefusedNamingTheValue) {
   expect_refused("bench hig-toy --steps 9223372036854775807", "--steps: must be in [1, 1000000]");
 }
 
+// Numbers at the ends of their range: a subnormal is read as itself, a real that would read 0 or
+// overflow and a whole number beyond 64 bits are named, and settings whose untrained loss
+// overflows name the run.
+TEST_F(Hostile, ExtremeRealsAreReadAsGivenOrNamed) {
+  const Outcome tiny = run("run comparison --iters 2 --lr 1e-310 --out tiny");
+  EXPECT_EQ(tiny.exit_code, 0) << tiny.err;
+  expect_refused("run comparison --lr 1e-400",
+                 "--lr: '1e-400' is too close to 0 for a double (it would read 0)");
+  expect_refused("run comparison --lr 1e400", "--lr: '1e400' is out of the range of a double");
+  expect_refused("run comparison --seed 18446744073709551615",
+                 "--seed: must be in [0, 4294967295], got '18446744073709551615'");
+  expect_refused("run sin-rotation --phi 1e308", "--phi: must be in [-360, 360], got '1e308'");
+  expect_refused("run hig-toy --seeds 1 --iters 2 --lambda 1e308 --out lambda",
+                 "run 0 (adam, λ=1e+308, seed 0): the untrained network's train loss is not "
+                 "finite");
+}
+
 TEST_F(Hostile, ListValuesThatReadTheSameInLabelsAreRefused) {
   expect_refused("run hig-toy --lambda 1,1", "--lambda: '1' is listed twice");
   expect_refused("run hig-toy --lambda 0.01,0.010001",

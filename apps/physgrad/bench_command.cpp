@@ -108,13 +108,13 @@ void BenchCommand::run(std::ostream& out) const {
   const ex::ReferenceCase single = ex::reference_case(name_, 1);
   const Index batch = batch_.empty() ? ex::reference_batch(single, optimizer_)
                                      : read_integer("batch", batch_, 1);
-  // The reference eigendecomposition holds three B·m × B·m matrices; refuse a batch for which
-  // they cannot fit before allocating anything of that size.
+  // The reference eigendecomposition holds three B·m × B·m matrices and dsyevd's workspace of
+  // about two more; refuse a batch for which they cannot fit before allocating anything.
   const double order =
       static_cast<double>(batch) * static_cast<double>(single.physics->output_dim());
   char size[64];
   std::snprintf(size, sizeof size, "%.0f × %.0f", order, order);
-  require_memory(3 * order * order * sizeof(double),
+  require_memory(5 * order * order * sizeof(double),
                  "--batch: " + std::to_string(batch) +
                      " (the reference eigendecomposition of a " + size + " matrix)");
   ex::ReferenceCase reference = ex::reference_case(name_, batch);
