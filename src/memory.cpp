@@ -51,12 +51,11 @@ std::string format_bytes(double bytes) {
     bytes /= 1024;
     ++unit;
   }
+  // Three significant digits, rounded down: an amount just short of 128 MiB does not read 128.
+  const double scale = bytes >= 100 ? 1 : bytes >= 10 ? 10 : 100;
+  const double shown = std::floor(bytes * scale) / scale;
   char text[48];
-  if (unit == 0) {
-    std::snprintf(text, sizeof text, "%.0f B", bytes);
-  } else {
-    std::snprintf(text, sizeof text, "%.3g %s", bytes, units[unit]);
-  }
+  std::snprintf(text, sizeof text, unit == 0 ? "%.0f %s" : "%.3g %s", shown, units[unit]);
   return text;
 }
 

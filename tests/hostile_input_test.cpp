@@ -46,9 +46,11 @@ class Hostile : public Cli {
     EXPECT_EQ(entries(), before) << args << " left files behind";
   }
 
-  // As expect_refused, for a command that must also not block: it is killed after 30 s.
-  void expect_refused_promptly(const std::string& args, const std::string& needle) const {
-    const pid_t pid = spawn(args);
+  // As expect_refused, for a command that must also not block: it is killed after 30 s. `shell`
+  // runs before it in the same shell (a ulimit, say).
+  void expect_refused_promptly(const std::string& args, const std::string& needle,
+                               const std::string& shell = "") const {
+    const pid_t pid = spawn_after(shell, args);
     const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
     int status = 0;
     while (::waitpid(pid, &status, WNOHANG) == 0) {
@@ -64,6 +66,21 @@ class Hostile : public Cli {
     const std::string err = read_file(configs_ / "spawned.err");
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << args << ": " << err;
     EXPECT_NE(err.find(needle), std::string::npos) << args << ": " << err;
+  }
+
+  // spawn() with `shell` run first in the same shell.
+  pid_t spawn_after(const std::string& shell, const std::string& args) const {
+    if (shell.empty()) return spawn(args);
+    const std::string command = shell + " && cd '" + dir_.string() + "' && exec '" +
+                                PHYSGRAD_CLI + "' " + args + " > '" +
+                                (configs_ / "spawned.out").string() + "' 2> '" +
+                                (configs_ / "spawned.err").string() + "'";
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+      ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    return pid;
   }
 
   std::size_t entries() const {
@@ -136,6 +153,19 @@ TEST_F(Hostile, FilesThatAreNotPlainOrTooLargeAreRefusedWithoutBlocking) {
   fs::rename(folder / "config.json", configs_ / "config.json");
   ASSERT_EQ(::mkfifo((folder / "config.json").c_str(), 0600), 0);
   expect_refused_promptly("resume part", "config.json': is not a regular file (a FIFO)");
+}
+
+// OpenBLAS retries a failed allocation of its 128 MiB work buffer for ever; under an address-space
+// limit without room for it the command says so at once instead.
+TEST_F(Hostile, AnAddressSpaceTooSmallForTheBlasBufferIsRefusedAtOnce) {
+  for (const std::string& args : {std::string("run hig-toy --seeds 1 --iters 5 --out small"),
+                                  std::string("bench hig-toy --steps 1")}) {
+    expect_refused_promptly(args,
+                            "the BLAS library's 128 MiB work buffer with 32 MiB to spare needs "
+                            "160 MiB, more than the ",
+                            "ulimit -v 200000");
+  }
+  EXPECT_EQ(entries(), 0u);
 }
 
 // Checkpoints with a valid checksum whose content this build did not write.

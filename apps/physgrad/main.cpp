@@ -5,6 +5,7 @@
 // SIGINT/SIGTERM stop a run: learning runs leave a checkpoint in the run folder (exit 128 +
 // signal), other runs write nothing.
 #include <CLI/CLI.hpp>
+#include <cblas.h>
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
@@ -111,17 +112,29 @@ void check_subcommand(CLI::App& app, const std::string& name) {
                         " (known: " + known + ")");
 }
 
-// OpenBLAS (Debian's build) takes a work buffer of 128 MiB per thread at its first level-3 call
-// and retries for ever when it cannot have it; under an address-space limit (ulimit -v) that
-// leaves less room, say so instead of spinning.
-void check_blas_room() {
-  constexpr double kBlasBuffer = 128.0 * 1024 * 1024;
-  physgrad::require_memory(kBlasBuffer, "the BLAS library's work buffer");
-}
-
 int usage_error(const std::string& message) {
   std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << one_line(message) << '\n';
   return physgrad::cli::end_run(kUsageError);  // under mpirun: ends the other ranks too
+}
+
+// OpenBLAS (Debian's build) takes a work buffer of 128 MiB per thread at its first level-3 call
+// and retries for ever when it cannot have it. Check that an address-space limit (ulimit -v)
+// leaves room for it, then take it now with one tiny dsyrk, before the run's own data: a later
+// shortage is an ordinary allocation failure with a message. Without room the process ends at
+// once: a BLAS thread may already be retrying, and exit() would wait for it.
+void reserve_blas_buffer() {
+  constexpr double kMiB = 1024.0 * 1024.0;
+  try {
+    physgrad::require_memory(160 * kMiB,
+                             "the BLAS library's 128 MiB work buffer with 32 MiB to spare");
+  } catch (const physgrad::Error& e) {
+    std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << one_line(e.what())
+              << std::endl;
+    std::_Exit(kUsageError);
+  }
+  const double one = 1;
+  double product = 0;
+  cblas_dsyrk(CblasColMajor, CblasLower, CblasNoTrans, 1, 1, 1.0, &one, 1, 0.0, &product, 1);
 }
 
 void print_table(const ex::RunContext::Table& table) {
@@ -329,7 +342,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (bench.parsed()) {
-      check_blas_room();
+      reserve_blas_buffer();
       bench.run(std::cout);
       return 0;
     }
@@ -337,7 +350,7 @@ int main(int argc, char** argv) {
       print_table(ex::options_table(ex::find_experiment(describe_name)));
       return 0;
     }
-    check_blas_room();
+    reserve_blas_buffer();
     ex::install_interrupt_handlers();
     if (resume->parsed()) return resume_run(resume_folder);
     for (const auto& experiment : ex::registry()) {

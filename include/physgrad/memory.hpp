@@ -10,7 +10,7 @@ namespace physgrad {
 // Bytes this process may still allocate, by the bound above (ulimit -v and -d count).
 std::size_t available_memory_bytes();
 
-// "512 B", "1.5 KiB", "7.3 TiB" (3 significant digits).
+// "512 B", "1.5 KiB", "7.3 TiB" (3 significant digits, rounded down).
 std::string format_bytes(double bytes);
 
 // Throws Error "WHAT needs 7.3 TiB, more than the 22 GiB this process may use" when `bytes`
