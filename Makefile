@@ -3,7 +3,6 @@
 
 BUILD_DIR   ?= build
 JOBS        ?= $(shell nproc)
-DEMO_OUT    ?= runs/demo
 DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapacke-dev \
                libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev \
                libopenmpi-dev openmpi-bin
@@ -12,7 +11,7 @@ SANITIZE_DIR ?= build-sanitize
 
 RESULTS_DIR ?= docs/results
 EXPERIMENTS  = scaled-toy sensitivity comparison hig-toy sin-rotation heat-inverse oscillators \
-               quantum-dipole poisson
+               quantum-dipole poisson time-reversal
 
 .PHONY: all deps build demo test test-sanitize bench bench-mpi results clean
 
@@ -32,9 +31,9 @@ build: deps
 	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
+# Each demo run gets a folder of its own (runs/hig-toy-<timestamp>); earlier ones are kept.
 demo: build
-	rm -rf $(DEMO_OUT)
-	$(BUILD_DIR)/physgrad run hig-toy --lambda 0.01 --out $(DEMO_OUT)
+	$(BUILD_DIR)/physgrad run hig-toy --lambda 0.01
 
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)

@@ -1,9 +1,9 @@
 #include "checkpoint.hpp"
 
 #include "physgrad/error.hpp"
-#include "physgrad/report/atomic_file.hpp"
 #include "physgrad/serialize.hpp"
 #include "physgrad/train/checkpoint_file.hpp"
+#include "run_folder.hpp"
 
 namespace physgrad::experiments {
 
@@ -66,7 +66,7 @@ ExperimentCheckpoint::ExperimentCheckpoint(fs::path folder, nlohmann::json confi
   }
   resumed_current_ = resumed.value("current", nlohmann::json());
   resumed_environment_ = resumed.value("environment", nlohmann::json::object());
-  written_ = true;  // the folder and config.json exist
+  written_ = true;  // the resumed checkpoint file exists
 }
 
 std::optional<FinishedRun> ExperimentCheckpoint::finished(const RunKey& key,
@@ -118,21 +118,14 @@ void ExperimentCheckpoint::save_progress(const RunKey& key, const TrainerState& 
 
 void ExperimentCheckpoint::write(const nlohmann::json& current) {
   if (!writes_) return;
-  if (!written_) {
-    std::error_code error;
-    fs::create_directories(folder_, error);
-    if (error) {
-      throw Error("cannot create the run folder '" + folder_.string() + "': " + error.message());
-    }
-    write_file_atomic(folder_ / "config.json", config_.dump(2) + "\n");
-    written_ = true;
-  }
   write_checkpoint_file(folder_ / kCheckpointFile,
                         {{"experiment", config_.at("experiment")},
                          {"settings", config_.at("settings")},
                          {"environment", environment_},
                          {"finished", finished_},
                          {"current", current}});
+  written_ = true;
+  fault_point("checkpoint");
 }
 
 }  // namespace physgrad::experiments

@@ -46,7 +46,7 @@ class ExperimentCheckpoint {
   std::optional<FinishedRun> finished(const RunKey& key, Index parameter_count) const;
   std::optional<TrainerState> in_progress(const RunKey& key, Index parameter_count) const;
 
-  // Both write the checkpoint file (and config.json, the first time).
+  // Both write the checkpoint file into the run folder (which exists: the RunFolder holds it).
   void record_finished(const RunKey& key, const TrainingSummary& summary, const Vector& theta);
   void save_progress(const RunKey& key, const TrainerState& state);
 
@@ -56,7 +56,7 @@ class ExperimentCheckpoint {
   std::string set_environment(nlohmann::json environment);
 
   const std::filesystem::path& folder() const { return folder_; }
-  bool written() const { return written_; }
+  bool written() const { return written_; }  // the folder has a checkpoint file
 
  private:
   void write(const nlohmann::json& current);

@@ -63,22 +63,8 @@ class Comparison final : public Experiment {
     const Vector x0{{start[0], start[1]}};
     const auto iterations = static_cast<int>(settings.integer("iters"));
 
-    std::vector<RuleSetup> rules;
-    for (const RuleSetup& rule : selected_rules(settings, kDefaultLr)) {
-      if (rule.id != "pg") {
-        rules.push_back(rule);
-        continue;
-      }
-      for (const std::string& method : settings.texts("pg-inverse")) {
-        RuleSetup pg = rule;
-        pg.settings.inverse = parse_inverse_method(method);
-        const std::string inverse =
-            method == "analytic" ? "analytic" : find_rule(RuleKind::kDirect, method).label;
-        pg.label = "PG (" + inverse + " inverse)";
-        pg.extra_params["inverse"] = method;
-        rules.push_back(pg);
-      }
-    }
+    const std::vector<RuleSetup> rules =
+        with_pg_inverses(selected_rules(settings, kDefaultLr), settings.texts("pg-inverse"));
 
     const ComparisonToy physics;
     const L2Loss squares(2.0);  // L = y₀² + y₁², the notebook's loss

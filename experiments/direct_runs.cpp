@@ -43,15 +43,43 @@ void require_iterate_memory(const Settings& settings, std::size_t runs) {
                      " runs keeping every iterate)");
 }
 
+std::vector<RuleSetup> with_pg_inverses(const std::vector<RuleSetup>& rules,
+                                        const std::vector<std::string>& methods) {
+  std::vector<RuleSetup> out;
+  for (const RuleSetup& rule : rules) {
+    if (rule.id != "pg") {
+      out.push_back(rule);
+      continue;
+    }
+    for (const std::string& method : methods) {
+      RuleSetup pg = rule;
+      pg.settings.inverse = parse_inverse_method(method);
+      if (method == "analytic") {
+        pg.label = "PG (analytic inverse)";
+      } else if (method == "time_reversal") {
+        pg.label = "PG (time reversal)";
+      } else {
+        pg.label = "PG (" + find_rule(RuleKind::kDirect, method).label + " inverse)";
+      }
+      pg.extra_params["inverse"] = method;
+      out.push_back(pg);
+    }
+  }
+  return out;
+}
+
 DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Objective& objective,
                         const Vector& x0, int iterations, double tolerance,
-                        const nlohmann::json& row_extras) {
+                        const nlohmann::json& row_extras,
+                        const std::function<nlohmann::json()>& sample) {
   const std::unique_ptr<Optimizer> optimizer = make_optimizer(rule.id, rule.settings);
   MinimizeOptions options;
   options.max_iterations = iterations;
   options.loss_tolerance = tolerance;
-  options.callback = [&context](const IterationRecord&) {
+  std::vector<nlohmann::json> samples;
+  options.callback = [&context, &sample, &samples](const IterationRecord&) {
     context.check_interrupt();
+    if (sample) samples.push_back(sample());
     return false;
   };
   DirectResult result{rule, minimize(*optimizer, objective, x0, options), 0};
@@ -65,6 +93,9 @@ DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Object
                           {"loss", record.loss},
                           {"step_norm", record.step_norm}};
     for (const auto& [key, value] : row_extras.items()) row[key] = value;
+    if (static_cast<std::size_t>(record.iteration) < samples.size()) {
+      for (const auto& [key, value] : samples[record.iteration].items()) row[key] = value;
+    }
     for (Index i = 0; i < record.x.size(); ++i) {
       std::string column = "x";
       column += std::to_string(i);

@@ -28,6 +28,12 @@ struct RuleSetup {
 std::vector<RuleSetup> selected_rules(const Settings& settings,
                                       const std::map<std::string, double>& default_lr);
 
+// `rules` with every pg entry replaced by one run per local-inverse method ("analytic",
+// "time_reversal", "lbfgs", "gn"), labelled "PG (analytic inverse)", "PG (time reversal)",
+// "PG (L-BFGS inverse)", …, with the method in extra_params["inverse"].
+std::vector<RuleSetup> with_pg_inverses(const std::vector<RuleSetup>& rules,
+                                        const std::vector<std::string>& methods);
+
 struct DirectResult {
   RuleSetup rule;
   MinimizeSummary summary;
@@ -45,10 +51,12 @@ void require_iterate_memory(const Settings& settings, std::size_t runs);
 
 // Runs one rule from x0, records one metrics row per iterate (with `row_extras` columns) and
 // a summary entry (with `extra_params` merged into params). `tolerance` is the loss level
-// counted as converged.
+// counted as converged. `sample`, when given, is called at the start and after every iteration
+// while the run goes on; the columns it returns join that iterate's metrics row.
 DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Objective& objective,
                         const Vector& x0, int iterations, double tolerance,
-                        const nlohmann::json& row_extras = nlohmann::json::object());
+                        const nlohmann::json& row_extras = nlohmann::json::object(),
+                        const std::function<nlohmann::json()>& sample = nullptr);
 
 // "12" when converged, "diverged at 7" on numerical failure, "diverging (L ×…)" when the
 // budget ran out with the loss above its start, "> N" otherwise.

@@ -16,5 +16,6 @@ std::unique_ptr<Experiment> make_heat_inverse();
 std::unique_ptr<Experiment> make_oscillators();
 std::unique_ptr<Experiment> make_quantum_dipole();
 std::unique_ptr<Experiment> make_poisson();
+std::unique_ptr<Experiment> make_time_reversal();
 
 }  // namespace physgrad::experiments

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
 
 #include "checkpoint.hpp"
 #include "direct_runs.hpp"
@@ -237,6 +238,9 @@ TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Mlp& network,
     summary = train(network, update, problem, train_set, test_set, options);
   } catch (const Error& e) {
     throw Error(key.describe() + ": " + e.what());  // names the setting (λ=…, ξ=…) and seed
+  } catch (const std::bad_alloc&) {
+    throw Error(key.describe() + ": out of memory while training (--batch, --train-size or the "
+                "network need more than this process may use)");
   }
   if (summary.termination == TrainingTermination::kInterrupted) {
     stop_point_reached();

@@ -14,6 +14,7 @@ const std::vector<std::unique_ptr<Experiment>>& registry() {
     list.push_back(make_oscillators());
     list.push_back(make_quantum_dipole());
     list.push_back(make_poisson());
+    list.push_back(make_time_reversal());
     return list;
   }();
   return experiments;

@@ -1,15 +1,7 @@
 #include "run_folder.hpp"
 
-#include <fcntl.h>
-#include <signal.h>
-#include <stdio.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <set>
-#include <system_error>
 
-#include "checkpoint.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/report/atomic_file.hpp"
 #include "physgrad/report/csv.hpp"
@@ -20,8 +12,6 @@ namespace physgrad::experiments {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string reason(const std::error_code& error) { return error.message(); }
 
 CsvCell to_cell(const nlohmann::json& value) {
   if (value.is_number_integer()) return value.get<long long>();
@@ -104,52 +94,7 @@ std::string report_html(const Experiment& experiment, const Settings& settings,
   return html_report(experiment.name() + " — physgrad", experiment.description(), sections);
 }
 
-// Removes staging folders `prefix`PID left by processes that no longer exist (killed before
-// they could clean up).
-void remove_abandoned_staging(const fs::path& parent, const std::string& prefix) {
-  std::error_code error;
-  for (const fs::directory_entry& entry : fs::directory_iterator(parent, error)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind(prefix, 0) != 0) continue;
-    const std::string digits = name.substr(prefix.size());
-    if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos) continue;
-    const auto pid = static_cast<pid_t>(std::stol(digits));
-    if (::kill(pid, 0) != 0 && errno == ESRCH) fs::remove_all(entry.path(), error);
-  }
-}
-
 }  // namespace
-
-fs::path prepare_run_folder(const fs::path& out, bool resuming) {
-  std::error_code error;
-  const std::string name = std::string("'") + out.string() + "'";
-  if (!resuming && fs::exists(out, error)) {
-    if (!fs::is_directory(out, error)) {
-      throw Error("--out: " + name + " exists and is not a directory");
-    }
-    if (fs::exists(out / kCheckpointFile, error)) {
-      throw Error("--out: " + name + " holds an interrupted run; continue it with `physgrad " +
-                  "resume " + out.string() + "` or choose another folder");
-    }
-    if (!fs::is_empty(out, error)) {
-      throw Error("--out: " + name + " already exists and is not empty");
-    }
-  }
-  const fs::path parent = out.has_parent_path() ? out.parent_path() : fs::path(".");
-  fs::create_directories(parent, error);
-  if (error) {
-    throw Error("--out: cannot create '" + parent.string() + "': " + reason(error));
-  }
-  const std::string prefix = std::string(".") + out.filename().string() + ".partial-";
-  remove_abandoned_staging(parent, prefix);
-  const fs::path staging = parent / (prefix + std::to_string(getpid()));
-  fs::remove_all(staging, error);
-  if (!fs::create_directory(staging, error) || error) {
-    throw Error("--out: cannot write in '" + parent.string() + "': " +
-                (error ? reason(error) : "staging folder exists"));
-  }
-  return staging;
-}
 
 nlohmann::json config_document(const Experiment& experiment, const Settings& settings,
                                const std::string& command_line) {
@@ -165,10 +110,10 @@ nlohmann::json summary_document(const Experiment& experiment, const RunContext& 
 void write_run_folder(const fs::path& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
                       const std::string& command_line) {
-  write_file_atomic(staging / "config.json",
+  write_file_atomic(staging / kConfigFile,
                     config_document(experiment, settings, command_line).dump(2) + "\n");
   write_file_atomic(staging / "metrics.csv", metrics_csv(context));
-  write_file_atomic(staging / "summary.json", summary_document(experiment, context).dump(2) + "\n");
+  write_file_atomic(staging / kSummaryFile, summary_document(experiment, context).dump(2) + "\n");
   for (const RunContext::Figure& figure : context.figures()) {
     write_file_atomic(staging / figure.file, figure.svg);
   }
@@ -178,32 +123,6 @@ void write_run_folder(const fs::path& staging, const Experiment& experiment,
   }
   write_file_atomic(staging / "report.html",
                     report_html(experiment, settings, context, command_line));
-}
-
-void commit_run_folder(const fs::path& staging, const fs::path& out) {
-  std::error_code error;
-  if (fs::exists(out, error) && !fs::is_empty(out, error)) {
-    // An interrupted run's folder: exchange it with the results at once, then drop it.
-    if (::renameat2(AT_FDCWD, staging.c_str(), AT_FDCWD, out.c_str(), RENAME_EXCHANGE) == 0) {
-      fs::remove_all(staging, error);
-      return;
-    }
-    if (errno != EINVAL && errno != ENOSYS) {
-      throw Error("--out: cannot move the results to '" + out.string() +
-                  "': " + std::generic_category().message(errno));
-    }
-    fs::remove_all(out, error);  // a file system without atomic exchange
-  }
-  if (fs::exists(out, error)) fs::remove(out, error);  // an empty directory, checked before
-  fs::rename(staging, out, error);
-  if (error) {
-    throw Error("--out: cannot move the results to '" + out.string() + "': " + reason(error));
-  }
-}
-
-void discard_run_folder(const fs::path& staging) noexcept {
-  std::error_code error;
-  fs::remove_all(staging, error);
 }
 
 }  // namespace physgrad::experiments

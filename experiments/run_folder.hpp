@@ -1,37 +1,100 @@
-// Run folder — turns a finished RunContext into config.json, metrics.csv, summary.json, SVG
-// figures and report.html. Everything is written into a staging folder that is renamed into
-// place at the end, so an interrupted or failed run never leaves a half-written folder.
+// Run folder — the folder a run owns from its start to its end. It is claimed under an exclusive
+// lock (flock on the folder itself, released by the kernel even when the process is killed), so
+// no two processes ever write one folder; config.json is written at once, checkpoints go inside,
+// and the results are staged in OUT/.staging and moved in file by file, summary.json last, the
+// checkpoint removed after it. A folder is therefore always in one of four states, whatever
+// moment a run is killed at:
+//   empty       nothing of a run (scratch of a killed one aside): a new run may take it;
+//   unfinished  config.json, and checkpoint.pgc if a learning run saved one: `physgrad resume`
+//               continues it (from the start of the run when there is no checkpoint);
+//   finished    summary.json and no checkpoint: never written again;
+//   foreign     anything else: refused.
+// Nothing is ever removed but the run's own files, and only while the lock is held.
 #pragma once
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "experiment.hpp"
 
 namespace physgrad::experiments {
 
-// Checks that `out` can become the run folder (absent or an empty directory; with `resuming`,
-// the folder of an interrupted run, whose checkpoint the caller has read) and creates the
-// staging folder beside it. Throws Error
-// naming the path and the reason otherwise.
-std::filesystem::path prepare_run_folder(const std::filesystem::path& out, bool resuming = false);
+inline constexpr const char* kConfigFile = "config.json";
+inline constexpr const char* kSummaryFile = "summary.json";
+
+// A path a user typed, checked and resolved: no control characters, trailing slashes dropped,
+// symbolic links to folders followed (a dangling or looping link, or a file, is refused).
+struct FolderPath {
+  std::string shown;           // as typed, without trailing slashes: used in messages
+  std::filesystem::path path;  // absolute, symbolic links resolved
+};
+// `option` names the value in messages ("--out", "resume"). Throws Error.
+FolderPath locate_folder(const std::string& text, const std::string& option);
+
+class RunFolder {
+ public:
+  // Claims the folder for a new run: absent (it is created, with missing parents) or empty.
+  // Throws Error naming the folder when it holds a run, anything else, or another process
+  // uses it; nothing is changed then.
+  static RunFolder create(const FolderPath& out);
+  // Claims a new folder PARENT/STEM, or PARENT/STEM-2, -3, … when that one exists (the default
+  // --out: two runs started in the same second get a folder each).
+  static RunFolder create_unique(const std::filesystem::path& parent, const std::string& stem);
+  // Claims the folder of an unfinished run for `physgrad resume`. Throws Error when it is
+  // finished, holds no run, or another process uses it.
+  static RunFolder reopen(const FolderPath& folder);
+
+  RunFolder(RunFolder&& other) noexcept;
+  RunFolder& operator=(RunFolder&&) = delete;
+  ~RunFolder();  // abandon() unless committed, then releases the lock
+
+  const std::filesystem::path& path() const { return path_; }
+  const std::string& shown() const { return shown_; }
+  bool resuming() const { return resuming_; }
+
+  // An empty folder OUT/.staging for the results (made anew on each call).
+  std::filesystem::path staging() const;
+  // Moves the staged files into the folder (summary.json last), then removes the checkpoint
+  // and the staging folder: the folder is finished.
+  void commit();
+  // Ends a run that will not commit and says what is left: the folder with its checkpoint (or,
+  // when resuming, as it was) for `physgrad resume`, or nothing — the files of the run, the
+  // folder and the parents this process created are removed. Never throws; the second call
+  // returns the first one's text.
+  std::string abandon() noexcept;
+
+ private:
+  RunFolder(FolderPath where, int lock_fd, bool resuming);
+
+  std::filesystem::path path_;
+  std::string shown_;
+  int lock_fd_ = -1;
+  bool resuming_ = false;
+  bool created_ = false;                              // this process made the folder
+  std::vector<std::filesystem::path> created_parents_;  // innermost first
+  std::vector<std::string> moved_;                      // results moved in by commit()
+  bool ended_ = false;
+  std::string ended_text_;
+};
 
 // The config.json document: {"experiment", "command", "settings"}.
 nlohmann::json config_document(const Experiment& experiment, const Settings& settings,
                                const std::string& command_line);
 
+// Writes config.json, metrics.csv, summary.json, the figures, networks.json and report.html
+// into `staging`.
 void write_run_folder(const std::filesystem::path& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
                       const std::string& command_line);
 
-// Moves the staging folder to `out`. An empty directory there is replaced; the folder of an
-// interrupted run (config.json and its checkpoint) is swapped out in one atomic exchange and
-// then removed.
-void commit_run_folder(const std::filesystem::path& staging, const std::filesystem::path& out);
-// Removes the staging folder; never throws.
-void discard_run_folder(const std::filesystem::path& staging) noexcept;
-
 // The summary.json document: {"experiment": NAME, "runs": [...]}.
 nlohmann::json summary_document(const Experiment& experiment, const RunContext& context);
+
+// Fault injection for tests: with PHYSGRAD_FAULT=ACTION@NAME:K the K-th pass through the point
+// NAME ("claimed": the folder is claimed and config.json written; "checkpoint": a checkpoint
+// was written; "commit": a result was moved into place) kills the process (ACTION "kill",
+// SIGKILL) or throws an Error ("fail"). Does nothing without the variable.
+void fault_point(const char* name);
 
 }  // namespace physgrad::experiments

@@ -40,6 +40,9 @@ void apply(Options& o, const RuleSettings& s) {
     take(o.inverse.method, s.inverse);
     take(o.inverse.tolerance, s.inverse_tolerance);
     take(o.inverse.max_iterations, s.inverse_iterations);
+    take(o.inverse.relative_tolerance, s.inverse_relative_tolerance);
+    take(o.inverse.function_tolerance, s.inverse_function_tolerance);
+    take(o.inverse.rcond, s.inverse_rcond);
   }
   if constexpr (requires { o.y_step; }) take(o.y_step, s.y_step);
   if constexpr (requires { o.adam; }) apply(o.adam, s);  // sip's Adam on the proxy loss

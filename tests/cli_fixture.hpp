@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -31,6 +32,29 @@ inline std::string read_file(const fs::path& path) {
   std::stringstream buffer;
   buffer << in.rdbuf();
   return buffer.str();
+}
+
+// Every file under `folder`: its path relative to `folder` → its content.
+inline std::map<std::string, std::string> snapshot(const fs::path& folder) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
+    if (entry.is_regular_file()) {
+      files[fs::relative(entry.path(), folder).string()] = read_file(entry.path());
+    }
+  }
+  return files;
+}
+
+// A finished run folder: its summary and report, no checkpoint, nothing staged or temporary.
+inline bool is_finished(const fs::path& folder) {
+  if (!fs::exists(folder / "summary.json") || !fs::exists(folder / "report.html") ||
+      fs::exists(folder / "checkpoint.pgc")) {
+    return false;
+  }
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    if (entry.path().filename().string()[0] == '.') return false;
+  }
+  return true;
 }
 
 // A run folder's metrics.csv without its wall-clock column: what an interrupted and resumed run
@@ -93,10 +117,14 @@ class Cli : public ::testing::Test {
     return path.string();
   }
 
-  Outcome run(const std::string& args) const {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string command = "cd '" + dir_.string() + "' && '" + PHYSGRAD_CLI + "' " + args +
-                                " > '" + out.string() + "' 2> '" + err.string() + "'";
+  // Runs `physgrad ARGS` in the working folder (or its sub-folder `subdir`), with the
+  // environment assignments `env` ("NAME=value …") in front, and waits for it.
+  Outcome run(const std::string& args, const std::string& env = "",
+              const std::string& subdir = "") const {
+    const fs::path out = configs_ / "stdout.txt", err = configs_ / "stderr.txt";
+    const std::string command = "cd '" + (dir_ / subdir).string() + "' && env " + env + " '" +
+                                PHYSGRAD_CLI + "' " + args + " > '" + out.string() + "' 2> '" +
+                                err.string() + "'";
     const int status = std::system(command.c_str());
     Outcome outcome;
     outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -108,11 +136,13 @@ class Cli : public ::testing::Test {
   }
 
   // Starts `physgrad ARGS` in the working folder without waiting; its stdout and stderr go to
-  // spawned.out / spawned.err beside the config files.
-  pid_t spawn(const std::string& args) const {
-    const std::string command = "cd '" + dir_.string() + "' && exec '" + PHYSGRAD_CLI + "' " +
-                                args + " > '" + (configs_ / "spawned.out").string() + "' 2> '" +
-                                (configs_ / "spawned.err").string() + "'";
+  // TAG.out / TAG.err beside the config files.
+  pid_t spawn(const std::string& args, const std::string& env = "",
+              const std::string& tag = "spawned") const {
+    const std::string command = "cd '" + dir_.string() + "' && exec env " + env + " '" +
+                                PHYSGRAD_CLI + "' " + args + " > '" +
+                                (configs_ / (tag + ".out")).string() + "' 2> '" +
+                                (configs_ / (tag + ".err")).string() + "'";
     const pid_t pid = ::fork();
     if (pid == 0) {
       ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));

@@ -96,10 +96,9 @@ TEST_F(Cli, RunWritesTheWholeRunFolder) {
   }
   const auto config = nlohmann::json::parse(read_file(result / "config.json"));
   EXPECT_EQ(config["settings"]["iters"], 10);
-  // Staging folders never stay behind.
-  for (const auto& entry : fs::directory_iterator(dir_)) {
-    EXPECT_EQ(entry.path().filename().string().find(".result.partial"), std::string::npos);
-  }
+  // Nothing staged or temporary stays behind, in the folder or beside it.
+  EXPECT_TRUE(physgrad::testing::is_finished(result));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
 }
 
 TEST_F(Cli, BadConfigFileIsOneLineExitTwoAndWritesNothing) {
@@ -170,7 +169,7 @@ TEST_F(Cli, SavedConfigReproducesTheRun) {
   // The saved folder is a setting too: rerunning into it is refused, and nothing is touched.
   const Outcome into_first = run("run comparison --config first/config.json");
   EXPECT_EQ(into_first.exit_code, 2);
-  EXPECT_NE(into_first.err.find("'first' already exists and is not empty"), std::string::npos)
+  EXPECT_NE(into_first.err.find("'first' holds the results of a finished run"), std::string::npos)
       << into_first.err;
 }
 

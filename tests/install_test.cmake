@@ -1,5 +1,6 @@
 # The installed package from an outside project: installs BUILD_DIR into a fresh prefix under
-# WORK_DIR, then configures, builds and runs PROJECT_DIR against it. Any failing step fails.
+# WORK_DIR, runs the installed physgrad command, then configures, builds and runs PROJECT_DIR
+# against the library. Any failing step fails.
 # Set by the test: BUILD_DIR, PROJECT_DIR, WORK_DIR, CXX_COMPILER, CXX_FLAGS (may be empty).
 cmake_minimum_required(VERSION 3.25)
 file(REMOVE_RECURSE "${WORK_DIR}")
@@ -25,6 +26,11 @@ foreach(file libphysgrad.a physgradConfig.cmake physgradConfigVersion.cmake phys
     message(FATAL_ERROR "install: ${file} is missing from ${prefix}")
   endif()
 endforeach()
+# The command-line tool is installed and runs from there.
+run_step("installed physgrad" "${prefix}/bin/physgrad" list)
+if(NOT step_output MATCHES "scaled-toy")
+  message(FATAL_ERROR "installed physgrad list: unexpected output:\n${step_output}")
+endif()
 
 run_step("configure" "${CMAKE_COMMAND}" -S "${PROJECT_DIR}" -B "${WORK_DIR}/build"
          "-DCMAKE_PREFIX_PATH=${prefix}" "-DCMAKE_CXX_COMPILER=${CXX_COMPILER}"

@@ -77,6 +77,9 @@ TEST(Catalogue, SettingsReachEveryOptionTheRulesReport) {
                               .inverse = InverseMethod::kGaussNewton,
                               .inverse_tolerance = 1e-7,
                               .inverse_iterations = 17,
+                              .inverse_relative_tolerance = 1e-3,
+                              .inverse_function_tolerance = 1e-9,
+                              .inverse_rcond = 1e-8,
                               .y_step = 0.75};
   const nlohmann::json expected = {
       {"lr", 0.123},        {"initial_step", 0.123},       {"beta", 0.5},
@@ -84,7 +87,9 @@ TEST(Catalogue, SettingsReachEveryOptionTheRulesReport) {
       {"rcond", 1e-4},      {"kappa", 0.25},               {"backend", "normal"},
       {"memory", 4},        {"c1", 1e-3},                  {"c2", 0.5},
       {"initial_damping", 0.01}, {"min_damping", 1e-12},   {"inverse", "gn"},
-      {"inverse_tolerance", 1e-7}, {"inverse_iterations", 17}, {"y_step", 0.75}};
+      {"inverse_tolerance", 1e-7}, {"inverse_iterations", 17},
+      {"inverse_relative_tolerance", 1e-3}, {"inverse_function_tolerance", 1e-9},
+      {"inverse_rcond", 1e-8},      {"y_step", 0.75}};
   for (const RuleInfo& rule : rule_catalogue()) {
     const nlohmann::json params =
         rule.kind == RuleKind::kDirect ? make_optimizer(rule.id, settings)->params()

@@ -23,15 +23,7 @@
 namespace physgrad {
 namespace {
 
-// A well-posed linear least-squares problem: 5 residuals, 3 unknowns, target b.
-struct LeastSquares {
-  Matrix a = (Matrix(5, 3) << 2, -1, 0, 1, 3, 1, 0, 1, 4, -1, 0, 2, 1, 1, 1).finished();
-  Vector b = (Vector(5) << 1, -2, 0.5, 3, 1).finished();
-  testing::LinearSimulator physics{a};
-  L2Loss loss;
-  Objective objective{physics, loss, b};
-  Vector solution() const { return a.colPivHouseholderQr().solve(b); }
-};
+using testing::LeastSquares;
 
 std::vector<Vector> iterates(Optimizer& optimizer, const Objective& objective, const Vector& x0,
                              int steps) {

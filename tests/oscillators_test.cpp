@@ -9,20 +9,12 @@
 #include "physgrad/autodiff/finite_difference.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"
+#include "test_problems.hpp"
 
 namespace physgrad {
 namespace {
 
-// U[lo, hi) from the top 53 bits of the generator.
-Matrix uniform(std::mt19937_64& rng, Index rows, Index cols, double lo = 0, double hi = 1) {
-  Matrix m(rows, cols);
-  for (Index j = 0; j < cols; ++j) {
-    for (Index i = 0; i < rows; ++i) {
-      m(i, j) = lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
-    }
-  }
-  return m;
-}
+using testing::random_uniform;
 
 TEST(Oscillators, DerivativesMatchFiniteDifferences) {
   std::mt19937_64 rng(7);
@@ -31,8 +23,8 @@ TEST(Oscillators, DerivativesMatchFiniteDifferences) {
        {OscillatorConfig::paper(), OscillatorConfig::book(), chain}) {
     const CoupledOscillators physics(config);
     for (int trial = 0; trial < 2; ++trial) {
-      const Vector u = uniform(rng, physics.input_dim(), 1, -1, 1);
-      const Vector s0 = uniform(rng, physics.context_dim(), 1);
+      const Vector u = random_uniform(rng, physics.input_dim(), 1, -1, 1);
+      const Vector s0 = random_uniform(rng, physics.context_dim(), 1);
       const DerivativeCheck check = check_derivatives(physics, u, s0, 1e-6);
       EXPECT_TRUE(check.passed) << "N " << config.oscillators << ", Nt " << config.steps << ": "
                                 << check.report();
@@ -43,9 +35,9 @@ TEST(Oscillators, DerivativesMatchFiniteDifferences) {
 TEST(Oscillators, BatchedCallsEqualColumnByColumnCalls) {
   std::mt19937_64 rng(11);
   const CoupledOscillators physics;
-  const Matrix u = uniform(rng, physics.input_dim(), 5, -1, 1);
-  const Matrix s0 = uniform(rng, physics.context_dim(), 5);
-  const Matrix gy = uniform(rng, physics.output_dim(), 5, -1, 1);
+  const Matrix u = random_uniform(rng, physics.input_dim(), 5, -1, 1);
+  const Matrix s0 = random_uniform(rng, physics.context_dim(), 5);
+  const Matrix gy = random_uniform(rng, physics.output_dim(), 5, -1, 1);
   const Matrix y = physics.forward_batch(u, s0), gx = physics.vjp_batch(u, s0, gy);
   for (Index b = 0; b < 5; ++b) {
     EXPECT_LT((y.col(b) - physics.forward(u.col(b), s0.col(b))).norm(), 1e-14);
@@ -81,7 +73,7 @@ TEST(Oscillators, ZeroControlLossMatchesTheReference) {
        {Case{OscillatorConfig::book(), 0.726}, Case{OscillatorConfig::paper(), 0.796}}) {
     const CoupledOscillators physics(c.config);
     std::mt19937_64 rng(2024);
-    const Matrix s0 = uniform(rng, 4, 20000);
+    const Matrix s0 = random_uniform(rng, 4, 20000);
     const Matrix s = physics.forward_batch(Matrix::Zero(c.config.steps, 20000), s0);
     const double mean = (s - s0).colwise().squaredNorm().mean();
     EXPECT_NEAR(mean, c.expected, 0.01) << "Nt " << c.config.steps;

@@ -11,19 +11,12 @@
 #include "physgrad/error.hpp"
 #include "physgrad/loss/fidelity.hpp"
 #include "physgrad/physics/quantum_dipole.hpp"
+#include "test_problems.hpp"
 
 namespace physgrad {
 namespace {
 
-Matrix uniform(std::mt19937_64& rng, Index rows, Index cols, double lo, double hi) {
-  Matrix m(rows, cols);
-  for (Index j = 0; j < cols; ++j) {
-    for (Index i = 0; i < rows; ++i) {
-      m(i, j) = lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
-    }
-  }
-  return m;
-}
+using testing::random_uniform;
 
 // ⟨a|b⟩ in the real layout [Re …, Im …].
 std::complex<double> inner(const Vector& a, const Vector& b) {
@@ -38,10 +31,10 @@ std::complex<double> inner(const Vector& a, const Vector& b) {
 TEST(QuantumDipole, DerivativesMatchFiniteDifferences) {
   std::mt19937_64 rng(3);
   const QuantumDipole physics;
-  Vector random_state = uniform(rng, 28, 1, -1, 1);
+  Vector random_state = random_uniform(rng, 28, 1, -1, 1);
   random_state /= random_state.norm();
   for (const Vector& psi0 : {dipole_eigenstate(1), random_state}) {
-    const Vector u = uniform(rng, physics.input_dim(), 1, -2, 2);
+    const Vector u = random_uniform(rng, physics.input_dim(), 1, -2, 2);
     const DerivativeCheck check = check_derivatives(physics, u, psi0, 1e-6);
     EXPECT_TRUE(check.passed) << check.report();
   }
@@ -50,8 +43,8 @@ TEST(QuantumDipole, DerivativesMatchFiniteDifferences) {
 TEST(QuantumDipole, NormIsConservedUnderRandomControls) {
   std::mt19937_64 rng(5);
   const QuantumDipole physics;
-  const Matrix u = uniform(rng, physics.input_dim(), 8, -2, 2);
-  Matrix psi0 = uniform(rng, 28, 8, -1, 1);
+  const Matrix u = random_uniform(rng, physics.input_dim(), 8, -2, 2);
+  Matrix psi0 = random_uniform(rng, 28, 8, -1, 1);
   psi0.colwise().normalize();
   const Matrix psi = physics.forward_batch(u, psi0);
   for (Index b = 0; b < 8; ++b) EXPECT_NEAR(psi.col(b).squaredNorm(), 1.0, 1e-12);
@@ -101,7 +94,7 @@ TEST(QuantumDipole, RejectsBadShapesAndArguments) {
 TEST(Fidelity, DerivativesMatchFiniteDifferences) {
   std::mt19937_64 rng(9);
   const FidelityLoss loss;
-  const Vector y = uniform(rng, 28, 1, -1, 1), target = uniform(rng, 28, 1, -1, 1);
+  const Vector y = random_uniform(rng, 28, 1, -1, 1), target = random_uniform(rng, 28, 1, -1, 1);
   const auto value = [&](const Vector& at) { return Vector::Constant(1, loss.value(at, target)); };
   const auto gradient = [&](const Vector& at) { return loss.gradient(at, target); };
   const Vector g = loss.gradient(y, target);
@@ -117,7 +110,7 @@ TEST(Fidelity, DerivativesMatchFiniteDifferences) {
 TEST(Fidelity, ZeroForTheTargetTimesAPhase) {
   std::mt19937_64 rng(13);
   const FidelityLoss loss;
-  Vector target = uniform(rng, 28, 1, -1, 1);
+  Vector target = random_uniform(rng, 28, 1, -1, 1);
   target /= target.norm();
   for (const double phi : {0.0, 0.7, -2.9}) {
     const std::complex<double> phase = std::polar(1.0, phi);

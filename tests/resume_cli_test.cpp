@@ -50,7 +50,7 @@ TEST_F(Resume, TerminatedRunContinuesToTheSameResults) {
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM);
   const std::string err = read_file(configs_ / "spawned.err");
-  EXPECT_NE(err.find("checkpoint saved, continue with: physgrad resume part"), std::string::npos)
+  EXPECT_NE(err.find("checkpoint kept, continue with: physgrad resume part"), std::string::npos)
       << err;
   // The interrupted folder holds the settings and the checkpoint, nothing half-written.
   std::vector<std::string> files;
@@ -124,7 +124,7 @@ TEST_F(Resume, DamagedCheckpointOrConfigIsOneLineAndChangesNothing) {
   std::ofstream(folder / "checkpoint.pgc", std::ios::binary) << checkpoint;
   std::ofstream(folder / "config.json", std::ios::binary) << config;
   expect_refused(kRun + "part", "physgrad resume part");
-  expect_refused("resume no-such-folder", "holds no checkpoint");
+  expect_refused("resume no-such-folder", "'no-such-folder' does not exist");
   // Another BLAS thread count than the checkpoint's is allowed, with a warning.
   const char* threads = std::getenv("OPENBLAS_NUM_THREADS");
   const std::string saved_threads = threads == nullptr ? "" : threads;

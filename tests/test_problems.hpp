@@ -3,13 +3,28 @@
 #pragma once
 
 #include <cmath>
+#include <random>
 #include <string>
 #include <utility>
 
 #include "physgrad/error.hpp"
+#include "physgrad/loss/loss.hpp"
+#include "physgrad/optim/objective.hpp"
 #include "physgrad/physics/simulator.hpp"
 
 namespace physgrad::testing {
+
+// Entries drawn from U[lo, hi) with the top 53 bits of the generator.
+inline Matrix random_uniform(std::mt19937_64& rng, Index rows, Index cols, double lo = 0,
+                             double hi = 1) {
+  Matrix m(rows, cols);
+  for (Index j = 0; j < cols; ++j) {
+    for (Index i = 0; i < rows; ++i) {
+      m(i, j) = lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
+    }
+  }
+  return m;
+}
 
 // Extended Rosenbrock in n (even) dimensions: independent pairs (x_{2i}, x_{2i+1}) with residuals
 // r_{2i} = 10(x_{2i+1} − x_{2i}²), r_{2i+1} = 1 − x_{2i}. n = 2 is the classic function; with
@@ -98,6 +113,16 @@ class Bounded final : public Simulator {
 
  private:
   double bound_;
+};
+
+// A well-posed linear least-squares problem ½‖A x − b‖²: 5 residuals, 3 unknowns.
+struct LeastSquares {
+  Matrix a = (Matrix(5, 3) << 2, -1, 0, 1, 3, 1, 0, 1, 4, -1, 0, 2, 1, 1, 1).finished();
+  Vector b = (Vector(5) << 1, -2, 0.5, 3, 1).finished();
+  LinearSimulator physics{a};
+  L2Loss loss;
+  Objective objective{physics, loss, b};
+  Vector solution() const { return a.colPivHouseholderQr().solve(b); }
 };
 
 }  // namespace physgrad::testing

@@ -25,6 +25,7 @@
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
+#include "physgrad/report/atomic_file.hpp"
 #include "physgrad/train/checkpoint_file.hpp"
 #include "physgrad/threads.hpp"
 #include "ranks.hpp"
@@ -184,12 +185,23 @@ void print_rules(bool markdown) {
   }
 }
 
-// Runs `experiment` into its run folder; `resumed` is the checkpoint of an interrupted run to
-// continue (null for a fresh run).
-int run_experiment(const ex::Experiment& experiment,
-                   const std::vector<std::pair<std::string, std::string>>& given,
-                   const std::string& command_line, const nlohmann::json& resumed = nullptr) {
-  const ex::Settings settings = ex::resolve_settings(experiment, given);
+// Claims the run folder: --out, or a new runs/NAME-<timestamp>[-N]. Only the writing rank
+// claims one (under mpirun every rank trains its share; rank 0 alone prints and writes).
+std::optional<ex::RunFolder> claim_new_folder(const ex::Experiment& experiment,
+                                              const ex::Settings& settings) {
+  if (!physgrad::cli::is_writer()) return std::nullopt;
+  if (settings.has("out") && !settings.text("out").empty()) {
+    return ex::RunFolder::create(ex::locate_folder(settings.text("out"), "--out"));
+  }
+  return ex::RunFolder::create_unique("runs", experiment.name() + "-" + timestamp());
+}
+
+// Runs `experiment` into `folder` (absent on the ranks that do not write): writes config.json
+// into a new one, or continues the checkpoint `resumed` when it is not null. Whatever ends the run, the folder is committed or
+// left as RunFolder::abandon() says.
+int run_experiment(const ex::Experiment& experiment, const ex::Settings& settings,
+                   const std::string& command_line, std::optional<ex::RunFolder>& folder,
+                   const fs::path& folder_path, const nlohmann::json& resumed = nullptr) {
   // One BLAS thread unless asked: the matrices of most runs are small, and a multithreaded
   // BLAS on busy cores costs more than it saves.
   if (settings.has("threads")) {
@@ -198,20 +210,19 @@ int run_experiment(const ex::Experiment& experiment,
              std::getenv("OMP_NUM_THREADS") == nullptr) {
     physgrad::set_blas_threads(1);
   }
-  const fs::path out = settings.has("out") && !settings.text("out").empty()
-                           ? fs::path(settings.text("out"))
-                           : fs::path("runs") / (experiment.name() + "-" + timestamp());
-  // Under mpirun every rank trains its share; rank 0 alone prints and writes the run folder and
-  // the checkpoint (every rank reads a resumed one).
-  const bool writer = physgrad::cli::is_writer();
-  const fs::path staging = writer ? ex::prepare_run_folder(out, !resumed.is_null()) : fs::path();
-  std::optional<ex::ExperimentCheckpoint> checkpoint;
+  const bool writer = folder.has_value();
   try {
-    checkpoint.emplace(out, ex::config_document(experiment, settings, command_line), resumed,
-                       writer);
+    if (writer && !folder->resuming()) {
+      physgrad::write_file_atomic(
+          folder->path() / ex::kConfigFile,
+          ex::config_document(experiment, settings, command_line).dump(2) + "\n");
+      ex::fault_point("claimed");
+    }
+    ex::ExperimentCheckpoint checkpoint(
+        folder_path, ex::config_document(experiment, settings, command_line), resumed, writer);
     const std::string changed =
-        checkpoint->set_environment({{"blas_threads", physgrad::blas_threads()},
-                                     {"ranks", physgrad::cli::communicator()->size()}});
+        checkpoint.set_environment({{"blas_threads", physgrad::blas_threads()},
+                                    {"ranks", physgrad::cli::communicator()->size()}});
     if (!changed.empty() && writer) {
       std::cerr << "physgrad: warning: the checkpoint was written with " << changed
                 << "; the continued run may differ from an uninterrupted one in the last bits\n";
@@ -219,48 +230,58 @@ int run_experiment(const ex::Experiment& experiment,
     ex::RunContext context;
     context.set_experiment_name(experiment.name());
     context.set_stop_flag(&ex::stop_flag());
-    context.set_checkpoint(&*checkpoint);
+    context.set_checkpoint(&checkpoint);
     context.set_communicator(physgrad::cli::communicator());
     context.set_quiet(!writer);
     experiment.run(settings, context);
     if (!writer) return 0;
-    ex::write_run_folder(staging, experiment, settings, context, command_line);
-    ex::commit_run_folder(staging, out);
+    ex::write_run_folder(folder->staging(), experiment, settings, context, command_line);
+    folder->commit();
     for (const auto& table : context.tables()) print_table(table);
-    std::cout << "report: " << (out / "report.html").string() << '\n';
+    std::cout << "report: " << (fs::path(folder->shown()) / "report.html").string() << '\n';
   } catch (const ex::Interrupted& e) {
-    if (!writer) return 128 + ex::received_signal();
-    ex::discard_run_folder(staging);
-    std::cerr << "physgrad: " << e.what() << "; "
-              << (checkpoint && checkpoint->written()
-                      ? "checkpoint saved, continue with: physgrad resume " + out.string()
-                      : std::string("nothing written"))
-              << '\n';
+    if (writer) std::cerr << "physgrad: " << e.what() << "; " << folder->abandon() << '\n';
     return 128 + ex::received_signal();
-  } catch (...) {
-    if (writer) ex::discard_run_folder(staging);
-    throw;
+  } catch (const std::exception& e) {
+    if (!writer) throw;
+    throw physgrad::Error(std::string(e.what()) + "; " + folder->abandon());
   }
   return 0;
 }
 
-// Continues the interrupted run in `folder` with the settings of its config.json.
-int resume_run(const fs::path& folder) {
-  if (!fs::exists(folder / ex::kCheckpointFile)) {
-    throw physgrad::Error("'" + folder.string() + "' holds no checkpoint (" +
-                          ex::kCheckpointFile + "): not the folder of an interrupted run");
-  }
-  const nlohmann::json config = ex::read_config_document(folder / "config.json");
+// A new run of `experiment` with the options `given`.
+int start_run(const ex::Experiment& experiment, const ex::OptionTexts& given,
+              const std::string& command_line) {
+  const ex::Settings settings = ex::resolve_settings(experiment, given);
+  std::optional<ex::RunFolder> folder = claim_new_folder(experiment, settings);
+  return run_experiment(experiment, settings, command_line, folder,
+                        folder ? folder->path() : fs::path());
+}
+
+// Continues the unfinished run in `text` with the settings of its config.json: from its
+// checkpoint, or from the start when it has none.
+int resume_run(const std::string& text) {
+  const ex::FolderPath where = ex::locate_folder(text, "resume");
+  std::optional<ex::RunFolder> folder;
+  if (physgrad::cli::is_writer()) folder.emplace(ex::RunFolder::reopen(where));
+  const nlohmann::json config = ex::read_config_document(where.path / ex::kConfigFile);
   if (!config.is_object() || !config.contains("experiment") || !config["experiment"].is_string()) {
-    throw physgrad::Error("'" + (folder / "config.json").string() + "' names no experiment");
+    throw physgrad::Error("'" + where.shown + "/" + ex::kConfigFile + "' names no experiment");
   }
   const ex::Experiment& experiment = ex::find_experiment(config["experiment"].get<std::string>());
   ex::OptionTexts given = ex::config_options(experiment, config);
-  given.emplace_back("out", folder.string());
-  const nlohmann::json resumed = physgrad::read_checkpoint_file(folder / ex::kCheckpointFile);
+  given.emplace_back("out", where.shown);
+  const ex::Settings settings = ex::resolve_settings(experiment, given);
+  nlohmann::json resumed;
+  if (fs::exists(where.path / ex::kCheckpointFile)) {
+    resumed = physgrad::read_checkpoint_file(where.path / ex::kCheckpointFile);
+  } else if (folder) {
+    std::cerr << "physgrad: " << where.shown << " has no checkpoint; the run starts again from "
+              << "the beginning with its saved settings\n";
+  }
   const std::string command =
       config.contains("command") && config["command"].is_string() ? config["command"].get<std::string>() : "";
-  return run_experiment(experiment, given, command, resumed);
+  return run_experiment(experiment, settings, command, folder, where.path, resumed);
 }
 
 }  // namespace
@@ -366,7 +387,7 @@ int main(int argc, char** argv) {
         const std::string name = option->get_name().substr(2);  // drop "--"
         given.emplace_back(name, texts[experiment->name()][name]);
       }
-      return run_experiment(*experiment, given, command_line);
+      return start_run(*experiment, given, command_line);
     }
   } catch (const std::bad_alloc&) {
     return usage_error("out of memory: a size given (samples, batch, grid, list) needs more than "

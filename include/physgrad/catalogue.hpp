@@ -72,8 +72,13 @@ struct RuleSettings {
   std::optional<double> initial_damping = std::nullopt;  // lm
   std::optional<double> min_damping = std::nullopt;      // lm
   std::optional<InverseMethod> inverse = std::nullopt;   // pg, sip: the local inverse
-  std::optional<double> inverse_tolerance = std::nullopt;  // pg, sip: of a numerical inverse
-  std::optional<int> inverse_iterations = std::nullopt;    // pg, sip: of a numerical inverse
+  // pg, sip: the numerical local inverse (LocalInverseOptions: tolerance, relative_tolerance,
+  // function_tolerance, max_iterations, rcond)
+  std::optional<double> inverse_tolerance = std::nullopt;
+  std::optional<int> inverse_iterations = std::nullopt;
+  std::optional<double> inverse_relative_tolerance = std::nullopt;
+  std::optional<double> inverse_function_tolerance = std::nullopt;
+  std::optional<double> inverse_rcond = std::nullopt;
   std::optional<double> y_step = std::nullopt;             // sip
 };
 

@@ -16,11 +16,7 @@ SipUpdate::SipUpdate(Options options) : options_(options), adam_(options.adam) {
 nlohmann::json SipUpdate::params() const {
   nlohmann::json params = adam_.params();
   params["y_step"] = options_.y_step;
-  params["inverse"] = to_string(options_.inverse.method);
-  if (options_.inverse.method != InverseMethod::kAnalytic) {
-    params["inverse_tolerance"] = options_.inverse.tolerance;
-    params["inverse_iterations"] = options_.inverse.max_iterations;
-  }
+  params.update(local_inverse_params(options_.inverse));
   return params;
 }
 

@@ -74,8 +74,11 @@ void AdamState::set_learning_rate(double lr) {
   options_.lr = lr;
 }
 
-Step Adam::step(const Objective& objective, const Vector& x) {
-  return {state_.update(objective.gradient(x)), Step::Status::kOk, {}, 1};
+Step Adam::propose(const Objective& objective, const Vector& x, const Domain& domain) {
+  // The moments live in z: Δz = Adam(D g), Δx = D Δz, projected onto the box.
+  const Vector s = domain.scale(x.size());
+  const Vector dz = state_.update(s.cwiseProduct(objective.gradient(x)));
+  return {domain.feasible_step(x, s.cwiseProduct(dz)), Step::Status::kOk, {}, 1};
 }
 
 }  // namespace physgrad

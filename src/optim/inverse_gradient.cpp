@@ -11,10 +11,18 @@ InverseGradient::InverseGradient(Options options) : options_(options) {
   require_in_range("ig: rcond", options_.rcond, 0.0, 1.0);
 }
 
-Step InverseGradient::step(const Objective& objective, const Vector& x) {
-  const Vector dy = y_step(objective, objective.output(x), options_.lr);
-  const Vector dx = power_pinv_apply(objective.jacobian(x), dy, {1.0, options_.rcond});
-  return {dx, Step::Status::kOk, {}, 1};
+Step InverseGradient::propose(const Objective& objective, const Vector& x, const Domain& domain) {
+  const Vector y = objective.output(x);
+  const Vector dy = y_step(objective, y, options_.lr);
+  const Matrix j = objective.jacobian(x);
+  // Held variables (Domain::free_variables, by the gradient Jᵀ ∂L/∂y) keep their value; the
+  // others move by Δz_F = (J[:, F] D_F)⁺ Δy, Δx_F = D_F Δz_F.
+  const Vector gradient = domain.bounded()
+                              ? Vector(j.transpose() * objective.loss().gradient(y, objective.target()))
+                              : Vector::Zero(x.size());
+  const FreeSubspace free(domain, x, gradient);
+  const Vector dz = power_pinv_apply(free.columns(j), dy, {1.0, options_.rcond});
+  return {free.step(dz), Step::Status::kOk, {}, 1};
 }
 
 }  // namespace physgrad

@@ -14,23 +14,38 @@ LevenbergMarquardt::LevenbergMarquardt(Options options) : options_(options) {
 void LevenbergMarquardt::reset() {
   mu_ = options_.initial_damping;
   nu_ = 2;
+  unit_ = 0;
 }
 
-Step LevenbergMarquardt::step(const Objective& objective, const Vector& x) {
+Step LevenbergMarquardt::propose(const Objective& objective, const Vector& x,
+                                 const Domain& domain) {
   const Vector y = objective.output(x);
   const double loss = objective.loss().value(y, objective.target());
   const Matrix j = objective.jacobian(x);
   const Matrix a = j.transpose() * objective.loss().hessian(y, objective.target()) * j;
   const Vector g = j.transpose() * objective.loss().gradient(y, objective.target());
-  if (g.isZero(0.0)) return {Vector::Zero(x.size()), Step::Status::kOk, {}, 1};
+  const FreeSubspace free(domain, x, g);
+  const Vector gz = free.covector(g);
+  if (gz.isZero(0.0)) return {Vector::Zero(x.size()), Step::Status::kOk, {}, 1};
 
-  // Marquardt's scaling by diag(A) keeps the damped step invariant to rescaling each x_i;
-  // entries are floored so that directions A does not see are still damped.
-  const Vector diag = a.diagonal().cwiseMax(1e-12 * std::max(a.diagonal().maxCoeff(), 1e-300));
-  Matrix damped = a;
+  // The damped system in the free scaled variables z_F. Without x_scale: Marquardt's scaling by
+  // diag(A_z), which keeps the step invariant to rescaling each x_i (entries floored so that
+  // directions A does not see are still damped). With x_scale: the identity in z, i.e. a trust
+  // region on ‖Δx ⊘ s‖ (MINPACK's diag = 1/x_scale), in units of the largest diag(A_z) of the
+  // first step.
+  const Matrix az = free.square(a);
+  Vector diag;
+  if (domain.scaled()) {
+    if (unit_ == 0) unit_ = std::max(az.diagonal().maxCoeff(), 1e-300);
+    diag = Vector::Constant(az.rows(), unit_);
+  } else {
+    diag = az.diagonal().cwiseMax(1e-12 * std::max(az.diagonal().maxCoeff(), 1e-300));
+  }
+  Matrix damped = az;
   damped.diagonal() += mu_ * diag;
-  const Vector dx = -damped.ldlt().solve(g);
+  const Vector dx = free.step(-damped.ldlt().solve(gz));
 
+  // The gain ratio of the step actually taken (cut to the box), against the model in x.
   const double predicted = -(g.dot(dx) + 0.5 * dx.dot(a * dx));
   const double trial = objective.value(x + dx);
   const double rho = (loss - trial) / predicted;
@@ -44,7 +59,7 @@ Step LevenbergMarquardt::step(const Objective& objective, const Vector& x) {
   if (!std::isfinite(mu_)) {
     return {Vector::Zero(x.size()), Step::Status::kFailed, "lm: damping overflowed; no descent found", 2};
   }
-  return {Vector::Zero(x.size()), Step::Status::kRejected, {}, 2};
+  return {dx, Step::Status::kRejected, {}, 2};
 }
 
 }  // namespace physgrad

@@ -62,7 +62,7 @@ class Search {
     result_.gradient = gradient0;
   }
 
-  LineSearchResult run(double initial_step) {
+  LineSearchResult run(double initial_step, double step_limit) {
     if (!std::isfinite(start_.value)) return fail("the value at the starting point is not finite");
     if (!(start_.slope < 0)) {
       std::ostringstream msg;
@@ -71,7 +71,8 @@ class Search {
     }
     // Algorithm 3.5: grow α until [previous, trial] brackets an acceptable step.
     Trial previous = start_;
-    double step = std::min(initial_step, options_.max_step);
+    const double largest = std::min(options_.max_step, step_limit);
+    double step = std::min(initial_step, largest);
     while (result_.evaluations < options_.max_evaluations) {
       Trial trial = evaluate(step);
       if (!trial.finite() || !sufficient_decrease(trial) ||
@@ -80,6 +81,8 @@ class Search {
       }
       if (curvature(trial)) return accept(trial);
       if (trial.slope >= 0) return zoom(std::move(trial), std::move(previous));
+      // The ray leaves the feasible region here while φ still decreases: the lowest φ on it.
+      if (step >= step_limit) return accept(trial);
       if (step >= options_.max_step) {
         return fail("φ is still decreasing steeply at max_step = " + format(options_.max_step));
       }
@@ -87,7 +90,7 @@ class Search {
       // least 10% (no stalling) and at most 10× (no wild jump on a poor model).
       const double guess = cubic_minimizer(previous, trial);
       step = std::isfinite(guess) ? std::clamp(guess, 1.1 * step, 10 * step) : 10 * step;
-      step = std::min(step, options_.max_step);
+      step = std::min(step, largest);
       previous = std::move(trial);
     }
     return out_of_evaluations();
@@ -179,9 +182,14 @@ class Search {
 LineSearchResult strong_wolfe_line_search(const Objective& objective, const Vector& x,
                                           double value0, const Vector& gradient0,
                                           const Vector& direction, double initial_step,
-                                          const LineSearchOptions& options) {
+                                          const LineSearchOptions& options, double step_limit) {
   options.validate();
   require_positive("line search: initial_step", initial_step);
+  if (!(step_limit > 0)) {
+    std::ostringstream msg;
+    msg << "line search: step_limit must be > 0, got " << step_limit;
+    throw Error(msg.str());
+  }
   const Index n = objective.dim();
   if (x.size() != n || gradient0.size() != n || direction.size() != n) {
     std::ostringstream msg;
@@ -189,7 +197,7 @@ LineSearchResult strong_wolfe_line_search(const Objective& objective, const Vect
         << " and " << direction.size() << " entries, expected " << n;
     throw Error(msg.str());
   }
-  return Search(objective, x, direction, value0, gradient0, options).run(initial_step);
+  return Search(objective, x, direction, value0, gradient0, options).run(initial_step, step_limit);
 }
 
 }  // namespace physgrad

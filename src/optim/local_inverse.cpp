@@ -6,42 +6,32 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
-#include "physgrad/optim/gauss_newton.hpp"
+#include "physgrad/optim/inverse_gradient.hpp"
 #include "physgrad/optim/lbfgs.hpp"
 #include "physgrad/optim/minimize.hpp"
 
 namespace physgrad {
 
-std::string to_string(InverseMethod method) {
-  switch (method) {
-    case InverseMethod::kAuto: return "auto";
-    case InverseMethod::kAnalytic: return "analytic";
-    case InverseMethod::kLbfgs: return "lbfgs";
-    case InverseMethod::kGaussNewton: return "gn";
+namespace {
+
+constexpr InverseMethod kMethods[] = {InverseMethod::kAuto, InverseMethod::kAnalytic,
+                                      InverseMethod::kTimeReversal, InverseMethod::kLbfgs,
+                                      InverseMethod::kGaussNewton};
+
+void check_options(const LocalInverseOptions& options) {
+  require_positive("local inverse: tolerance", options.tolerance);
+  require_in_range("local inverse: relative_tolerance", options.relative_tolerance, 0.0, 1.0);
+  require_in_range("local inverse: function_tolerance", options.function_tolerance, 0.0, INFINITY);
+  require_in_range("local inverse: rcond", options.rcond, 0.0, 1.0);
+  if (options.max_iterations < 1) {
+    throw Error("local inverse: max_iterations must be ≥ 1, got " +
+                std::to_string(options.max_iterations));
   }
-  return "unknown";
 }
 
-InverseMethod parse_inverse_method(const std::string& text) {
-  for (InverseMethod method : {InverseMethod::kAuto, InverseMethod::kAnalytic,
-                               InverseMethod::kLbfgs, InverseMethod::kGaussNewton}) {
-    if (text == to_string(method)) return method;
-  }
-  throw Error("unknown inverse method '" + text + "' (known: auto, analytic, lbfgs, gn)");
-}
-
-LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, const Vector& x0,
-                                 const Vector& context, const LocalInverseOptions& options) {
-  if (y.size() != simulator.output_dim()) {
-    std::ostringstream msg;
-    msg << "local inverse: y has " << y.size() << " entries, simulator '" << simulator.name()
-        << "' has output_dim " << simulator.output_dim();
-    throw Error(msg.str());
-  }
-  InverseMethod method = options.method;
-  if (method == InverseMethod::kAuto) {
-    method = simulator.has_inverse() ? InverseMethod::kAnalytic : InverseMethod::kLbfgs;
-  }
+// The simulator's own inverse or its anchored time reversal, projected onto the box.
+LocalInverseResult closed_form(const Simulator& simulator, InverseMethod method, const Vector& y,
+                               const Vector& x0, const Vector& context, const Domain& domain) {
   LocalInverseResult result;
   if (method == InverseMethod::kAnalytic) {
     if (!simulator.has_inverse()) {
@@ -49,30 +39,110 @@ LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, co
                   "' has no analytic inverse; use a numerical one (lbfgs or gn)");
     }
     result.x = simulator.inverse(y, x0, context);
-    result.residual = (simulator.forward(result.x, context) - y).norm();
-    result.converged = std::isfinite(result.residual);
-    return result;
+    result.evaluations = 2;
+  } else {
+    if (!simulator.has_time_reversal()) {
+      throw Error("simulator '" + simulator.name() +
+                  "' has no time reversal; use a numerical inverse (lbfgs or gn)");
+    }
+    // x₀ + R(y) − R(P(x₀)): maps P(x₀) to x₀ exactly, so the reversal's own error (the
+    // truncation error of a scheme that is not reversible) cancels to first order near x₀.
+    const Vector y0 = simulator.forward(x0, context);
+    result.x = x0 + (simulator.time_reversal(y, context) - simulator.time_reversal(y0, context));
+    result.evaluations = 4;
+  }
+  result.x = domain.project(result.x);
+  result.residual = (simulator.forward(result.x, context) - y).norm();
+  result.converged = std::isfinite(result.residual);
+  return result;
+}
+
+}  // namespace
+
+std::string to_string(InverseMethod method) {
+  switch (method) {
+    case InverseMethod::kAuto: return "auto";
+    case InverseMethod::kAnalytic: return "analytic";
+    case InverseMethod::kTimeReversal: return "time_reversal";
+    case InverseMethod::kLbfgs: return "lbfgs";
+    case InverseMethod::kGaussNewton: return "gn";
+  }
+  return "unknown";
+}
+
+InverseMethod parse_inverse_method(const std::string& text) {
+  std::string known;
+  for (InverseMethod method : kMethods) {
+    if (text == to_string(method)) return method;
+    known += (known.empty() ? "" : ", ") + to_string(method);
+  }
+  throw Error("unknown inverse method '" + text + "' (known: " + known + ")");
+}
+
+nlohmann::json local_inverse_params(const LocalInverseOptions& options) {
+  nlohmann::json params = {{"inverse", to_string(options.method)}};
+  if (options.method != InverseMethod::kAnalytic &&
+      options.method != InverseMethod::kTimeReversal) {
+    params["inverse_tolerance"] = options.tolerance;
+    params["inverse_relative_tolerance"] = options.relative_tolerance;
+    params["inverse_function_tolerance"] = options.function_tolerance;
+    params["inverse_iterations"] = options.max_iterations;
+    params["inverse_rcond"] = options.rcond;
+  }
+  return params;
+}
+
+LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, const Vector& x0,
+                                 const Vector& context, const LocalInverseOptions& options,
+                                 const Domain& domain) {
+  if (y.size() != simulator.output_dim()) {
+    std::ostringstream msg;
+    msg << "local inverse: y has " << y.size() << " entries, simulator '" << simulator.name()
+        << "' has output_dim " << simulator.output_dim();
+    throw Error(msg.str());
+  }
+  domain.check_dim(x0.size(), "local inverse");
+  InverseMethod method = options.method;
+  if (method == InverseMethod::kAuto) {
+    method = simulator.has_inverse()         ? InverseMethod::kAnalytic
+             : simulator.has_time_reversal() ? InverseMethod::kTimeReversal
+                                             : InverseMethod::kLbfgs;
+  }
+  if (method == InverseMethod::kAnalytic || method == InverseMethod::kTimeReversal) {
+    return closed_form(simulator, method, y, x0, context, domain);
   }
 
-  require_positive("local inverse: tolerance", options.tolerance);
-  if (options.max_iterations < 1) throw Error("local inverse: max_iterations must be ≥ 1");
+  check_options(options);
   const L2Loss half_squares;
   const Objective misfit(simulator, half_squares, y, context);
-  std::unique_ptr<Optimizer> solver;
-  if (method == InverseMethod::kLbfgs) {
-    solver = std::make_unique<Lbfgs>();
-  } else {
-    solver = std::make_unique<GaussNewton>();
-  }
-  const double residual_tolerance = options.tolerance * (1 + y.norm());
-  MinimizeOptions run;
-  run.max_iterations = options.max_iterations;
-  run.loss_tolerance = 0.5 * residual_tolerance * residual_tolerance;
-  if (!std::isfinite(misfit.value(x0))) {
+  LocalInverseResult result;
+  const double start = misfit.value(x0);
+  result.evaluations = 1;
+  if (!std::isfinite(start)) {
     result.x = Vector::Constant(x0.size(), NAN);
     result.residual = NAN;
     return result;
   }
+  std::unique_ptr<Optimizer> solver;
+  if (method == InverseMethod::kLbfgs) {
+    solver = std::make_unique<Lbfgs>();
+  } else {  // Gauss-Newton for ½‖P(x) − y‖²: the full inverse-gradient step J⁺(y − P(x))
+    solver = std::make_unique<InverseGradient>(InverseGradientOptions{1.0, options.rcond});
+  }
+  // ‖r‖ ≤ a ⟺ ½‖r‖² ≤ ½a², and ‖r‖ ≤ ρ‖r₀‖ ⟺ ½‖r‖² ≤ ρ²·½‖r₀‖².
+  const double absolute = options.tolerance * (1 + y.norm());
+  const double relative = options.relative_tolerance * std::sqrt(2 * start);
+  MinimizeOptions run;
+  run.max_iterations = options.max_iterations;
+  run.loss_tolerance = 0.5 * absolute * absolute;
+  run.relative_loss_tolerance = options.relative_tolerance * options.relative_tolerance;
+  run.function_tolerance = options.function_tolerance;
+  const Index n = x0.size();
+  if (domain.bounded()) {
+    run.lower = domain.lower(n);
+    run.upper = domain.upper(n);
+  }
+  if (domain.scaled()) run.x_scale = domain.scale(n);
   const MinimizeSummary summary = minimize(*solver, misfit, x0, run);
   if (summary.termination == Termination::kNumericalFailure) {
     throw NumericalError("local inverse (" + to_string(method) + "): " + summary.message);
@@ -80,7 +150,8 @@ LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, co
   result.x = summary.x;
   result.residual = std::sqrt(2 * summary.loss);
   result.iterations = summary.iterations;
-  result.converged = result.residual <= residual_tolerance;
+  result.evaluations = 1 + summary.evaluations;
+  result.converged = result.residual <= absolute || result.residual <= relative;
   return result;
 }
 

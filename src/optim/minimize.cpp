@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "physgrad/error.hpp"
@@ -11,6 +12,10 @@ namespace physgrad {
 std::string to_string(Termination termination) {
   switch (termination) {
     case Termination::kConverged: return "converged";
+    case Termination::kRelativeLoss: return "relative_loss";
+    case Termination::kGradientTolerance: return "gradient_tolerance";
+    case Termination::kFunctionTolerance: return "function_tolerance";
+    case Termination::kParameterTolerance: return "parameter_tolerance";
     case Termination::kMaxIterations: return "max_iterations";
     case Termination::kStationary: return "stationary";
     case Termination::kNumericalFailure: return "numerical_failure";
@@ -20,54 +25,184 @@ std::string to_string(Termination termination) {
   return "unknown";
 }
 
-MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const Vector& x0,
-                         const MinimizeOptions& options) {
+bool converged(Termination termination) {
+  switch (termination) {
+    case Termination::kConverged:
+    case Termination::kRelativeLoss:
+    case Termination::kGradientTolerance:
+    case Termination::kFunctionTolerance:
+    case Termination::kParameterTolerance: return true;
+    default: return false;
+  }
+}
+
+namespace {
+
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
+void check_options(const MinimizeOptions& options) {
   if (options.max_iterations < 1) {
     throw Error("minimize: max_iterations must be ≥ 1, got " +
                 std::to_string(options.max_iterations));
   }
-  const auto start = std::chrono::steady_clock::now();
-  const auto elapsed = [&] {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  require_in_range("minimize: relative_loss_tolerance", options.relative_loss_tolerance, 0.0, 1.0);
+  const double inf = INFINITY;
+  require_in_range("minimize: gradient_tolerance", options.gradient_tolerance, 0.0, inf);
+  require_in_range("minimize: function_tolerance", options.function_tolerance, 0.0, inf);
+  require_in_range("minimize: parameter_tolerance", options.parameter_tolerance, 0.0, inf);
+}
+
+// The stopping rules of one run. Each test returns the termination that holds, with its
+// message; comparisons are written so that NaN never passes (a <= b is false for NaN).
+class StoppingRules {
+ public:
+  StoppingRules(const MinimizeOptions& options, const Domain& domain, double initial_loss)
+      : options_(options), domain_(domain), initial_loss_(initial_loss) {}
+
+  // The tests on the current point: loss, relative loss, projected gradient (when `gradient`
+  // is given).
+  bool at_point(double loss, const Vector& x, const Vector* gradient, MinimizeSummary& out) const {
+    if (std::isfinite(loss) && loss <= options_.loss_tolerance) {
+      return stop(out, Termination::kConverged,
+                  "L = " + number(loss) + " ≤ loss_tolerance = " + number(options_.loss_tolerance));
+    }
+    const double relative = options_.relative_loss_tolerance * initial_loss_;
+    if (options_.relative_loss_tolerance > 0 && std::isfinite(loss) && loss <= relative) {
+      return stop(out, Termination::kRelativeLoss,
+                  "L = " + number(loss) + " ≤ relative_loss_tolerance·L₀ = " + number(relative));
+    }
+    if (gradient != nullptr) {
+      out.gradient_norm = domain_.projected_gradient_norm(x, *gradient);
+      if (std::isfinite(out.gradient_norm) && out.gradient_norm <= options_.gradient_tolerance) {
+        return stop(out, Termination::kGradientTolerance,
+                    "projected gradient max-norm " + number(out.gradient_norm) +
+                        " ≤ gradient_tolerance = " + number(options_.gradient_tolerance));
+      }
+    }
+    return false;
+  }
+
+  // The tests on a step from x (loss `before`) by dx to loss `after`.
+  // The tests on a step from x (loss `before`) by dx to loss `after`; the function tolerance
+  // only when the step was taken (`moved`).
+  bool after_step(double before, double after, const Vector& x, const Vector& dx,
+                  MinimizeSummary& out, bool moved = true) const {
+    const double change = std::abs(before - after);
+    const double allowed = options_.function_tolerance * before;
+    if (moved && options_.function_tolerance > 0 && std::isfinite(change) && change <= allowed) {
+      return stop(out, Termination::kFunctionTolerance,
+                  "|ΔL| = " + number(change) + " ≤ function_tolerance·L = " + number(allowed));
+    }
+    const double tol = options_.parameter_tolerance;
+    const double length = domain_.scaled_norm(dx);
+    const double limit = tol * (domain_.scaled_norm(x) + tol);
+    if (tol > 0 && std::isfinite(length) && length <= limit) {
+      return stop(out, Termination::kParameterTolerance,
+                  std::string(moved ? "step" : "rejected trial") + " ‖Δx ⊘ s‖ = " + number(length) +
+                      " ≤ parameter_tolerance·(‖x ⊘ s‖ + parameter_tolerance) = " + number(limit));
+    }
+    return false;
+  }
+
+  std::vector<std::pair<std::string, double>> listed() const {
+    std::vector<std::pair<std::string, double>> rules = {
+        {"max_iterations", options_.max_iterations}, {"loss_tolerance", options_.loss_tolerance}};
+    for (const auto& [name, value] :
+         {std::pair{"relative_loss_tolerance", options_.relative_loss_tolerance},
+          std::pair{"gradient_tolerance", options_.gradient_tolerance},
+          std::pair{"function_tolerance", options_.function_tolerance},
+          std::pair{"parameter_tolerance", options_.parameter_tolerance}}) {
+      if (value > 0) rules.emplace_back(name, value);
+    }
+    return rules;
+  }
+
+ private:
+  static bool stop(MinimizeSummary& out, Termination termination, std::string message) {
+    out.termination = termination;
+    out.message = std::move(message);
+    return true;
+  }
+
+  const MinimizeOptions& options_;
+  const Domain& domain_;
+  double initial_loss_;
+};
+
+}  // namespace
+
+MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const Vector& x0,
+                         const MinimizeOptions& options) {
+  check_options(options);
+  const Domain domain(objective.dim(), options.lower, options.upper, options.x_scale);
+  domain.check_dim(x0.size(), "minimize");
+  domain.check_contains(x0, "minimize: x0");
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  const auto since = [](Clock::time_point from) {
+    return std::chrono::duration<double>(Clock::now() - from).count();
   };
 
   MinimizeSummary summary;
+  summary.optimizer = optimizer.id();
+  summary.params = optimizer.params();
+  summary.parameters = x0.size();
+  summary.bounded = domain.bounded();
+  summary.scaled = domain.scaled();
   summary.x = x0;
-  summary.loss = objective.value(x0);
+  summary.termination = Termination::kMaxIterations;
+
+  // L (and ∇L when the gradient test is on) at a point, timed as minimize's own evaluations.
+  Vector gradient;
+  const bool with_gradient = options.gradient_tolerance > 0;
+  const auto evaluate = [&](const Vector& x) {
+    const auto begin = Clock::now();
+    const double value =
+        with_gradient ? objective.value_and_gradient(x, gradient) : objective.value(x);
+    summary.evaluation_seconds += since(begin);
+    ++summary.evaluations;
+    return value;
+  };
+  summary.loss = evaluate(x0);
+  summary.initial_loss = summary.loss;
   if (!std::isfinite(summary.loss)) {
     std::ostringstream msg;
     msg << "the loss at the starting point is " << summary.loss;
     throw Error(msg.str());
   }
-  int evaluations = 1;
+  const StoppingRules rules(options, domain, summary.initial_loss);
+  summary.stopping_rules = rules.listed();
+  const Vector* tested_gradient = with_gradient ? &gradient : nullptr;
   const auto record = [&](double step_norm) {
-    summary.history.push_back(
-        {summary.iterations, summary.loss, step_norm, elapsed(), evaluations, summary.x});
+    summary.history.push_back({summary.iterations, summary.loss, step_norm, since(start),
+                               summary.evaluations, summary.x});
     return options.callback && options.callback(summary.history.back());
   };
 
   optimizer.reset();
   bool stop = record(0.0);
-  summary.termination = Termination::kMaxIterations;
-  while (!stop) {
-    if (summary.loss <= options.loss_tolerance) {
-      summary.termination = Termination::kConverged;
-      break;
-    }
+  bool done = !stop && rules.at_point(summary.loss, summary.x, tested_gradient, summary);
+  while (!stop && !done) {
     if (summary.iterations >= options.max_iterations) break;
 
     // Numerical failures name the iteration, the rule and the place.
     const std::string where =
         "iteration " + std::to_string(summary.iterations + 1) + " of " + optimizer.id() + ": ";
     Step step;
+    const auto step_start = Clock::now();
     try {
-      step = optimizer.step(objective, summary.x);
+      step = optimizer.step(objective, summary.x, domain);
     } catch (const NumericalError& e) {
       summary.termination = Termination::kNumericalFailure;
       summary.message = where + e.what();
       break;
     }
-    evaluations += step.evaluations;
+    summary.step_seconds += since(step_start);
+    summary.evaluations += step.evaluations;
     if (step.status == Step::Status::kFailed) {
       summary.termination = Termination::kFailed;
       summary.message = step.message;
@@ -75,7 +210,11 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
     }
     if (step.status == Step::Status::kRejected) {
       ++summary.iterations;
+      ++summary.rejected_steps;
       stop = record(0.0);
+      // A trial too short to matter ends the run like an accepted one (the loss did not move).
+      done = !stop && step.dx.size() == summary.x.size() &&
+             rules.after_step(summary.loss, summary.loss, summary.x, step.dx, summary, false);
       continue;
     }
     if (!all_finite(step.dx)) {
@@ -83,15 +222,16 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
       summary.message = where + "non-finite step";
       break;
     }
-    const double step_norm = step.dx.norm();
+    // The rule keeps x + Δx in the box; the projection only removes rounding in the sum.
+    const Vector x_next = domain.project(summary.x + step.dx);
+    const Vector dx = x_next - summary.x;
+    const double step_norm = dx.norm();
     if (step_norm == 0.0) {
       summary.termination = Termination::kStationary;
       summary.message = "zero step at iteration " + std::to_string(summary.iterations + 1);
       break;
     }
-    const Vector x_next = summary.x + step.dx;
-    const double loss_next = objective.value(x_next);
-    ++evaluations;
+    const double loss_next = evaluate(x_next);
     if (!std::isfinite(loss_next)) {
       summary.termination = Termination::kNumericalFailure;
       std::ostringstream msg;
@@ -99,14 +239,69 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
       summary.message = msg.str();
       break;
     }
+    const double loss_before = summary.loss;
+    const Vector x_before = summary.x;
     summary.x = x_next;
     summary.loss = loss_next;
     ++summary.iterations;
     stop = record(step_norm);
+    done = !stop && (rules.at_point(summary.loss, summary.x, tested_gradient, summary) ||
+                     rules.after_step(loss_before, summary.loss, x_before, dx, summary));
   }
-  if (stop) summary.termination = Termination::kStopped;
-  summary.wall_seconds = elapsed();
+  if (stop) {
+    summary.termination = Termination::kStopped;
+    summary.message = "the callback asked to stop after iteration " +
+                      std::to_string(summary.iterations);
+  } else if (summary.termination == Termination::kMaxIterations) {
+    summary.message = "max_iterations = " + std::to_string(options.max_iterations) + " reached";
+  }
+  summary.at_bounds = domain.count_at_bounds(summary.x);
+  summary.wall_seconds = since(start);
   return summary;
+}
+
+std::string brief_report(const MinimizeSummary& s) {
+  return s.optimizer + ": " + std::to_string(s.iterations) + " iterations, " +
+         std::to_string(s.evaluations) + " evaluations, loss " + number(s.initial_loss) + " → " +
+         number(s.loss) + ", " + to_string(s.termination);
+}
+
+std::string full_report(const MinimizeSummary& s) {
+  std::ostringstream out;
+  const auto row = [&out](const std::string& name, const std::string& value) {
+    out << "  " << name << std::string(name.size() < 24 ? 24 - name.size() : 1, ' ') << value
+        << "\n";
+  };
+  out << "physgrad minimize report\n\n";
+  out << "Problem\n";
+  row("parameters", std::to_string(s.parameters));
+  row("bounds", s.bounded ? "box (" + std::to_string(s.at_bounds) + " at a bound at the end)"
+                          : "none");
+  row("x_scale", s.scaled ? "given" : "none (1)");
+  out << "\nRule\n";
+  row("optimizer", s.optimizer);
+  for (const auto& [name, value] : s.params.items()) {
+    row(name, value.is_string() ? value.get<std::string>() : value.dump());
+  }
+  out << "\nStopping rules\n";
+  for (const auto& [name, value] : s.stopping_rules) row(name, number(value));
+  out << "\nLoss\n";
+  row("initial", number(s.initial_loss));
+  row("final", number(s.loss));
+  row("change", number(s.initial_loss - s.loss));
+  if (s.gradient_norm >= 0) row("projected gradient", number(s.gradient_norm));
+  out << "\nWork\n";
+  row("iterations", std::to_string(s.iterations) + " (" + std::to_string(s.rejected_steps) +
+                        " rejected trials)");
+  row("evaluations", std::to_string(s.evaluations));
+  out << "\nTime (seconds)\n";
+  row("rule steps", number(s.step_seconds));
+  row("loss evaluations", number(s.evaluation_seconds));
+  row("total", number(s.wall_seconds));
+  out << "\nTermination: " << to_string(s.termination)
+      << (converged(s.termination) ? " (convergence)" : "") << "\n";
+  if (!s.message.empty()) out << "  " << s.message << "\n";
+  return out.str();
 }
 
 }  // namespace physgrad

@@ -7,6 +7,11 @@
 
 namespace physgrad {
 
+Step Optimizer::step(const Objective& objective, const Vector& x, const Domain& domain) {
+  domain.check_dim(x.size(), id().c_str());
+  return propose(objective, x, domain);
+}
+
 void require_positive(const char* what, double value) {
   if (!(std::isfinite(value) && value > 0)) {
     std::ostringstream msg;

@@ -25,20 +25,37 @@ void QuasiNewton::reset() {
   g_.resize(0);
 }
 
+// Zeroes the components of a z-direction that may not move: the held variables, and free ones
+// at a bound that p would push out of the box. For those gᵢ pᵢ ≥ 0, so dropping them keeps p a
+// descent direction.
+Vector QuasiNewton::restrict(const Domain& domain, const Vector& x, const std::vector<bool>& free,
+                             Vector p) const {
+  if (!domain.bounded()) return p;
+  const Vector lower = domain.lower(x.size()), upper = domain.upper(x.size());
+  for (Index i = 0; i < p.size(); ++i) {
+    const bool outward = (x(i) <= lower(i) && p(i) < 0) || (x(i) >= upper(i) && p(i) > 0);
+    if (!free[static_cast<std::size_t>(i)] || outward) p(i) = 0;
+  }
+  return p;
+}
+
 LineSearchResult QuasiNewton::search(const Objective& objective, const Vector& x,
-                                     const Vector& p) const {
+                                     const Vector& pz, const Domain& domain) const {
+  const Vector s = domain.scale(x.size());
+  const Vector p = s.cwiseProduct(pz);  // the direction in x
   const double first = has_curvature() ? initial_step_
-                                       : initial_step_ * std::min(1.0, 1 / p.stableNorm());
+                                       : initial_step_ * std::min(1.0, 1 / pz.stableNorm());
   if (!(first > 0 && std::isfinite(first))) {
     std::ostringstream msg;
-    msg << "line search: the first trial step along a direction of norm " << p.stableNorm()
+    msg << "line search: the first trial step along a direction of norm " << pz.stableNorm()
         << " is " << first;
     throw NumericalError(msg.str());
   }
-  return strong_wolfe_line_search(objective, x, value_, g_, p, first, line_search_);
+  return strong_wolfe_line_search(objective, x, value_, g_, p, first, line_search_,
+                                  domain.max_step(x, p));
 }
 
-Step QuasiNewton::step(const Objective& objective, const Vector& x) {
+Step QuasiNewton::propose(const Objective& objective, const Vector& x, const Domain& domain) {
   Step out;
   const Index n = x.size();
   if (!(x_.size() == n && x == x_)) {
@@ -48,19 +65,26 @@ Step QuasiNewton::step(const Objective& objective, const Vector& x) {
     ++out.evaluations;
   }
   if (!all_finite(g_)) throw NumericalError("the gradient at x is not finite");
-  if ((g_.array() == 0).all()) {  // stationary point: a zero step ends the run
+  // Everything below is in z = x ⊘ s: gradient D g, pairs (D⁻¹s, D y), direction p_z.
+  const Vector scale = domain.scale(n);
+  const std::vector<bool> free = domain.free_variables(x, g_);
+  Vector gz = scale.cwiseProduct(g_);
+  for (Index i = 0; i < n; ++i) {
+    if (!free[static_cast<std::size_t>(i)]) gz(i) = 0;
+  }
+  if ((gz.array() == 0).all()) {  // stationary (on the box): a zero step ends the run
     out.dx = Vector::Zero(n);
     return out;
   }
 
-  Vector p = direction(g_);
-  LineSearchResult result = search(objective, x, p);
+  Vector pz = restrict(domain, x, free, direction(gz));
+  LineSearchResult result = search(objective, x, pz, domain);
   out.evaluations += result.evaluations;
   if (!result.success && has_curvature()) {
     out.message = id() + ": restarted along −∇L after: " + result.message;
     clear_curvature();
-    p = -g_;
-    result = search(objective, x, p);
+    pz = restrict(domain, x, free, -gz);
+    result = search(objective, x, pz, domain);
     out.evaluations += result.evaluations;
   }
   if (!result.success && result.evaluations > 0 && result.non_finite == result.evaluations) {
@@ -73,12 +97,20 @@ Step QuasiNewton::step(const Objective& objective, const Vector& x) {
     return out;
   }
 
-  out.dx = result.step * p;
-  const Vector y = result.gradient - g_;
-  if (y.dot(out.dx) > kCurvatureTolerance * out.dx.norm() * y.norm()) add_pair(out.dx, y);
-  x_ = x + out.dx;  // the point the caller moves to
-  value_ = result.value;
-  g_ = std::move(result.gradient);
+  const Vector moved = result.step * scale.cwiseProduct(pz);
+  out.dx = domain.feasible_step(x, moved);
+  const Vector sz = out.dx.cwiseQuotient(scale);
+  const Vector yz = scale.cwiseProduct(result.gradient - g_);
+  if (yz.dot(sz) > kCurvatureTolerance * sz.norm() * yz.norm()) add_pair(sz, yz);
+  // The point the caller moves to, with its value and gradient when the line search evaluated
+  // exactly there (a step cut to the box may differ in the last bits: evaluated afresh).
+  x_ = domain.project(x + out.dx);
+  if (x_ == x + moved) {
+    value_ = result.value;
+    g_ = std::move(result.gradient);
+  } else {
+    x_.resize(0);
+  }
   return out;
 }
 

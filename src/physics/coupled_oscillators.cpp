@@ -55,43 +55,82 @@ void CoupledOscillators::rhs_adjoint(const Eigen::Ref<const Array>& pos, const A
   }
 }
 
-CoupledOscillators::Array CoupledOscillators::integrate(const Matrix& x, const Matrix& context,
-                                                        Array* stage_positions) const {
-  const Index N = config_.oscillators, B = x.cols();
-  const double dt = config_.dt;
-  Array s = context.array(), z(2 * N, B), k(2 * N, B), slope(2 * N, B);
-  const auto store = [&](Index n, Index stage, const Array& state) {
+void CoupledOscillators::split(const Matrix& x, const Matrix& context, Matrix& controls,
+                               Matrix& initial) const {
+  if (controls_in()) {
+    controls = x;
+    initial = context;
+  } else {
+    controls = context.size() == 0 ? Matrix(Matrix::Zero(config_.steps, x.cols())) : context;
+    initial = x;
+  }
+}
+
+void CoupledOscillators::rk4_step(Array& s, const Matrix& controls, Index n, double h,
+                                  Workspace& w, Array* stage_positions) const {
+  const Index N = config_.oscillators, B = s.cols();
+  Array &z = w.z, &k = w.k, &slope = w.slope;
+  z.resize(2 * N, B);
+  k.resize(2 * N, B);
+  slope.resize(2 * N, B);
+  const auto store = [&](Index stage, const Array& state) {
     if (stage_positions) stage_positions->middleCols((4 * n + stage) * B, B) = state.topRows(N);
   };
-  for (Index n = 0; n < config_.steps; ++n) {
-    store(n, 0, s);
-    rhs(s, x, n, k);
-    slope = k;
-    z = s + 0.5 * dt * k;
-    store(n, 1, z);
-    rhs(z, x, n, k);
-    slope += 2 * k;
-    z = s + 0.5 * dt * k;
-    store(n, 2, z);
-    rhs(z, x, n, k);
-    slope += 2 * k;
-    z = s + dt * k;
-    store(n, 3, z);
-    rhs(z, x, n, k);
-    slope += k;
-    s += (dt / 6) * slope;
-  }
+  store(0, s);
+  rhs(s, controls, n, k);
+  slope = k;
+  z = s + 0.5 * h * k;
+  store(1, z);
+  rhs(z, controls, n, k);
+  slope += 2 * k;
+  z = s + 0.5 * h * k;
+  store(2, z);
+  rhs(z, controls, n, k);
+  slope += 2 * k;
+  z = s + h * k;
+  store(3, z);
+  rhs(z, controls, n, k);
+  slope += k;
+  s += (h / 6) * slope;
+}
+
+CoupledOscillators::Array CoupledOscillators::integrate(const Matrix& controls,
+                                                        const Matrix& initial,
+                                                        Array* stage_positions) const {
+  Array s = initial.array();
+  Workspace w;
+  for (Index n = 0; n < config_.steps; ++n) rk4_step(s, controls, n, config_.dt, w, stage_positions);
   return s;
 }
 
 Matrix CoupledOscillators::forward_batch(const Matrix& x, const Matrix& context) const {
-  check_batch(x, context, "forward", true);
-  return integrate(x, context, nullptr).matrix();
+  check_batch(x, context, "forward", controls_in());
+  Matrix controls, initial;
+  split(x, context, controls, initial);
+  return integrate(controls, initial, nullptr).matrix();
+}
+
+Vector CoupledOscillators::time_reversal(const Vector& y, const Vector& context) const {
+  if (controls_in()) {
+    throw Error(name() + ": time reversal needs the initial state as input "
+                "(OscillatorInput::kInitialState)");
+  }
+  if (y.size() != state_dim()) {
+    throw Error(name() + ".time_reversal: y has " + std::to_string(y.size()) +
+                " entries, expected " + std::to_string(state_dim()));
+  }
+  check_batch(Matrix(Matrix::Zero(state_dim(), 1)), context, "time_reversal");
+  const Matrix controls = context.size() == 0 ? Matrix(Matrix::Zero(config_.steps, 1))
+                                              : Matrix(context);
+  Array s = y.array();
+  Workspace w;
+  for (Index n = config_.steps - 1; n >= 0; --n) rk4_step(s, controls, n, -config_.dt, w, nullptr);
+  return s.matrix();
 }
 
 Matrix CoupledOscillators::vjp_batch(const Matrix& x, const Matrix& context,
                                      const Matrix& gy) const {
-  check_batch(x, context, "vjp", true);
+  check_batch(x, context, "vjp", controls_in());
   const Index N = config_.oscillators, B = x.cols(), last = 2 * N - 1;
   if (gy.rows() != output_dim() || gy.cols() != B) {
     std::ostringstream msg;
@@ -99,8 +138,10 @@ Matrix CoupledOscillators::vjp_batch(const Matrix& x, const Matrix& context,
         << output_dim() << "×" << B;
     throw Error(msg.str());
   }
+  Matrix controls, initial;
+  split(x, context, controls, initial);
   Array positions(N, 4 * config_.steps * B);
-  integrate(x, context, &positions);
+  integrate(controls, initial, &positions);
 
   // Reverse sweep. s' = s + dt/6 (k₁ + 2k₂ + 2k₃ + k₄) with k_i = f(z_i, u), z₁ = s,
   // z₂ = s + dt/2 k₁, z₃ = s + dt/2 k₂, z₄ = s + dt k₃. `a` is the adjoint of the current k_i,
@@ -129,7 +170,8 @@ Matrix CoupledOscillators::vjp_batch(const Matrix& x, const Matrix& context,
     lambda.swap(next);
     gx.row(n) *= config_.control_factor;
   }
-  return gx;
+  // After the sweep λ is the adjoint of the initial state.
+  return controls_in() ? gx : Matrix(lambda.matrix());
 }
 
 }  // namespace physgrad

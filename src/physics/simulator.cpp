@@ -71,4 +71,8 @@ Vector Simulator::inverse(const Vector& /*y*/, const Vector& /*x0*/,
   throw Error("simulator '" + name() + "' has no analytic local inverse");
 }
 
+Vector Simulator::time_reversal(const Vector& /*y*/, const Vector& /*context*/) const {
+  throw Error("simulator '" + name() + "' has no time reversal");
+}
+
 }  // namespace physgrad

@@ -43,6 +43,19 @@ int create_temp(const std::filesystem::path& path, std::filesystem::path& temp) 
 
 }  // namespace
 
+bool is_atomic_write_temp(std::string_view name) {
+  // "." NAME ".tmp" PID "-" N, with NAME non-empty.
+  const std::size_t tmp = name.rfind(".tmp");
+  if (name.size() < 2 || name[0] != '.' || tmp == std::string_view::npos || tmp < 2) return false;
+  const std::string_view numbers = name.substr(tmp + 4);
+  const std::size_t dash = numbers.find('-');
+  const auto digits = [](std::string_view text) {
+    return !text.empty() && text.find_first_not_of("0123456789") == std::string_view::npos;
+  };
+  return dash != std::string_view::npos && digits(numbers.substr(0, dash)) &&
+         digits(numbers.substr(dash + 1));
+}
+
 void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
   std::filesystem::path temp;
   const int fd = create_temp(path, temp);
@@ -58,11 +71,14 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
   if (::rename(temp.c_str(), path.c_str()) != 0) abandon(path, temp, -1, "rename");
 
   // Make the rename itself durable; the content is already complete, so this is best effort.
-  const std::filesystem::path dir = path.parent_path().empty() ? "." : path.parent_path();
-  const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dir_fd >= 0) {
-    ::fsync(dir_fd);
-    ::close(dir_fd);
+  sync_directory(path.parent_path().empty() ? "." : path.parent_path());
+}
+
+void sync_directory(const std::filesystem::path& folder) noexcept {
+  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
   }
 }
 

@@ -43,9 +43,9 @@ class Adam final : public Optimizer {
   std::string id() const override { return "adam"; }
   nlohmann::json params() const override { return state_.params(); }
   void reset() override { state_.reset(); }
-  Step step(const Objective& objective, const Vector& x) override;
 
  private:
+  Step propose(const Objective& objective, const Vector& x, const Domain& domain) override;
   AdamState state_;
 };
 

@@ -17,9 +17,9 @@ class GaussNewton final : public Optimizer {
   explicit GaussNewton(Options options = {});
   std::string id() const override { return "gn"; }
   nlohmann::json params() const override { return {{"lr", options_.lr}, {"rcond", options_.rcond}}; }
-  Step step(const Objective& objective, const Vector& x) override;
 
  private:
+  Step propose(const Objective& objective, const Vector& x, const Domain& domain) override;
   Options options_;
 };
 

@@ -17,9 +17,9 @@ class GradientDescent final : public Optimizer {
   explicit GradientDescent(Options options = {});
   std::string id() const override { return "gd"; }
   nlohmann::json params() const override { return {{"lr", options_.lr}}; }
-  Step step(const Objective& objective, const Vector& x) override;
 
  private:
+  Step propose(const Objective& objective, const Vector& x, const Domain& domain) override;
   Options options_;
 };
 

@@ -18,9 +18,9 @@ class InverseGradient final : public Optimizer {
   explicit InverseGradient(Options options = {});
   std::string id() const override { return "ig"; }
   nlohmann::json params() const override { return {{"lr", options_.lr}, {"rcond", options_.rcond}}; }
-  Step step(const Objective& objective, const Vector& x) override;
 
  private:
+  Step propose(const Objective& objective, const Vector& x, const Domain& domain) override;
   Options options_;
 };
 

@@ -11,6 +11,10 @@ struct LevenbergMarquardtOptions {
   double min_damping = 1e-15;     // μ never drops below this (> 0)
 };
 
+// Bounds: variables held at a bound (Domain::free_variables) stay; the step in the others is cut
+// to the box by projection and the gain ratio is that of the step taken. x_scale replaces the
+// Marquardt scaling diag(A) by the trust region ‖Δx ⊘ s‖ (the damping μ·c·D⁻², c = max diag(DAD)
+// at the first step).
 class LevenbergMarquardt final : public Optimizer {
  public:
   using Options = LevenbergMarquardtOptions;
@@ -21,12 +25,13 @@ class LevenbergMarquardt final : public Optimizer {
   }
   void reset() override;
   double damping() const { return mu_; }
-  Step step(const Objective& objective, const Vector& x) override;
 
  private:
+  Step propose(const Objective& objective, const Vector& x, const Domain& domain) override;
   Options options_;
   double mu_ = 0;
-  double nu_ = 2;  // growth factor of μ after consecutive rejections
+  double nu_ = 2;    // growth factor of μ after consecutive rejections
+  double unit_ = 0;  // with x_scale: the damping's unit, max diag(A_z) at the first step
 };
 
 }  // namespace physgrad

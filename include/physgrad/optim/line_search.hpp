@@ -2,6 +2,7 @@
 // φ(α) ≤ φ(0) + c1·α·φ'(0) and |φ'(α)| ≤ c2·|φ'(0)| (Nocedal & Wright, Algorithms 3.5 and 3.6).
 #pragma once
 
+#include <cmath>
 #include <string>
 
 #include "physgrad/optim/objective.hpp"
@@ -34,8 +35,8 @@ struct LineSearchResult {
 };
 
 // Finds α along `direction` from x, given value0 = L(x) and gradient0 = ∇L(x). The first trial
-// is α = min(initial_step, max_step); while the trials keep satisfying sufficient decrease and
-// descending, α grows (cubic extrapolation kept within [1.1α, 10α]); once a bracket is found it is
+// is α = min(initial_step, max_step, step_limit); while the trials keep satisfying sufficient
+// decrease and descending, α grows (cubic extrapolation kept within [1.1α, 10α]); once a bracket is found it is
 // narrowed by cubic interpolation, with bisection whenever the interpolant is non-finite or
 // outside the middle 80% of the bracket. A trial with a non-finite value or gradient counts as
 // too long: it closes the bracket from above and is never accepted.
@@ -47,11 +48,17 @@ struct LineSearchResult {
 // with a finite value and gradient that satisfy sufficient decrease, or are 0, value0 and
 // gradient0 when there is none.
 //
+// A bounded search: no trial goes beyond step_limit (where the ray x + αp leaves a feasible
+// box, Domain::max_step). A trial at step_limit that satisfies sufficient decrease while φ still
+// decreases is accepted (success) without the curvature condition: it is the lowest φ on the
+// feasible part of the ray as far as the search can tell.
+//
 // Throws Error when x, gradient0 or direction do not have objective.dim() entries, when
-// initial_step is not finite and > 0, or when options are invalid.
+// initial_step is not finite and > 0, when step_limit is not > 0, or when options are invalid.
 LineSearchResult strong_wolfe_line_search(const Objective& objective, const Vector& x,
                                           double value0, const Vector& gradient0,
                                           const Vector& direction, double initial_step,
-                                          const LineSearchOptions& options);
+                                          const LineSearchOptions& options,
+                                          double step_limit = INFINITY);
 
 }  // namespace physgrad

@@ -1,42 +1,68 @@
-// Numerical local inverse P⁻¹(y; x₀): minimizes ½‖P(x; c) − y‖² from x₀, so the solution
-// found is the one the descent reaches from the guess (the nearest one in the usual case).
+// Local inverse P⁻¹(y; x₀): the simulator's own inverse, its time reversal anchored at x₀
+// (x₀ + R(y) − R(P(x₀))), or the minimizer of ½‖P(x; c) − y‖² reached from x₀ by descent.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 
+#include "physgrad/optim/domain.hpp"
 #include "physgrad/physics/simulator.hpp"
 
 namespace physgrad {
 
 enum class InverseMethod {
-  kAuto,         // analytic when the simulator has one, else L-BFGS
-  kAnalytic,     // the simulator's own inverse()
-  kLbfgs,        // L-BFGS with a strong-Wolfe line search
-  kGaussNewton,  // full Gauss-Newton steps (pseudo-inverse of J)
+  kAuto,          // analytic when the simulator has one, else its time reversal, else L-BFGS
+  kAnalytic,      // the simulator's own inverse()
+  kTimeReversal,  // the simulator's time_reversal(), anchored at x₀
+  kLbfgs,         // L-BFGS with a strong-Wolfe line search
+  kGaussNewton,   // full Gauss-Newton steps (truncated pseudo-inverse of J)
 };
 std::string to_string(InverseMethod method);
-// "auto", "analytic", "lbfgs" or "gn"; throws Error naming the text otherwise.
+// "auto", "analytic", "time_reversal", "lbfgs" or "gn"; throws Error naming the text otherwise.
 InverseMethod parse_inverse_method(const std::string& text);
 
+// The options of the numerical inverses (lbfgs, gn); the analytic and time-reversal inverses
+// have none. The member initialisers are the defaults (the rule catalogue's, for pg and sip).
 struct LocalInverseOptions {
   InverseMethod method = InverseMethod::kAuto;
-  // Stop once ‖P(x) − y‖ ≤ tolerance·(1 + ‖y‖).
+  // Stop once ‖P(x) − y‖ ≤ tolerance·(1 + ‖y‖) (absolute), > 0.
   double tolerance = 1e-10;
-  int max_iterations = 200;
+  int max_iterations = 200;  // ≥ 1
+  // ... or once ‖P(x) − y‖ ≤ relative_tolerance·‖P(x₀) − y‖ (relative to the start residual, so
+  // a PG step of size Δy is solved to that fraction of Δy), in [0, 1); 0 disables.
+  double relative_tolerance = 1e-8;
+  // ... or once an iteration changes ½‖P(x) − y‖² by at most function_tolerance times its value
+  // (the solve stalls: y is out of reach, or the rest of the misfit is below what rounding lets
+  // the steps resolve), ≥ 0; 0 disables. Ceres' default.
+  double function_tolerance = 1e-6;
+  // gn: singular values σ ≤ rcond·σ_max of J are dropped from its pseudo-inverse, in [0, 1).
+  double rcond = 1e-10;
 };
+
+// The settings as pg and sip report them: "inverse", and for a numerical method also
+// inverse_tolerance, inverse_relative_tolerance, inverse_function_tolerance,
+// inverse_iterations and inverse_rcond.
+nlohmann::json local_inverse_params(const LocalInverseOptions& options);
 
 struct LocalInverseResult {
   Vector x;
   double residual = 0;  // ‖P(x) − y‖
   int iterations = 0;
-  bool converged = false;
+  // Simulator evaluations spent: forward (+ VJP) passes of the numerical inverse; for the
+  // closed forms the inverse or reversals and the forward pass of the residual.
+  int evaluations = 0;
+  bool converged = false;  // the residual meets the absolute or the relative tolerance
 };
 
-// kAnalytic uses the simulator's own inverse (Error if it has none). When the misfit at x₀ is
+// The preimage of y from x₀, inside `domain`: the numerical inverses minimize over the box (in
+// the domain's scaled variables); the analytic and time-reversal results are projected onto it.
+// kAnalytic and kTimeReversal throw Error when the simulator lacks them. When the misfit at x₀ is
 // not finite (a NaN from the simulator or in y) the numerical inverse cannot start: the result
 // is x = NaN, not converged, for the caller's numerical guard to see. Numerical trouble inside
-// the numerical inverse (a non-finite Jacobian, say) throws NumericalError naming it.
+// the numerical inverse (a non-finite Jacobian, say) throws NumericalError naming it. Throws
+// Error on out-of-range options or mismatched sizes.
 LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, const Vector& x0,
-                                 const Vector& context, const LocalInverseOptions& options);
+                                 const Vector& context, const LocalInverseOptions& options,
+                                 const Domain& domain = {});
 
 }  // namespace physgrad

@@ -20,9 +20,9 @@ class Momentum final : public Optimizer {
     return {{"lr", options_.lr}, {"beta", options_.beta}};
   }
   void reset() override { velocity_.resize(0); }
-  Step step(const Objective& objective, const Vector& x) override;
 
  private:
+  Step propose(const Objective& objective, const Vector& x, const Domain& domain) override;
   Options options_;
   Vector velocity_;
 };

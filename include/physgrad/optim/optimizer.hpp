@@ -5,14 +5,16 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "physgrad/optim/domain.hpp"
 #include "physgrad/optim/objective.hpp"
 
 namespace physgrad {
 
 struct Step {
   enum class Status {
-    kOk,        // dx is the proposed update
-    kRejected,  // a trial was tried and rejected (trust region); x stays, the iteration counts
+    kOk,        // dx is the proposed update; x + dx lies in the domain's box
+    kRejected,  // a trial was tried and rejected (trust region); x stays, the iteration counts;
+                // dx is the rejected trial (minimize() tests its length, as Ceres does)
     kFailed,    // the rule cannot continue (e.g. no acceptable step length)
   };
   Vector dx;
@@ -30,7 +32,14 @@ class Optimizer {
   virtual nlohmann::json params() const = 0;
   // Forget per-run state; called by minimize() before the first step.
   virtual void reset() {}
-  virtual Step step(const Objective& objective, const Vector& x) = 0;
+  // Proposes Δx at x, which lies in `domain`'s box; x + Δx lies in it too (up to rounding in the
+  // sum: minimize() clamps the new iterate). The default domain is unbounded with unit scale.
+  // Throws Error when the domain has another dimension than x.
+  Step step(const Objective& objective, const Vector& x, const Domain& domain = {});
+
+ private:
+  // The rule's update: in the scaled variables z = x ⊘ s, and what it does with bounds.
+  virtual Step propose(const Objective& objective, const Vector& x, const Domain& domain) = 0;
 };
 
 // Throws Error naming `what` unless value is finite and > 0.

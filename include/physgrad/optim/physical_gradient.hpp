@@ -9,10 +9,13 @@ namespace physgrad {
 
 struct PhysicalGradientOptions {
   double lr = 1.0;  // η > 0
-  // kAnalytic needs a simulator with has_inverse(); the numerical methods work for any
-  // simulator with a VJP.
+  // kAnalytic needs a simulator with has_inverse(), kTimeReversal one with has_time_reversal();
+  // the numerical methods work for any simulator with a VJP.
   LocalInverseOptions inverse{};
 };
+
+// Bounds and x_scale go to the local inverse: the numerical inverses solve inside the box in the
+// scaled variables, the analytic and time-reversal results are projected onto it.
 
 class PhysicalGradient final : public Optimizer {
  public:
@@ -20,9 +23,9 @@ class PhysicalGradient final : public Optimizer {
   explicit PhysicalGradient(Options options = {});
   std::string id() const override { return "pg"; }
   nlohmann::json params() const override;
-  Step step(const Objective& objective, const Vector& x) override;
 
  private:
+  Step propose(const Objective& objective, const Vector& x, const Domain& domain) override;
   Options options_;
 };
 

@@ -2,6 +2,8 @@
 // curvature model H and α from a strong-Wolfe line search; then the pair (s = Δx, y = Δ∇L) updates H.
 #pragma once
 
+#include <vector>
+
 #include "physgrad/optim/line_search.hpp"
 #include "physgrad/optim/optimizer.hpp"
 
@@ -18,10 +20,15 @@ namespace physgrad {
 //
 // The gradient at the point a step moved to is reused by the next step when that step starts
 // exactly there; any other x is evaluated afresh. The cache assumes one objective per run.
+//
+// In the domain: the model works in z = x ⊘ s (pairs D⁻¹s and D y, first trial length in z).
+// With bounds, the variables held at a bound (Domain::free_variables) and free ones at a bound
+// that p would push outward get pᵢ = 0 (p stays a descent direction), and the line search is
+// bounded by the step where the ray x + αDp leaves the box (it accepts that step when φ still
+// decreases there).
 class QuasiNewton : public Optimizer {
  public:
   void reset() override;
-  Step step(const Objective& objective, const Vector& x) final;
 
  protected:
   // Throws Error naming the field when initial_step or the line-search options are out of range.
@@ -37,7 +44,11 @@ class QuasiNewton : public Optimizer {
   const LineSearchOptions& line_search_options() const { return line_search_; }
 
  private:
-  LineSearchResult search(const Objective& objective, const Vector& x, const Vector& p) const;
+  Step propose(const Objective& objective, const Vector& x, const Domain& domain) final;
+  Vector restrict(const Domain& domain, const Vector& x, const std::vector<bool>& free,
+                  Vector p) const;
+  LineSearchResult search(const Objective& objective, const Vector& x, const Vector& pz,
+                          const Domain& domain) const;
 
   double initial_step_;
   LineSearchOptions line_search_;

@@ -35,6 +35,13 @@ class Simulator {
   virtual bool has_inverse() const { return false; }
   virtual Vector inverse(const Vector& y, const Vector& x0, const Vector& context = {}) const;
 
+  // Time reversal R(y; c), for a simulator whose input is an initial state and whose output the
+  // state a time T later: its integrator run backwards in time (t → −t) from y, so that
+  // P(R(y; c); c) ≈ y — to rounding for a time-reversible scheme (leapfrog, velocity Verlet), to
+  // the scheme's truncation error otherwise. Default: none (Error).
+  virtual bool has_time_reversal() const { return false; }
+  virtual Vector time_reversal(const Vector& y, const Vector& context = {}) const;
+
   // Single-sample conveniences over the batched calls.
   Vector forward(const Vector& x, const Vector& context = {}) const;
   Vector vjp(const Vector& x, const Vector& context, const Vector& gy) const;

@@ -1,0 +1,353 @@
+// The run folder's life: located, claimed under its lock, committed or abandoned (run_folder.hpp).
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+
+#include "checkpoint.hpp"
+#include "physgrad/error.hpp"
+#include "physgrad/report/atomic_file.hpp"
+#include "run_folder.hpp"
+
+namespace physgrad::experiments {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kStaging = ".staging";
+constexpr const char* kPendingSummary = ".summary.json.pending";
+
+std::string in_quotes(const std::string& text) { return "'" + text + "'"; }
+std::string system_reason(int err) { return std::strerror(err); }
+
+// What a folder holds, by the names the run folder uses.
+struct Contents {
+  bool config = false;
+  bool checkpoint = false;
+  bool summary = false;
+  std::vector<std::string> scratch;  // staging folder and temporary files of a killed process
+  std::vector<std::string> other;    // results, or anything else
+  bool empty() const { return !config && !checkpoint && !summary && other.empty(); }
+  bool finished() const { return summary && !checkpoint; }
+  bool unfinished() const { return config && !finished(); }
+};
+
+Contents read_contents(const fs::path& folder, const std::string& shown) {
+  Contents contents;
+  std::error_code error;
+  for (fs::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    if (name == kConfigFile) {
+      contents.config = true;
+    } else if (name == kCheckpointFile) {
+      contents.checkpoint = true;
+    } else if (name == kSummaryFile) {
+      contents.summary = true;
+    } else if (name == kStaging || name == kPendingSummary || is_atomic_write_temp(name)) {
+      contents.scratch.push_back(name);
+    } else {
+      contents.other.push_back(name);
+    }
+  }
+  if (error) throw Error(in_quotes(shown) + ": cannot list the folder: " + error.message());
+  return contents;
+}
+
+void remove_scratch(const fs::path& folder, const Contents& contents) {
+  std::error_code ignored;
+  for (const std::string& name : contents.scratch) fs::remove_all(folder / name, ignored);
+}
+
+// Removes the folders in `folders` (innermost first) while they are empty.
+void remove_empty(const std::vector<fs::path>& folders) noexcept {
+  for (const fs::path& folder : folders) {
+    if (::rmdir(folder.c_str()) != 0) return;
+  }
+}
+
+// Creates the missing parents of `path`; returns those it made, innermost first.
+std::vector<fs::path> make_parents(const fs::path& path, const std::string& option) {
+  std::vector<fs::path> missing;  // innermost first
+  for (fs::path p = path.parent_path(); p != p.root_path() && !p.empty(); p = p.parent_path()) {
+    struct stat info {};
+    if (::stat(p.c_str(), &info) == 0) break;
+    missing.push_back(p);
+  }
+  std::vector<fs::path> created;
+  for (auto p = missing.rbegin(); p != missing.rend(); ++p) {
+    if (::mkdir(p->c_str(), 0777) == 0) {
+      created.insert(created.begin(), *p);
+    } else if (errno != EEXIST) {
+      const int err = errno;
+      remove_empty(created);
+      throw Error(option + ": cannot create " + in_quotes(p->string()) + ": " + system_reason(err));
+    }
+  }
+  return created;
+}
+
+// Opens `path` and takes its lock; -1 when there is no folder there (any more). The identity
+// check catches a folder removed or replaced between the open and the lock.
+int open_locked(const fs::path& path, const std::string& what) {
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0) {
+      if (errno == ENOENT) return -1;
+      throw Error(what + ": cannot open the folder: " + system_reason(errno));
+    }
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      const int err = errno;
+      ::close(fd);
+      if (err == EWOULDBLOCK) {
+        throw Error(what + " is in use by another physgrad process; wait for it to end or choose "
+                           "another folder");
+      }
+      throw Error(what + ": cannot lock the folder: " + system_reason(err));
+    }
+    struct stat held {}, now {};
+    if (::fstat(fd, &held) == 0 && ::stat(path.c_str(), &now) == 0 &&
+        held.st_dev == now.st_dev && held.st_ino == now.st_ino) {
+      return fd;
+    }
+    ::close(fd);
+  }
+  throw Error(what + ": the folder keeps being replaced by another process");
+}
+
+}  // namespace
+
+FolderPath locate_folder(const std::string& text, const std::string& option) {
+  if (text.empty()) throw Error(option + ": the folder name is empty");
+  const std::string named = option + ": " + in_quotes(text);
+  for (const char c : text) {
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) {
+      throw Error(named + " contains a control character");
+    }
+  }
+  FolderPath where{text, {}};
+  while (where.shown.size() > 1 && where.shown.back() == '/') where.shown.pop_back();
+  std::error_code error;
+  where.path = fs::weakly_canonical(fs::absolute(where.shown, error), error);
+  if (error) throw Error(named + ": " + error.message());
+  if (!where.path.has_filename()) where.path = where.path.parent_path();  // "DIR/." → "DIR/"
+  struct stat info {};
+  if (::lstat(where.path.c_str(), &info) == 0) {
+    if (S_ISLNK(info.st_mode)) {  // weakly_canonical follows every link that leads somewhere
+      throw Error(named + " is a symbolic link to " +
+                  in_quotes(fs::read_symlink(where.path, error).string()) + ", which does not exist");
+    }
+    if (!S_ISDIR(info.st_mode)) throw Error(named + " exists and is not a directory");
+  }
+  return where;
+}
+
+RunFolder::RunFolder(FolderPath where, int lock_fd, bool resuming)
+    : path_(std::move(where.path)),
+      shown_(std::move(where.shown)),
+      lock_fd_(lock_fd),
+      resuming_(resuming) {}
+
+RunFolder::RunFolder(RunFolder&& other) noexcept
+    : path_(std::move(other.path_)),
+      shown_(std::move(other.shown_)),
+      lock_fd_(std::exchange(other.lock_fd_, -1)),
+      resuming_(other.resuming_),
+      created_(other.created_),
+      created_parents_(std::move(other.created_parents_)),
+      moved_(std::move(other.moved_)),
+      ended_(std::exchange(other.ended_, true)),
+      ended_text_(std::move(other.ended_text_)) {}
+
+RunFolder::~RunFolder() {
+  if (!ended_) abandon();
+  if (lock_fd_ >= 0) ::close(lock_fd_);
+}
+
+RunFolder RunFolder::create(const FolderPath& out) {
+  const std::string what = "--out: " + in_quotes(out.shown);
+  std::vector<fs::path> parents = make_parents(out.path, "--out");
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    const bool made = ::mkdir(out.path.c_str(), 0777) == 0;
+    if (!made && errno != EEXIST) {
+      const int err = errno;
+      remove_empty(parents);
+      throw Error(what + ": cannot create the folder: " + system_reason(err));
+    }
+    int fd = -1;
+    try {
+      fd = open_locked(out.path, what);
+    } catch (const Error&) {
+      remove_empty(parents);
+      throw;
+    }
+    if (fd < 0) continue;  // removed again before it could be opened
+    RunFolder folder(out, fd, false);
+    folder.created_ = made;
+    folder.created_parents_ = std::move(parents);
+    const Contents contents = read_contents(folder.path_, out.shown);
+    if (!contents.empty()) {
+      folder.ended_ = true;  // not ours: leave it exactly as it is
+      remove_empty(folder.created_parents_);
+      if (contents.finished()) {
+        throw Error(what + " holds the results of a finished run; choose another folder");
+      }
+      if (contents.unfinished()) {
+        throw Error(what + " holds an unfinished run; continue it with `physgrad resume " +
+                    out.shown + "` or choose another folder");
+      }
+      throw Error(what + " already exists and is not empty");
+    }
+    remove_scratch(folder.path_, contents);
+    return folder;
+  }
+  remove_empty(parents);
+  throw Error(what + ": the folder keeps being removed by another process");
+}
+
+RunFolder RunFolder::create_unique(const fs::path& parent, const std::string& stem) {
+  const FolderPath first = locate_folder((parent / stem).string(), "--out");
+  std::vector<fs::path> parents = make_parents(first.path, "--out");
+  for (int n = 1; n <= 1000; ++n) {
+    std::string suffix;
+    if (n > 1) suffix.append("-").append(std::to_string(n));
+    FolderPath where{first.shown + suffix, fs::path(first.path.string() + suffix)};
+    if (::mkdir(where.path.c_str(), 0777) != 0) {
+      if (errno == EEXIST) continue;
+      const int err = errno;
+      remove_empty(parents);
+      throw Error("--out: cannot create " + in_quotes(where.shown) + ": " + system_reason(err));
+    }
+    const int fd = open_locked(where.path, "--out: " + in_quotes(where.shown));
+    if (fd < 0) continue;
+    RunFolder folder(std::move(where), fd, false);
+    folder.created_ = true;
+    folder.created_parents_ = std::move(parents);
+    return folder;
+  }
+  remove_empty(parents);
+  throw Error("--out: no free folder name " + in_quotes(first.shown) + "[-N] up to N = 1000");
+}
+
+RunFolder RunFolder::reopen(const FolderPath& where) {
+  const std::string what = "resume: " + in_quotes(where.shown);
+  const int fd = open_locked(where.path, what);
+  if (fd < 0) throw Error(what + " does not exist");
+  RunFolder folder(where, fd, true);
+  const Contents contents = read_contents(folder.path_, where.shown);
+  if (contents.finished()) {
+    folder.ended_ = true;
+    throw Error(what + " holds a finished run (" + kSummaryFile + "); there is nothing to resume");
+  }
+  if (!contents.unfinished()) {
+    folder.ended_ = true;
+    throw Error(what + " holds no run to resume (no " + kConfigFile + ")");
+  }
+  remove_scratch(folder.path_, contents);
+  return folder;
+}
+
+fs::path RunFolder::staging() const {
+  const fs::path staging = path_ / kStaging;
+  std::error_code error;
+  fs::remove_all(staging, error);
+  if (!fs::create_directory(staging, error) || error) {
+    throw Error(in_quotes(shown_) + ": cannot create the staging folder: " +
+                (error ? error.message() : "it exists"));
+  }
+  return staging;
+}
+
+void RunFolder::commit() {
+  const fs::path staging = path_ / kStaging;
+  std::vector<std::string> names;
+  std::error_code error;
+  for (fs::directory_iterator it(staging, error), end; !error && it != end; it.increment(error)) {
+    names.push_back(it->path().filename().string());
+  }
+  if (error) throw Error(in_quotes(shown_) + ": cannot list the staged results: " + error.message());
+  const auto move = [&](const fs::path& from, const std::string& to) {
+    if (::rename(from.c_str(), (path_ / to).c_str()) != 0) {
+      throw Error(in_quotes(shown_) + ": cannot move " + from.filename().string() +
+                  " into place: " + system_reason(errno));
+    }
+  };
+  std::sort(names.begin(), names.end());
+  for (const std::string& name : names) {
+    if (name == kSummaryFile) continue;
+    move(staging / name, name);
+    moved_.push_back(name);
+    fault_point("commit");
+  }
+  // summary.json marks the folder finished: it is parked under a scratch name so that the
+  // staging folder is gone before it appears.
+  move(staging / kSummaryFile, kPendingSummary);
+  if (::rmdir(staging.c_str()) != 0) {
+    throw Error(in_quotes(shown_) + ": cannot remove the staging folder: " + system_reason(errno));
+  }
+  sync_directory(path_);
+  move(path_ / kPendingSummary, kSummaryFile);
+  moved_.push_back(kSummaryFile);
+  sync_directory(path_);
+  fault_point("commit");
+  // The last step: without its checkpoint the folder is finished.
+  if (::unlink((path_ / kCheckpointFile).c_str()) != 0 && errno != ENOENT) {
+    throw Error(in_quotes(shown_) + ": cannot remove the checkpoint: " + system_reason(errno));
+  }
+  sync_directory(path_);
+  ended_ = true;
+  ended_text_ = "finished";
+}
+
+std::string RunFolder::abandon() noexcept {
+  if (ended_) return ended_text_;
+  ended_ = true;
+  std::error_code error;
+  fs::remove_all(path_ / kStaging, error);
+  try {
+    const Contents contents = read_contents(path_, shown_);
+    remove_scratch(path_, contents);
+    if (contents.checkpoint) {
+      ended_text_ = "checkpoint kept, continue with: physgrad resume " + shown_;
+    } else if (resuming_) {
+      ended_text_ = "the folder is kept; physgrad resume " + shown_ + " runs it again";
+    } else {
+      // A new run without a checkpoint: take back what this process wrote.
+      fs::remove(path_ / kConfigFile, error);
+      for (const std::string& name : moved_) fs::remove(path_ / name, error);
+      if (created_ && ::rmdir(path_.c_str()) == 0) remove_empty(created_parents_);
+      ended_text_ = "nothing was kept";
+    }
+  } catch (const std::exception& e) {
+    ended_text_ = std::string("the folder could not be cleaned up: ") + e.what();
+  }
+  return ended_text_;
+}
+
+void fault_point(const char* name) {
+  // "ACTION@NAME:K", read once.
+  static const std::string wanted = [] {
+    const char* text = std::getenv("PHYSGRAD_FAULT");
+    return text == nullptr ? std::string() : std::string(text);
+  }();
+  if (wanted.empty()) return;
+  const std::size_t at = wanted.find('@');
+  const std::size_t colon = wanted.find(':');
+  if (at == std::string::npos || wanted.substr(at + 1, colon - at - 1) != name) return;
+  static std::map<std::string, long> passes;
+  const long k = colon == std::string::npos ? 1 : std::atol(wanted.c_str() + colon + 1);
+  if (++passes[name] != k) return;
+  if (wanted.compare(0, at, "kill") == 0) ::kill(::getpid(), SIGKILL);
+  if (wanted.compare(0, at, "fail") == 0) {
+    throw Error(std::string("injected failure at ") + name + " " + std::to_string(k));
+  }
+}
+
+}  // namespace physgrad::experiments

@@ -1,0 +1,105 @@
+// The numerical local inverse's options: the tolerance relative to the start residual, the stall
+// test on an unreachable y, the gn inverse's cutoff on the singular values of an ill-conditioned
+// J (heat diffusion), the box, and the option checks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "physgrad/error.hpp"
+#include "physgrad/optim/local_inverse.hpp"
+#include "physgrad/physics/comparison_toy.hpp"
+#include "physgrad/physics/heat_diffusion.hpp"
+#include "test_problems.hpp"
+
+namespace physgrad {
+namespace {
+
+TEST(LocalInverse, RelativeToleranceStopsAtAFractionOfTheStartResidual) {
+  // y = (2, 2) from (3, 3): start residual ‖(3, 9) − (2, 2)‖ = √50.
+  const ComparisonToy physics;
+  const Vector y{{2.0, 2.0}}, x0{{3.0, 3.0}};
+  LocalInverseOptions options{.method = InverseMethod::kLbfgs, .tolerance = 1e-14};
+  options.relative_tolerance = 1e-3;
+  const LocalInverseResult loose = local_inverse(physics, y, x0, {}, options);
+  options.relative_tolerance = 1e-9;
+  const LocalInverseResult tight = local_inverse(physics, y, x0, {}, options);
+  const double start = std::sqrt(50.0);
+  EXPECT_TRUE(loose.converged);
+  EXPECT_LE(loose.residual, 1e-3 * start);
+  EXPECT_LE(tight.residual, 1e-9 * start);
+  EXPECT_LT(loose.iterations, tight.iterations);
+  EXPECT_LT(loose.evaluations, tight.evaluations);
+}
+
+TEST(LocalInverse, AnUnreachableTargetEndsAtTheStallInsteadOfTheIterationBudget) {
+  // P(x) = (x, x) cannot reach y = (1, −1): the best preimage is x = 0 with residual √2.
+  const testing::LinearSimulator physics((Matrix(2, 1) << 1, 1).finished());
+  const Vector y{{1.0, -1.0}};
+  for (const InverseMethod method : {InverseMethod::kLbfgs, InverseMethod::kGaussNewton}) {
+    const LocalInverseResult r =
+        local_inverse(physics, y, Vector{{3.0}}, {}, {.method = method, .max_iterations = 200});
+    EXPECT_FALSE(r.converged) << to_string(method);
+    EXPECT_NEAR(r.x(0), 0.0, 1e-8) << to_string(method);
+    EXPECT_NEAR(r.residual, std::sqrt(2.0), 1e-12) << to_string(method);
+    EXPECT_LT(r.iterations, 10) << to_string(method);
+  }
+}
+
+TEST(LocalInverse, GaussNewtonResolvesIllConditionedDiffusionWithItsDefaultCutoff) {
+  // 1-D diffusion of 32 cells, amount 2: the singular values of J run from 1 down to 2.7e-9.
+  const HeatDiffusion physics({32, 1, 2.0});
+  Vector x_true(32);
+  for (Index i = 0; i < 32; ++i) x_true(i) = std::sin(0.7 * static_cast<double>(i * i));
+  const Vector y = physics.forward(x_true);
+  LocalInverseOptions options{.method = InverseMethod::kGaussNewton};
+  const LocalInverseResult resolved = local_inverse(physics, y, Vector::Zero(32), {}, options);
+  EXPECT_TRUE(resolved.converged);
+  EXPECT_LE(resolved.iterations, 2);
+  EXPECT_LE(resolved.residual, 1e-10 * (1 + y.norm()));
+  // A cutoff of 1e-6·σ_max (what a cutoff of 1e-12 on the eigenvalues of JᵀJ keeps) drops the
+  // smallest modes: the residual stays above the tolerance and the solve ends at its stall.
+  options.rcond = 1e-6;
+  const LocalInverseResult truncated = local_inverse(physics, y, Vector::Zero(32), {}, options);
+  EXPECT_FALSE(truncated.converged);
+  EXPECT_GT(truncated.residual, 1e-9);
+  EXPECT_LT(truncated.iterations, 10);
+}
+
+TEST(LocalInverse, NumericalInversesStayInTheBoxAndClosedFormsAreProjected) {
+  // y = (2, 2) has the preimage (2, ±√2); with x₁ ≤ 1 the nearest feasible point is (2, 1).
+  const ComparisonToy physics;
+  const Domain box(2, Vector{{-10.0, -10.0}}, Vector{{10.0, 1.0}}, {});
+  for (const InverseMethod method :
+       {InverseMethod::kLbfgs, InverseMethod::kGaussNewton, InverseMethod::kAnalytic}) {
+    const LocalInverseResult r =
+        local_inverse(physics, Vector{{2.0, 2.0}}, Vector{{0.5, 0.5}}, {}, {.method = method}, box);
+    EXPECT_NEAR(r.x(0), 2.0, 1e-8) << to_string(method);
+    EXPECT_NEAR(r.x(1), 1.0, 1e-8) << to_string(method);
+    EXPECT_LE(r.x(1), 1.0) << to_string(method);
+  }
+}
+
+TEST(LocalInverse, OutOfRangeOptionsAndMissingCapabilitiesAreErrors) {
+  const ComparisonToy physics;
+  const Vector y{{2.0, 2.0}}, x0{{3.0, 3.0}};
+  const auto message = [&](const LocalInverseOptions& options) {
+    try {
+      local_inverse(physics, y, x0, {}, options);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message({.method = InverseMethod::kLbfgs, .relative_tolerance = 1.5}),
+            "local inverse: relative_tolerance must be in [0, 1), got 1.5");
+  EXPECT_EQ(message({.method = InverseMethod::kGaussNewton, .rcond = -1}),
+            "local inverse: rcond must be in [0, 1), got -1");
+  EXPECT_EQ(message({.method = InverseMethod::kLbfgs, .max_iterations = 0}),
+            "local inverse: max_iterations must be ≥ 1, got 0");
+  EXPECT_EQ(message({.method = InverseMethod::kTimeReversal}),
+            "simulator 'comparison_toy' has no time reversal; use a numerical inverse (lbfgs or gn)");
+  EXPECT_THROW(parse_inverse_method("reverse"), Error);
+}
+
+}  // namespace
+}  // namespace physgrad
