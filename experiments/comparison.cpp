@@ -1,5 +1,6 @@
 // comparison: y = P(x) = (x₀, x₁²), L = ‖y‖² = x₀² + x₁⁴ from (3, 3), as in the book's simple
 // optimizer comparison: GD, Adam, Newton, IG and PG (analytic and numerical local inverse).
+#include <algorithm>
 #include <cmath>
 #include <functional>
 
@@ -32,7 +33,7 @@ class Comparison final : public Experiment {
   }
   std::vector<OptionSpec> options() const override {
     return {
-        real_list_option("start", "3,3", "starting point x₀ (two values)"),
+        real_list_option("start", "3,3", "starting point x₀ (two values)").coordinates(),
         text_list_option("pg-inverse", "analytic,lbfgs", "local inverses PG runs with, one run each")
             .one_of({"analytic", "lbfgs", "gn"}),
     };
@@ -48,6 +49,13 @@ class Comparison final : public Experiment {
   void validate(const Settings& settings) const override {
     const std::size_t n = settings.reals("start").size();
     if (n != 2) throw Error("--start: needs exactly 2 values, got " + std::to_string(n));
+    const std::vector<double> start = settings.reals("start");
+    const ComparisonToy physics;
+    require_start(Objective(physics, L2Loss(2.0), Vector::Zero(2)), Vector{{start[0], start[1]}});
+    const std::vector<std::string> ids = settings.texts("optimizers");
+    const bool pg = std::find(ids.begin(), ids.end(), "pg") != ids.end();
+    require_iterate_memory(settings,
+                           ids.size() + (pg ? settings.texts("pg-inverse").size() - 1 : 0));
   }
 
   void run(const Settings& settings, RunContext& context) const override {

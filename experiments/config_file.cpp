@@ -3,16 +3,11 @@
 #include "config_file.hpp"
 
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <cstring>
-#include <fstream>
-#include <set>
-#include <sstream>
-#include <string_view>
 
 #include "physgrad/error.hpp"
+#include "physgrad/json_file.hpp"
 
 namespace physgrad::experiments {
 
@@ -22,6 +17,7 @@ using json = nlohmann::json;
 using Kind = OptionSpec::Kind;
 
 constexpr std::size_t kMaxDepth = 16;
+constexpr std::size_t kMaxBytes = 1 << 20;
 constexpr std::size_t kPreviewBytes = 60;
 
 std::string flag(const OptionSpec& spec) { return "--" + spec.name; }
@@ -36,93 +32,6 @@ std::string preview(const json& value) {
   while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;
   return text.substr(0, cut) + "…";
 }
-
-// "line L, column C" of the byte after the first `position` bytes, counted as nlohmann::json does.
-std::string text_position(const std::string& text, std::size_t position) {
-  const std::string_view read(text.data(), std::min(position, text.size()));
-  const auto lines = std::count(read.begin(), read.end(), '\n');
-  const std::size_t last_newline = read.rfind('\n');
-  const std::size_t column =
-      last_newline == std::string_view::npos ? read.size() : read.size() - last_newline - 1;
-  return "line " + std::to_string(lines + 1) + ", column " + std::to_string(column);
-}
-
-// nlohmann::json SAX handler building the document iteratively, so that repeated keys and deep
-// nesting are caught while parsing and every parse error gets its line and column.
-class DocumentBuilder {
- public:
-  explicit DocumentBuilder(const std::string& text) : text_(text) {}
-  json take() { return std::move(root_); }
-
-  bool null() { return add(nullptr); }
-  bool boolean(bool value) { return add(value); }
-  bool number_integer(json::number_integer_t value) { return add(value); }
-  bool number_unsigned(json::number_unsigned_t value) { return add(value); }
-  bool number_float(json::number_float_t value, const json::string_t& /*text*/) {
-    return add(value);
-  }
-  bool string(json::string_t& value) { return add(std::move(value)); }
-  bool binary(json::binary_t& /*value*/) { return false; }  // JSON text has no binary values
-  bool start_object(std::size_t /*size*/) {
-    keys_.emplace_back();
-    return open(json::object());
-  }
-  bool key(json::string_t& name) {
-    if (!keys_.back().insert(name).second) throw Error("key '" + name + "' appears twice");
-    key_ = std::move(name);
-    return true;
-  }
-  bool end_object() {
-    keys_.pop_back();
-    open_.pop_back();
-    return true;
-  }
-  bool start_array(std::size_t /*size*/) { return open(json::array()); }
-  bool end_array() {
-    open_.pop_back();
-    return true;
-  }
-  bool parse_error(std::size_t position, const std::string& /*last_token*/,
-                   const json::exception& error) {
-    // what() is "[json.exception.KIND.ID] parse error at line L, column C: DETAIL" or
-    // "[json.exception.KIND.ID] DETAIL"; keep DETAIL.
-    std::string detail = error.what();
-    detail.erase(0, detail.find("] ") + 2);
-    if (detail.starts_with("parse error")) detail.erase(0, detail.find(": ") + 2);
-    throw Error("invalid JSON at " + text_position(text_, position) + ": " + detail);
-  }
-
- private:
-  bool add(json value) {
-    place(std::move(value));
-    return true;
-  }
-  json* place(json value) {
-    if (open_.empty()) {
-      root_ = std::move(value);
-      return &root_;
-    }
-    json& parent = *open_.back();
-    if (parent.is_array()) {
-      parent.push_back(std::move(value));
-      return &parent.back();
-    }
-    return &(parent[key_] = std::move(value));
-  }
-  bool open(json container) {
-    if (open_.size() == kMaxDepth) {
-      throw Error("JSON nested deeper than " + std::to_string(kMaxDepth) + " levels");
-    }
-    open_.push_back(place(std::move(container)));
-    return true;
-  }
-
-  const std::string& text_;
-  json root_;
-  std::vector<json*> open_;  // the open arrays and objects, innermost last
-  std::vector<std::set<std::string>> keys_;  // keys seen in each open object
-  std::string key_;
-};
 
 std::string kind_description(Kind kind) {
   switch (kind) {
@@ -219,11 +128,7 @@ const json& saved_settings(const Experiment& experiment, const json& document) {
 
 }  // namespace
 
-json parse_config_json(const std::string& text) {
-  DocumentBuilder builder(text);
-  json::sax_parse(text, &builder);
-  return builder.take();
-}
+json parse_config_json(const std::string& text) { return parse_json_text(text, kMaxDepth); }
 
 OptionTexts config_options(const Experiment& experiment, const json& document) {
   if (!document.is_object()) {
@@ -251,18 +156,10 @@ OptionTexts config_options(const Experiment& experiment, const json& document) {
 }
 
 nlohmann::json read_config_document(const std::filesystem::path& path) {
-  const std::string where = std::string("config file '") + path.string() + "': ";
-  std::error_code error;
-  if (std::filesystem::is_directory(path, error)) throw Error(where + "is a directory");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(where + "cannot open: " + std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw Error(where + "cannot read: " + std::strerror(errno));
   try {
-    return parse_config_json(text.str());
+    return parse_config_json(read_regular_file(path, kMaxBytes));
   } catch (const Error& e) {
-    throw Error(where + e.what());
+    throw Error(std::string("config file '") + path.string() + "': " + e.what());
   }
 }
 

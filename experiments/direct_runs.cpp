@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/landscape.hpp"
 #include "physgrad/report/line_plot.hpp"
@@ -22,6 +24,25 @@ std::vector<RuleSetup> selected_rules(const Settings& settings,
     rules.push_back(rule);
   }
   return rules;
+}
+
+void require_start(const Objective& objective, const Vector& x0, const std::string& where) {
+  const double loss = objective.value(x0);
+  if (loss > 0 && std::isfinite(loss)) return;
+  std::string point;
+  for (Index i = 0; i < x0.size(); ++i) point += (i ? ", " : "") + format_value(x0(i));
+  if (x0.size() > 1) point = "(" + point + ")";
+  throw Error("--start: the loss at " + point + " is " + format_value(loss) + where +
+              (loss == 0 ? ": already a minimum, nothing to optimize"
+                         : ": give a start where it is finite"));
+}
+
+void require_iterate_memory(const Settings& settings, std::size_t runs) {
+  constexpr double kIterateBytes = 2048;
+  const long long iterations = settings.integer("iters");
+  require_memory(static_cast<double>(iterations) * static_cast<double>(runs) * kIterateBytes,
+                 "--iters: " + std::to_string(iterations) + " (" + std::to_string(runs) +
+                     " runs keeping every iterate)");
 }
 
 std::vector<RuleSetup> with_pg_inverses(const std::vector<RuleSetup>& rules,

@@ -42,6 +42,15 @@ struct DirectResult {
   double initial_loss = 0;
 };
 
+// Throws Error "--start: the loss at (0, 1e-200) is 0: …" or "… is inf: …" (`where` appended,
+// e.g. " with α = 10"): a start at a minimum leaves nothing to compare, and minimize() cannot
+// start from a non-finite loss.
+void require_start(const Objective& objective, const Vector& x0, const std::string& where = "");
+
+// Throws Error naming --iters when `runs` direct runs of that many iterations cannot keep every
+// iterate (its metrics row, point and share of the figures: about 2 KiB, measured) in memory.
+void require_iterate_memory(const Settings& settings, std::size_t runs);
+
 // Runs one rule from x0, records one metrics row per iterate (with `row_extras` columns) and
 // a summary entry (with `extra_params` merged into params). `tolerance` is the loss level
 // counted as converged. `sample`, when given, is called at the start and after every iteration

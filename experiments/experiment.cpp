@@ -3,14 +3,17 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <sstream>
 
 #include "interrupt.hpp"
 #include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
 
 namespace physgrad::experiments {
 
@@ -53,17 +56,19 @@ std::string format_number(double value) {
 
 double parse_real(const OptionSpec& spec, const std::string& text) {
   const std::string item = trim(text);
-  double value = 0;
-  std::size_t used = 0;
-  try {
-    value = std::stod(item, &used);
-  } catch (const std::out_of_range&) {
-    throw Error(flag(spec) + ": '" + text + "' is out of the range of a double");
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (item.empty() || used != item.size()) {
+  // strtod, not stod: a value below the normal range (1e-310) is kept as the subnormal it is.
+  char* end = nullptr;
+  errno = 0;
+  const double value = std::strtod(item.c_str(), &end);
+  const bool range = errno == ERANGE;
+  if (item.empty() || end != item.c_str() + item.size()) {
     throw Error(flag(spec) + ": '" + text + "' is not a number");
+  }
+  if (range && std::isinf(value)) {
+    throw Error(flag(spec) + ": '" + text + "' is out of the range of a double");
+  }
+  if (range && value == 0) {
+    throw Error(flag(spec) + ": '" + text + "' is too close to 0 for a double (it would read 0)");
   }
   if (!std::isfinite(value)) throw Error(flag(spec) + ": must be finite, got '" + text + "'");
   const bool below = spec.min_exclusive ? !(value > spec.min) : !(value >= spec.min);
@@ -77,22 +82,28 @@ long long parse_integer(const OptionSpec& spec, const std::string& text) {
   const std::string item = trim(text);
   long long value = 0;
   std::size_t used = 0;
+  bool beyond = false;  // a whole number beyond ±9.2e18
   try {
     value = std::stoll(item, &used);
+  } catch (const std::out_of_range&) {
+    beyond = item.find_first_not_of("+-0123456789") == std::string::npos;
   } catch (const std::exception&) {
     used = 0;
   }
-  if (item.empty() || used != item.size()) {
+  if (!beyond && (item.empty() || used != item.size())) {
     throw Error(flag(spec) + ": '" + text + "' is not a whole number");
   }
   const auto as_double = static_cast<double>(value);
-  if (as_double < spec.min || as_double > spec.max || (spec.nonzero && value == 0)) {
+  if (beyond || as_double < spec.min || as_double > spec.max || (spec.nonzero && value == 0)) {
     throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got '" + text + "'");
   }
   return value;
 }
 
 std::string parse_text(const OptionSpec& spec, const std::string& text) {
+  if (const std::string problem = text_problem(text); !problem.empty()) {
+    throw Error(flag(spec) + ": '" + text + "' " + problem);
+  }
   const std::string item = trim(text);
   if (!spec.choices.empty() &&
       std::find(spec.choices.begin(), spec.choices.end(), item) == spec.choices.end()) {
@@ -130,6 +141,49 @@ OptionSpec text_list_option(std::string name, std::string default_text, std::str
   return make_option(std::move(name), Kind::kTextList, std::move(default_text), std::move(help));
 }
 
+std::string text_problem(std::string_view text) {
+  const auto hex = [](unsigned value) {
+    static const char* const digits = "0123456789abcdef";
+    return std::string("0x") + digits[(value >> 4) & 0xF] + digits[value & 0xF];
+  };
+  const auto bytes = reinterpret_cast<const unsigned char*>(text.data());
+  for (std::size_t i = 0; i < text.size();) {
+    const unsigned lead = bytes[i];
+    if (lead < 0x20 || lead == 0x7F) {
+      return "contains the control character " + hex(lead) + " at byte " + std::to_string(i);
+    }
+    // The length of the UTF-8 sequence and the range of its second byte (no overlong forms, no
+    // surrogates, nothing above U+10FFFF).
+    std::size_t length = 1;
+    unsigned low = 0x80, high = 0xBF;
+    if (lead >= 0xC2 && lead <= 0xDF) {
+      length = 2;
+    } else if (lead >= 0xE0 && lead <= 0xEF) {
+      length = 3;
+      if (lead == 0xE0) low = 0xA0;
+      if (lead == 0xED) high = 0x9F;
+    } else if (lead >= 0xF0 && lead <= 0xF4) {
+      length = 4;
+      if (lead == 0xF0) low = 0x90;
+      if (lead == 0xF4) high = 0x8F;
+    } else if (lead >= 0x80) {
+      return "is not valid UTF-8 (byte " + hex(lead) + " at " + std::to_string(i) + ")";
+    }
+    for (std::size_t k = 1; k < length; ++k) {
+      const unsigned next = i + k < text.size() ? bytes[i + k] : 0;
+      if (next < (k == 1 ? low : 0x80) || next > (k == 1 ? high : 0xBF)) {
+        return "is not valid UTF-8 (byte " + hex(lead) + " at " + std::to_string(i) + ")";
+      }
+    }
+    if (lead == 0xC2 && bytes[i + 1] <= 0x9F) {  // U+0080 … U+009F
+      return "contains the control character U+00" + hex(bytes[i + 1]).substr(2) + " at byte " +
+             std::to_string(i);
+    }
+    i += length;
+  }
+  return {};
+}
+
 std::string describe_range(const OptionSpec& spec) {
   if (spec.kind == Kind::kText || spec.kind == Kind::kTextList) {
     return spec.choices.empty() ? "" : "one of: " + join(spec.choices);
@@ -160,17 +214,23 @@ nlohmann::json parse_option(const OptionSpec& spec, const std::string& text) {
     case Kind::kTextList: {
       if (trim(text).empty()) throw Error(flag(spec) + ": needs at least one value");
       nlohmann::json items = nlohmann::json::array();
+      std::vector<std::string> entries, names;  // as given, and as labels show them
       for (const std::string& item : split_list(text)) {
         if (item.empty()) throw Error(flag(spec) + ": empty entry in list '" + text + "'");
-        if (spec.kind == Kind::kRealList) {
-          items.push_back(parse_real(spec, item));
-        } else {
-          const std::string value = parse_text(spec, item);
-          if (std::find(items.begin(), items.end(), value) != items.end()) {
-            throw Error(flag(spec) + ": '" + value + "' is listed twice");
-          }
-          items.push_back(value);
+        const bool number = spec.kind == Kind::kRealList;
+        const double value = number ? parse_real(spec, item) : 0.0;
+        const std::string name = number ? format_value(value) : parse_text(spec, item);
+        const auto same = std::find(names.begin(), names.end(), name);
+        if (spec.distinct && same != names.end()) {
+          const std::string& first = entries[static_cast<std::size_t>(same - names.begin())];
+          throw Error(flag(spec) + ": " +
+                      (first == item ? "'" + item + "' is listed twice"
+                                     : "'" + first + "' and '" + item + "' both read '" + name +
+                                           "' in labels and file names"));
         }
+        entries.push_back(item);
+        names.push_back(name);
+        items.push_back(number ? nlohmann::json(value) : nlohmann::json(name));
       }
       return items;
     }
@@ -223,6 +283,7 @@ void RunContext::finish_progress() {
 
 void RunContext::check_interrupt() const {
   if (stop_ != nullptr && stop_->load()) {
+    stop_point_reached();
     throw Interrupted(experiment_name_ + ": stopped on request");
   }
 }
@@ -239,7 +300,8 @@ std::vector<OptionSpec> common_options(const Experiment& experiment) {
                          : std::string(),
                      "iterations per run")
           .at_least(1)
-          .at_most(1e9),
+          .at_most(1e9)
+          .quick("2"),
       real_option("lr", "",
                   "step size η for every selected rule (default: each rule's own, see the report)")
           .above(0),
@@ -279,6 +341,14 @@ Settings resolve_settings(const Experiment& experiment,
   }
   Settings settings(std::move(values));
   experiment.validate(settings);
+  for (const OptionSpec& spec : specs) {
+    if (!spec.bytes_each || !settings.has(spec.name)) continue;
+    const double each = spec.bytes_each(settings);
+    const long long count = settings.integer(spec.name);
+    require_memory(static_cast<double>(count) * each,
+                   flag(spec) + ": " + std::to_string(count) + " (items of at least " +
+                       format_bytes(each) + " each)");
+  }
   return settings;
 }
 

@@ -3,10 +3,12 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "physgrad/parallel/communicator.hpp"
@@ -15,6 +17,7 @@
 namespace physgrad::experiments {
 
 class ExperimentCheckpoint;
+class Settings;
 
 // One command-line option of an experiment. Values are parsed and validated by parse_option(),
 // so every bad value gets the same kind of one-line error naming the option and the value.
@@ -29,6 +32,16 @@ struct OptionSpec {
   bool min_exclusive = false;
   bool nonzero = false;              // numeric: 0 is not allowed
   std::vector<std::string> choices;  // allowed texts (text kinds); empty = any
+  // Lists: each entry is a setting of its own, named in labels, tables and file names, so no two
+  // may be equal or read the same there (format_value). Off for the coordinates of one point.
+  bool distinct = true;
+  // Integers that count items (samples): the bytes each needs at least, for the settings given.
+  // A value whose items do not fit in the memory this process may use is refused before
+  // anything is allocated.
+  std::function<double(const Settings&)> bytes_each;
+  // The value a quick check of the whole experiment uses (tests): its sizes and limits made
+  // tiny. Empty: the default.
+  std::string quick_text;
 
   // Chainable constraints: real_option("lr", "0.1", "step size").above(0).
   OptionSpec& above(double bound) { min = bound; min_exclusive = true; return *this; }
@@ -36,6 +49,12 @@ struct OptionSpec {
   OptionSpec& at_most(double bound) { max = bound; return *this; }
   OptionSpec& not_zero() { nonzero = true; return *this; }
   OptionSpec& one_of(std::vector<std::string> allowed) { choices = std::move(allowed); return *this; }
+  OptionSpec& coordinates() { distinct = false; return *this; }
+  OptionSpec& needs_bytes_each(std::function<double(const Settings&)> bytes) {
+    bytes_each = std::move(bytes);
+    return *this;
+  }
+  OptionSpec& quick(std::string text) { quick_text = std::move(text); return *this; }
 };
 
 OptionSpec real_option(std::string name, std::string default_text, std::string help);
@@ -47,6 +66,10 @@ OptionSpec text_list_option(std::string name, std::string default_text, std::str
 // Parses `text` for `spec` into JSON (number, integer, string or array). Throws Error such as
 // "--lr: 'abc' is not a number" or "--iters: must be ≥ 1, got 0".
 nlohmann::json parse_option(const OptionSpec& spec, const std::string& text);
+// Empty when `text` is valid UTF-8 free of control characters (C0, DEL, C1: a NUL would cut a
+// path short, a newline split a message or a CSV line); else what is wrong with it, e.g.
+// "contains the control character 0x00 at byte 6" or "is not valid UTF-8 (byte 0xff at 2)".
+std::string text_problem(std::string_view text);
 // "a range like ≥ 1" for help texts; empty when unbounded.
 std::string describe_range(const OptionSpec& spec);
 
@@ -118,6 +141,9 @@ class RunContext {
   void check_interrupt() const;
   void set_checkpoint(ExperimentCheckpoint* checkpoint) { checkpoint_ = checkpoint; }
   ExperimentCheckpoint* checkpoint() const { return checkpoint_; }
+  // The position of the next learning run in the whole experiment (0, 1, 2, … in the order the
+  // runs start, however many sweeps make them): what identifies a run in the checkpoint.
+  long long next_learning_run() { return learning_runs_++; }
 
  private:
   std::vector<nlohmann::json> metrics_;
@@ -129,6 +155,7 @@ class RunContext {
   std::string experiment_name_;
   const std::atomic<bool>* stop_ = nullptr;
   ExperimentCheckpoint* checkpoint_ = nullptr;
+  long long learning_runs_ = 0;
   std::shared_ptr<Communicator> communicator_;
   bool quiet_ = false;
   bool progress_line_open_ = false;

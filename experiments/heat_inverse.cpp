@@ -9,6 +9,7 @@
 #include "learning_runs.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
+#include "physgrad/memory.hpp"
 #include "physgrad/physics/heat_diffusion.hpp"
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/field_plot.hpp"
@@ -19,6 +20,7 @@ namespace physgrad::experiments {
 namespace {
 
 constexpr int kMaxBoxes = 10;
+constexpr double kWeightCopies = 6;  // θ, ∇θ, the rule's state, checkpoints: vectors of |θ|
 constexpr Index kShownSamples = 3;  // test samples in the reconstruction figures
 
 // Network inputs and targets y*, and the true initial states x* (one sample per column).
@@ -26,6 +28,16 @@ struct HeatData {
   Dataset set;
   Matrix truth;
 };
+
+// Cells per sample: n^dims, n from --n or its default (64 in 1-D, 16 in 2-D).
+Index cells(const Settings& settings) {
+  const Index dims = settings.integer("dims");
+  const Index n = settings.has("n") ? settings.integer("n") : dims == 1 ? 64 : 16;
+  return dims == 1 ? n : n * n;
+}
+
+// The network's widths for `size` cells.
+std::vector<Index> widths(Index size) { return {size, 2 * size, 2 * size, size}; }
 
 // Fraction of the cell [i, i + 1) covered by [lo, hi): boxes get a linear edge one cell wide.
 std::vector<double> coverage(Index n, double lo, double hi) {
@@ -78,6 +90,11 @@ class HeatInverse final : public Experiment {
            "y* = P(x*): SIP (regularised inverse diffusion) vs Adam through the diffusion";
   }
   std::vector<OptionSpec> options() const override {
+    // A sample: its true field, input and target, and the network's activations on it.
+    const auto bytes_each = [](const Settings& settings) {
+      const Index size = cells(settings);
+      return sample_bytes(widths(size), 3 * size);
+    };
     std::vector<OptionSpec> options = {
         integer_option("dims", "1", "1: a line of n cells; 2: an n×n grid").at_least(1).at_most(2),
         integer_option("n", "", "cells per axis (default: 64 in 1-D, 16 in 2-D)").at_least(8),
@@ -85,8 +102,9 @@ class HeatInverse final : public Experiment {
                     "diffusion ν·t in cell units (default: 8·(n/64)², E6's 8 "
                     "at 64 cells, the same blur relative to the domain)")
             .above(0),
-        integer_option("train-size", "4096", "training samples").at_least(1),
-        integer_option("test-size", "256", "test samples (also the x losses)").at_least(1),
+        sample_count_option("train-size", "4096", "training samples", "16", bytes_each),
+        sample_count_option("test-size", "256",
+                            "test samples (also the x losses)", "8", bytes_each),
     };
     for (OptionSpec& spec : learning_options("20")) {
       if (spec.name == "eval-every") {
@@ -102,12 +120,17 @@ class HeatInverse final : public Experiment {
   std::vector<std::string> default_optimizers() const override { return {"sip", "adam"}; }
   long long default_iterations() const override { return 0; }
 
-  // 2-D networks have about 8n⁴ weights.
+  // The network has about 8·cells² weights (8n⁴ in 2-D); a rule keeps a few vectors that long.
   void validate(const Settings& settings) const override {
     if (settings.integer("dims") == 2 && settings.has("n") && settings.integer("n") > 32) {
       throw Error("--n: at most 32 in 2-D (the network has ~8n⁴ weights), got " +
                   std::to_string(settings.integer("n")));
     }
+    const Index size = cells(settings);
+    require_memory(kWeightCopies * 8 * static_cast<double>(size) * static_cast<double>(size) *
+                       sizeof(double),
+                   "--n: " + std::to_string(size) + " cells (a network of ~8·" +
+                       std::to_string(size) + "² weights)");
   }
 
   void run(const Settings& given, RunContext& context) const override {
@@ -142,7 +165,7 @@ class HeatInverse final : public Experiment {
       // tanh with Glorot weights: after 10 s the test x loss was ~1.3 (SIP) and ~1.8 (Adam),
       // against ~8 and ~21 with ReLU and He weights, whose larger start leaves more error in
       // the modes diffusion erases and L cannot see. The same start for every rule.
-      Mlp network({size, 2 * size, 2 * size, size}, Activation::kTanh);
+      Mlp network(widths(size), Activation::kTanh);
       network.initialize(seed);
       const LearningResult& r = sweep.run(id, tag, {{"dims", dims}, {"n", n}, {"seed", seed}},
                                           network, problem, train.set, &test.set, observe);

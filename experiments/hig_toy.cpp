@@ -74,14 +74,17 @@ class HigToy final : public Experiment {
            "Adam vs Gauss-Newton vs HIG";
   }
   std::vector<OptionSpec> options() const override {
+    // A sample: its input and target, and the network's activations on it.
+    const auto bytes_each = [](const Settings&) { return sample_bytes({1, kHidden, 2}, 3); };
     std::vector<OptionSpec> options = {
         real_list_option("lambda", "1,0.01", "scale λ of the second output").above(0),
         integer_option("seeds", "5", "number of seeds per configuration (seed, seed+1, …)")
             .at_least(1)
-            .at_most(1000),
-        integer_option("train-size", "512", "training samples").at_least(1),
-        integer_option("test-size", "256", "test samples (also the activation statistics)")
-            .at_least(1),
+            .at_most(1000)
+            .quick("2"),
+        sample_count_option("train-size", "512", "training samples", "16", bytes_each),
+        sample_count_option("test-size", "256",
+                            "test samples (also the activation statistics)", "8", bytes_each),
     };
     for (OptionSpec& spec : learning_options("", "200")) options.push_back(std::move(spec));
     return options;

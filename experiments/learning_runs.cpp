@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <new>
 
 #include "checkpoint.hpp"
 #include "direct_runs.hpp"
@@ -29,6 +30,40 @@ std::string milliseconds(double seconds, long long steps) {
   return steps > 0 ? format_value(1e3 * seconds / static_cast<double>(steps)) : "–";
 }
 
+// Refuses the history of a run read from a checkpoint unless this experiment could have written
+// it: no more iterations than the run's limit (and than 2⁵³), every test loss finite when the
+// run has a test set, and each record's extras exactly the finite numbers the experiment's
+// on_evaluate records (found by letting it fill one record for `network` as it is).
+void check_saved_history(const RunKey& key, const TrainingSummary& summary, const Mlp& network,
+                         bool has_test_set, const TrainerOptions& options) {
+  const long long limit = options.max_iterations.value_or(1LL << 53);
+  if (summary.iterations > limit) {
+    throw Error("checkpoint: " + key.describe() + " has " + std::to_string(summary.iterations) +
+                " iterations, more than the run's " + std::to_string(limit));
+  }
+  TrainingRecord probe;
+  if (options.on_evaluate) options.on_evaluate(network, probe);
+  for (const TrainingRecord& record : summary.history) {
+    std::string problem;
+    if (has_test_set && !std::isfinite(record.test_loss)) problem = "has no finite test loss";
+    for (const auto& item : probe.extras.items()) {
+      const std::string& name = item.key();
+      if (problem.empty() && !(record.extras.contains(name) &&
+                               record.extras.at(name).is_number() &&
+                               std::isfinite(record.extras.at(name).get<double>()))) {
+        problem = "has no finite '" + name + "'";
+      }
+    }
+    if (problem.empty() && record.extras.size() != probe.extras.size()) {
+      problem = "has values this experiment does not record";
+    }
+    if (!problem.empty()) {
+      throw Error("checkpoint: " + key.describe() + ": the record of iteration " +
+                  std::to_string(record.iteration) + " " + problem);
+    }
+  }
+}
+
 }  // namespace
 
 Series held_controls(const std::string& label, const Vector& u, double dt,
@@ -38,6 +73,21 @@ Series held_controls(const std::string& label, const Vector& u, double dt,
   if (u.size() > 0) s.y.push_back(s.y.back());
   s.steps = true;
   return s;
+}
+
+OptionSpec sample_count_option(std::string name, std::string default_text, std::string help,
+                               std::string quick,
+                               std::function<double(const Settings&)> bytes_each) {
+  return integer_option(std::move(name), std::move(default_text), std::move(help))
+      .at_least(1)
+      .needs_bytes_each(std::move(bytes_each))
+      .quick(std::move(quick));
+}
+
+double sample_bytes(const std::vector<Index>& widths, Index data_values) {
+  double values = static_cast<double>(data_values);
+  for (const Index width : widths) values += 2.0 * static_cast<double>(width);
+  return values * sizeof(double);
 }
 
 void require_training_limit(const Settings& settings, const std::string& experiment) {
@@ -119,10 +169,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                       std::to_string(result.seed) + ", iteration " +
                       std::to_string(r.iteration) + ", test loss " + format_value(r.test_loss));
   };
-  // Runs are numbered across every sweep of the experiment (sin-rotation has one per ξ), so
-  // that a checkpoint's run i is the same run however the experiment groups them.
-  result.summary = train_or_resume(RunKey{static_cast<long long>(context_.runs().size()), id, tag,
-                                          result.seed},
+  result.summary = train_or_resume(RunKey{context_.next_learning_run(), id, tag, result.seed},
                                    network, *update, problem, train_set, test_set, options);
   context_.finish_progress();
   context_.add_network({{"label", result.label},
@@ -178,21 +225,46 @@ TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Mlp& network,
   if (checkpoint != nullptr) {
     const Index count = network.num_parameters();
     if (std::optional<FinishedRun> done = checkpoint->finished(key, count)) {
+      check_saved_history(key, done->summary, network, test_set != nullptr, options);
       network.set_parameters(done->parameters);
       return std::move(done->summary);
     }
     state = checkpoint->in_progress(key, count);
-    if (state) options.resume = &*state;
+    if (state) {
+      check_saved_history(key, state->summary, network, test_set != nullptr, options);
+      // Every epoch takes the same number of batches, so the position follows from the count.
+      const Index batch = std::min(options.batch_size, train_set.size());
+      const long long batches = (train_set.size() + batch - 1) / batch;
+      if (state->batch_start % batch != 0 ||
+          state->epoch != state->summary.iterations / batches ||
+          state->batch_start / batch != state->summary.iterations % batches) {
+        throw Error("checkpoint: " + key.describe() + ": epoch " + std::to_string(state->epoch) +
+                    " and batch start " + std::to_string(state->batch_start) +
+                    " do not follow from its " + std::to_string(state->summary.iterations) +
+                    " iterations (" + std::to_string(batches) + " batches per epoch)");
+      }
+      options.resume = &*state;
+    }
     if (settings_.has("checkpoint-every")) {
       options.checkpoint_every = settings_.integer("checkpoint-every");
     }
     options.checkpoint_seconds = settings_.real("checkpoint-seconds");
-    options.on_checkpoint = [checkpoint, &key](const TrainerState& s) {
+    options.on_checkpoint = [checkpoint, &key, stop = options.stop](const TrainerState& s) {
+      if (stop != nullptr && stop->load()) stop_point_reached();  // saving, then ending
       checkpoint->save_progress(key, s);
     };
   }
-  TrainingSummary summary = train(network, update, problem, train_set, test_set, options);
+  TrainingSummary summary;
+  try {
+    summary = train(network, update, problem, train_set, test_set, options);
+  } catch (const Error& e) {
+    throw Error(key.describe() + ": " + e.what());  // names the setting (λ=…, ξ=…) and seed
+  } catch (const std::bad_alloc&) {
+    throw Error(key.describe() + ": out of memory while training (--batch, --train-size or the "
+                "network need more than this process may use)");
+  }
   if (summary.termination == TrainingTermination::kInterrupted) {
+    stop_point_reached();
     throw Interrupted(context_.experiment_name() + ": " + key.describe() + " " + summary.message);
   }
   if (checkpoint != nullptr) checkpoint->record_finished(key, summary, network.parameters());

@@ -42,6 +42,14 @@ struct RuleDefaults {
 // may give time and eval-every defaults).
 std::vector<OptionSpec> learning_options(const std::string& default_time = "",
                                          const std::string& default_eval_every = "");
+// An option counting samples (--train-size, --test-size): at least 1, refused when its samples of
+// `bytes_each` bytes do not fit in memory, `quick` in the quick check of every experiment.
+OptionSpec sample_count_option(std::string name, std::string default_text, std::string help,
+                               std::string quick,
+                               std::function<double(const Settings&)> bytes_each);
+// The bytes one sample needs at least: its `data_values` doubles (inputs, targets, context) and
+// the activations of a network of `widths` kept for the backward pass.
+double sample_bytes(const std::vector<Index>& widths, Index data_values);
 // Throws Error unless --iters, --epochs or --time limits the training.
 void require_training_limit(const Settings& settings, const std::string& experiment);
 

@@ -54,8 +54,12 @@ Configuration configuration(const std::string& name) {
 }
 
 // The 20-20-20 network of both configurations.
+std::vector<Index> widths(const CoupledOscillators& physics) {
+  return {physics.output_dim(), 20, 20, 20, physics.input_dim()};
+}
+
 Mlp make_network(const CoupledOscillators& physics, Activation activation, std::uint64_t seed) {
-  Mlp network({physics.output_dim(), 20, 20, 20, physics.input_dim()}, activation);
+  Mlp network(widths(physics), activation);
   network.initialize(seed);
   return network;
 }
@@ -138,13 +142,18 @@ class Oscillators final : public Experiment {
            "or Adam vs HIG vs SIP (book)";
   }
   std::vector<OptionSpec> options() const override {
+    // A sample: its state and target, and the network's activations on it.
+    const auto bytes_each = [](const Settings& settings) {
+      const CoupledOscillators physics(configuration(settings.text("variant")).physics);
+      return sample_bytes(widths(physics), 2 * physics.output_dim());
+    };
     std::vector<OptionSpec> options = {
         text_option("variant", "paper",
                     "paper: cubic coupling, Nt 96, dt 0.125, relu net; book: linear coupling, "
                     "Nt 24, dt 0.5, tanh net")
             .one_of({"paper", "book"}),
-        integer_option("train-size", "4096", "training states").at_least(1),
-        integer_option("test-size", "4096", "test states").at_least(1),
+        sample_count_option("train-size", "4096", "training states", "16", bytes_each),
+        sample_count_option("test-size", "4096", "test states", "8", bytes_each),
     };
     for (OptionSpec& spec : learning_options("20")) options.push_back(std::move(spec));
     return options;

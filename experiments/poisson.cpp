@@ -41,8 +41,10 @@ Matrix make_fields(Index count, Index n, std::uint64_t seed) {
   return fields;
 }
 
+std::vector<Index> widths(Index n) { return {n * n, 64, 128, 64, n * n}; }
+
 Mlp make_network(Index n, std::uint64_t seed) {
-  Mlp network({n * n, 64, 128, 64, n * n}, Activation::kTanh);
+  Mlp network(widths(n), Activation::kTanh);
   network.initialize(seed);
   return network;
 }
@@ -96,10 +98,15 @@ class PoissonExperiment final : public Experiment {
     return "network predicts x from y* = laplace(x*) on an 8x8 grid: Adam vs HIG (SIP optional)";
   }
   std::vector<OptionSpec> options() const override {
+    // A sample: its field, input and target, and the network's activations on it.
+    const auto bytes_each = [](const Settings& settings) {
+      const Index cells = settings.integer("grid") * settings.integer("grid");
+      return sample_bytes(widths(settings.integer("grid")), 3 * cells);
+    };
     std::vector<OptionSpec> options = {
         integer_option("grid", "8", "grid size n (n×n cells)").at_least(2).at_most(64),
-        integer_option("train-size", "2048", "training samples").at_least(1),
-        integer_option("test-size", "256", "test samples").at_least(1),
+        sample_count_option("train-size", "2048", "training samples", "16", bytes_each),
+        sample_count_option("test-size", "256", "test samples", "8", bytes_each),
     };
     for (OptionSpec& spec : learning_options("30")) options.push_back(std::move(spec));
     return options;

@@ -31,8 +31,19 @@ Dataset make_targets(Index n, Index points, std::uint64_t seed) {
   return data;
 }
 
+std::vector<Index> widths(const QuantumDipole& physics) {
+  return {physics.output_dim(), 20, 20, 20, physics.input_dim()};
+}
+
+// The paper's setting with --steps.
+QuantumDipoleConfig configuration(const Settings& settings) {
+  QuantumDipoleConfig config = QuantumDipoleConfig::paper();
+  config.steps = settings.integer("steps");
+  return config;
+}
+
 Mlp make_network(const QuantumDipole& physics, std::uint64_t seed) {
-  Mlp network({physics.output_dim(), 20, 20, 20, physics.input_dim()}, Activation::kTanh);
+  Mlp network(widths(physics), Activation::kTanh);
   network.initialize(seed);
   return network;
 }
@@ -131,10 +142,20 @@ class QuantumDipoleExperiment final : public Experiment {
            "Adam vs HIG";
   }
   std::vector<OptionSpec> options() const override {
+    // A sample: its target and start state, the states of its trajectory, and the network's
+    // activations on it.
+    const auto bytes_each = [](const Settings& settings) {
+      const QuantumDipole physics(configuration(settings));
+      const Index state = physics.output_dim();
+      return sample_bytes(widths(physics), (3 + settings.integer("steps")) * state);
+    };
     std::vector<OptionSpec> options = {
-        integer_option("train-size", "1024", "training targets").at_least(1),
-        integer_option("test-size", "1024", "test targets").at_least(1),
-        integer_option("steps", "384", "Crank-Nicolson steps Nt (dt = 0.05)").at_least(1),
+        sample_count_option("train-size", "1024", "training targets", "16", bytes_each),
+        sample_count_option("test-size", "1024", "test targets", "8", bytes_each),
+        integer_option("steps", "384", "Crank-Nicolson steps Nt (dt = 0.05)")
+            .at_least(1)
+            .at_most(1e5)
+            .quick("8"),
     };
     for (OptionSpec& spec : learning_options("30")) options.push_back(std::move(spec));
     return options;
@@ -154,8 +175,7 @@ class QuantumDipoleExperiment final : public Experiment {
   }
 
   void run(const Settings& settings, RunContext& context) const override {
-    QuantumDipoleConfig config = QuantumDipoleConfig::paper();
-    config.steps = settings.integer("steps");
+    const QuantumDipoleConfig config = configuration(settings);
     const QuantumDipole physics(config);
     const FidelityLoss fidelity;
     const LearningProblem problem{&physics, &fidelity};

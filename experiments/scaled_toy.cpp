@@ -23,7 +23,7 @@ class ScaledToy final : public Experiment {
   std::vector<OptionSpec> options() const override {
     return {
         real_list_option("alpha", "1,10,100,1000", "scales α of the second component").above(0),
-        real_list_option("start", "0.48,0.84", "starting point x₀ (two values)"),
+        real_list_option("start", "0.48,0.84", "starting point x₀ (two values)").coordinates(),
         real_option("tol", "1e-6", "convergence level of the loss (see --tol-mode)")
             .above(0)
             .at_most(1),
@@ -43,9 +43,15 @@ class ScaledToy final : public Experiment {
   void validate(const Settings& settings) const override {
     const std::size_t n = settings.reals("start").size();
     if (n != 2) throw Error("--start: needs exactly 2 values, got " + std::to_string(n));
-    if (settings.reals("start") == std::vector<double>{0.0, 0.0}) {
-      throw Error("--start: must not be the minimum (0, 0)");
+    const std::vector<double> start = settings.reals("start");
+    const L2Loss loss;
+    for (const double alpha : settings.reals("alpha")) {
+      const DiagonalScale physics(Vector{{1.0, alpha}});
+      require_start(Objective(physics, loss, Vector::Zero(2)), Vector{{start[0], start[1]}},
+                    " with α = " + format_value(alpha));
     }
+    require_iterate_memory(settings,
+                           settings.reals("alpha").size() * settings.texts("optimizers").size());
   }
 
   void run(const Settings& settings, RunContext& context) const override {

@@ -33,6 +33,17 @@ class Sensitivity final : public Experiment {
   std::vector<std::string> default_optimizers() const override { return {"gd", "newton", "ig"}; }
   long long default_iterations() const override { return 100; }
 
+  void validate(const Settings& settings) const override {
+    const L2Loss loss;
+    for (const double alpha : settings.reals("alpha")) {
+      const DiagonalScale physics(Vector{{alpha}});
+      require_start(Objective(physics, loss, Vector::Zero(1)), Vector{{settings.real("start")}},
+                    " with α = " + format_value(alpha));
+    }
+    require_iterate_memory(settings,
+                           settings.reals("alpha").size() * settings.texts("optimizers").size());
+  }
+
   void run(const Settings& settings, RunContext& context) const override {
     const std::vector<double> alphas = settings.reals("alpha");
     const Vector x0{{settings.real("start")}};

@@ -19,6 +19,7 @@ namespace {
 // The landscape figure's target and view, as in the SIP paper's figure (E5).
 const Vector kTrackedTarget{{0.3, -0.5}};
 constexpr double kViewX = 1.2, kViewY = 0.6;
+const std::vector<Index> kWidths = {2, 32, 64, 32, 2};
 
 SinRotation make_physics(double xi, double phi, const std::string& form) {
   SinRotationConfig config;
@@ -67,10 +68,12 @@ class SinRotationExperiment final : public Experiment {
            "SIP vs Adam vs SGD, x-distance to the nearest exact solution";
   }
   std::vector<OptionSpec> options() const override {
+    // A sample: its input and target, and the network's activations on it.
+    const auto bytes_each = [](const Settings&) { return sample_bytes(kWidths, 4); };
     std::vector<OptionSpec> options = {
         real_list_option("xi", "1,32", "conditioning ξ (Jacobian singular values differ by ξ²)")
             .above(0),
-        real_option("phi", "15", "coupling angle φ in degrees"),
+        real_option("phi", "15", "coupling angle φ in degrees").at_least(-360).at_most(360),
         text_option("form", "book",
                     "book: P = (sin(x̂₁)/ξ, ξx̂₂), x̂ = R_φx; code: the SIP "
                     "repository's x̂ = diag(10/ξ, 10ξ)R_φx, P = (sin x̂₁, x̂₂)")
@@ -78,8 +81,9 @@ class SinRotationExperiment final : public Experiment {
         integer_option("seeds", "1", "number of seeds per configuration (seed, seed+1, …)")
             .at_least(1)
             .at_most(1000),
-        integer_option("train-size", "10000", "training samples").at_least(1),
-        integer_option("test-size", "1000", "test samples (also the x-distance)").at_least(1),
+        sample_count_option("train-size", "10000", "training samples", "16", bytes_each),
+        sample_count_option("test-size", "1000",
+                            "test samples (also the x-distance)", "8", bytes_each),
     };
     for (OptionSpec& spec : learning_options("8", "1000")) options.push_back(std::move(spec));
     return options;
@@ -121,7 +125,7 @@ class SinRotationExperiment final : public Experiment {
           record.extras["tracked_x2"] = x(1);
         };
         for (const std::string& id : settings.texts("optimizers")) {
-          Mlp network({2, 32, 64, 32, 2}, Activation::kRelu);
+          Mlp network(kWidths, Activation::kRelu);
           network.initialize(seed, Init::kHeUniform);  // the same start for every rule
           const LearningResult& r = sweep.run(id, tag, {{"xi", xi}, {"phi", phi}, {"seed", seed}},
                                               network, problem, train_set, &test_set, observe);

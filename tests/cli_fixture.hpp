@@ -96,9 +96,9 @@ inline int interrupt_when(pid_t pid, const fs::path& checkpoint, const std::stri
 class Cli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("physgrad_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    std::replace(test.begin(), test.end(), '/', '_');  // parameterised tests: "Name/param"
+    dir_ = fs::temp_directory_path() / ("physgrad_cli_" + std::to_string(::getpid()) + "_" + test);
     configs_ = dir_.string() + "_configs";
     for (const fs::path& path : {dir_, configs_}) {
       fs::remove_all(path);

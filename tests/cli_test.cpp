@@ -241,7 +241,7 @@ TEST_F(Cli, BenchPrintsOneJsonLineAndRejectsBadInput) {
   for (const auto& [args, needle] : std::vector<std::pair<std::string, std::string>>{
            {"bench no-such-case", "unknown reference configuration 'no-such-case'"},
            {"bench hig-toy --optimizer newton", "unknown learning update 'newton'"},
-           {"bench hig-toy --steps 0", "--steps: must be ≥ 1"},
+           {"bench hig-toy --steps 0", "--steps: must be in [1, 1000000]"},
            {"bench hig-toy --batch x", "--batch: 'x' is not a whole number"},
            {"bench hig-toy --threads 0", "--threads: "}}) {
     const Outcome bad = run(args);

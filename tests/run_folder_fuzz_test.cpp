@@ -10,6 +10,7 @@
 #include <signal.h>
 #include <sys/wait.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -97,25 +98,36 @@ TEST_F(RunFolderFuzz, SeededOperationsNeverLoseAFinishedResultNorLeaveAnUnresuma
   const unsigned seed = seed_text == nullptr ? 20261124u : static_cast<unsigned>(std::atol(seed_text));
   rng_.seed(seed);
   SCOPED_TRACE("PHYSGRAD_FUZZ_SEED=" + std::to_string(seed));
-  ASSERT_EQ(run(kLearning + "ref-learning").exit_code, 0);
-  ASSERT_EQ(run(kDirect + "ref-direct").exit_code, 0);
+  // The uninterrupted results, and how long each kind of run takes here: a signal at a random
+  // moment comes within 1.2 times that, so that most land while the run is going on.
+  const auto timed = [&](const std::string& args) {
+    const auto begin = std::chrono::steady_clock::now();
+    EXPECT_EQ(run(args).exit_code, 0) << args;
+    const auto took = std::chrono::steady_clock::now() - begin;
+    return 1 + static_cast<std::size_t>(
+                   1.2 * std::chrono::duration<double, std::milli>(took).count());
+  };
+  const std::size_t learning_ms = timed(kLearning + "ref-learning");
+  const std::size_t direct_ms = timed(kDirect + "ref-direct");
+  ASSERT_FALSE(HasFailure());
   fs::create_directory_symlink("b", dir_ / "lb");  // dangling until b exists
   const std::vector<std::string> folders = {"a", "b", "n/c"};
   const std::set<std::string> top_level = {"ref-learning", "ref-direct", "a", "b", "n", "lb"};
 
   std::map<std::string, std::map<std::string, std::string>> finished;  // folder → its files
   std::map<std::string, int> seen;  // what the sequence reached, to show it covered the states
-  constexpr int kRounds = 36;
+  constexpr int kRounds = 100;
   for (int round = 0; round < kRounds; ++round) {
     const std::string folder = folders[pick(folders.size())];
     // Resume where there is something to resume, mostly; start a run elsewhere, mostly.
     const bool unfinished = state_of(dir_ / folder) == State::kUnfinished;
     const auto resuming = [&] { return pick(6) < (unfinished ? 4u : 1u); };
-    const bool learning = pick(4) != 0;
+    const bool first = round == 0;  // always a run killed at a checkpoint (below)
+    const bool learning = first || pick(4) != 0;
     const std::string start = (learning ? kLearning : kDirect) + spelling(folder);
     const std::string resume = "resume " + spelling(folder);
     const std::vector<std::string> faults = {
-        "", "kill@claimed:1", "kill@checkpoint:" + std::to_string(1 + pick(20)),
+        "", "kill@claimed:1", "kill@checkpoint:" + std::to_string(1 + pick(first ? 6 : 20)),
         "kill@commit:" + std::to_string(1 + pick(14))};
     std::vector<Exit> exits;
     bool concurrent = false;
@@ -123,10 +135,12 @@ TEST_F(RunFolderFuzz, SeededOperationsNeverLoseAFinishedResultNorLeaveAnUnresuma
     // A finished folder is refused by everything but removal: remove it often, so that the
     // sequence keeps passing through the other states.
     const bool finished_now = state_of(dir_ / folder) == State::kFinished;
-    switch (finished_now && pick(2) == 0 ? 6 : pick(7)) {
+    // The first round is a run killed at one of its first checkpoints, so that every sequence
+    // has an unfinished folder with a checkpoint to continue.
+    switch (first ? 0 : finished_now && pick(2) == 0 ? 6 : pick(7)) {
       case 0: case 1: {  // a run or resume, perhaps killed at a step
-        const bool resume_it = resuming();
-        const std::string fault = faults[pick(faults.size())];
+        const bool resume_it = !first && resuming();
+        const std::string fault = faults[first ? 2 : pick(faults.size())];
         op = (resume_it ? resume : start) + (fault.empty() ? "" : " [" + fault + "]");
         const auto outcome =
             run(resume_it ? resume : start, fault.empty() ? "" : "PHYSGRAD_FAULT=" + fault);
@@ -138,7 +152,7 @@ TEST_F(RunFolderFuzz, SeededOperationsNeverLoseAFinishedResultNorLeaveAnUnresuma
         const bool resume_it = resuming();
         op = (resume_it ? resume : start) + " [signal " + std::to_string(signal) + "]";
         const pid_t pid = spawn(resume_it ? resume : start, "", "one");
-        std::this_thread::sleep_for(std::chrono::milliseconds(pick(learning ? 300 : 100)));
+        std::this_thread::sleep_for(std::chrono::milliseconds(pick(learning ? learning_ms : direct_ms)));
         ::kill(pid, signal);
         exits.push_back(wait_for(pid, "one"));
         break;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -11,6 +12,7 @@
 
 #include "experiment.hpp"
 #include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
 #include "physgrad/threads.hpp"
 #include "reference_case.hpp"
 
@@ -20,6 +22,8 @@ namespace {
 
 namespace ex = physgrad::experiments;
 using Clock = std::chrono::steady_clock;
+
+constexpr double kMaxSteps = 1e6;  // timed or warm-up steps (their sum stays far from overflow)
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -74,8 +78,10 @@ BenchCommand::BenchCommand(CLI::App& app)
       ->default_str(optimizer_);
   command_->add_option("--batch", batch_, "batch size (default: the rule's own in NAME)")
       ->type_name("INT");
-  command_->add_option("--steps", steps_, "timed steps (≥ 1)")->default_str(steps_)->type_name("INT");
-  command_->add_option("--warmup", warmup_, "untimed steps before (≥ 0)")
+  command_->add_option("--steps", steps_, "timed steps (1 to 1000000)")
+      ->default_str(steps_)
+      ->type_name("INT");
+  command_->add_option("--warmup", warmup_, "untimed steps before (0 to 1000000)")
       ->default_str(warmup_)
       ->type_name("INT");
   command_->add_option("--threads", threads_,
@@ -85,8 +91,8 @@ BenchCommand::BenchCommand(CLI::App& app)
 }
 
 void BenchCommand::run(std::ostream& out) const {
-  const long long steps = read_integer("steps", steps_, 1);
-  const long long warmup = read_integer("warmup", warmup_, 0);
+  const long long steps = read_integer("steps", steps_, 1, kMaxSteps);
+  const long long warmup = read_integer("warmup", warmup_, 0, kMaxSteps);
   const long long threads = read_integer("threads", threads_, 1, 1024);
   const auto& names = ex::reference_case_names();
   if (std::find(names.begin(), names.end(), name_) == names.end()) {
@@ -99,8 +105,18 @@ void BenchCommand::run(std::ostream& out) const {
   set_jacobian_threads(static_cast<int>(threads));
 
   // The rule's own batch size, step size and τ in NAME, as `physgrad run NAME` uses them.
-  const Index batch = batch_.empty() ? ex::reference_batch(ex::reference_case(name_, 1), optimizer_)
+  const ex::ReferenceCase single = ex::reference_case(name_, 1);
+  const Index batch = batch_.empty() ? ex::reference_batch(single, optimizer_)
                                      : read_integer("batch", batch_, 1);
+  // The reference eigendecomposition holds three B·m × B·m matrices and dsyevd's workspace of
+  // about two more; refuse a batch for which they cannot fit before allocating anything.
+  const double order =
+      static_cast<double>(batch) * static_cast<double>(single.physics->output_dim());
+  char size[64];
+  std::snprintf(size, sizeof size, "%.0f × %.0f", order, order);
+  require_memory(5 * order * order * sizeof(double),
+                 "--batch: " + std::to_string(batch) +
+                     " (the reference eigendecomposition of a " + size + " matrix)");
   ex::ReferenceCase reference = ex::reference_case(name_, batch);
   const auto update = ex::make_reference_update(reference, optimizer_);
   const LearningProblem problem = reference.problem();

@@ -5,6 +5,7 @@
 // SIGINT/SIGTERM stop a run: learning runs leave a checkpoint in the run folder (exit 128 +
 // signal), other runs write nothing.
 #include <CLI/CLI.hpp>
+#include <cblas.h>
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
@@ -12,6 +13,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <new>
 #include <optional>
 #include <sstream>
 
@@ -22,6 +24,7 @@
 #include "interrupt.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
 #include "physgrad/report/atomic_file.hpp"
 #include "physgrad/train/checkpoint_file.hpp"
 #include "physgrad/threads.hpp"
@@ -79,9 +82,61 @@ std::string one_line(const std::string& message) {
   return line;
 }
 
+// Every argument is a text value: refuse control characters (a NUL cuts a path short) and bytes
+// that are not UTF-8 (config.json could not hold them), naming the option they belong to.
+void check_arguments(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string argument = argv[i];
+    const std::string problem = ex::text_problem(argument);
+    if (problem.empty()) continue;
+    const std::size_t equals = argument.find('=');
+    const std::string previous = i > 1 ? argv[i - 1] : "";
+    if (argument.starts_with("--") && equals != std::string::npos) {
+      throw physgrad::Error(argument.substr(0, equals) + ": '" + argument.substr(equals + 1) +
+                            "' " + ex::text_problem(argument.substr(equals + 1)));
+    }
+    const std::string owner =
+        previous.starts_with("--") ? previous : "argument " + std::to_string(i);
+    throw physgrad::Error(owner + ": '" + argument + "' " + problem);
+  }
+}
+
+// Throws Error "unknown subcommand 'NAME' (known: list, describe, …)" unless `name` is one
+// (an empty name: "a subcommand is required (known: …)").
+void check_subcommand(CLI::App& app, const std::string& name) {
+  std::string known;
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    if (sub->get_name() == name) return;
+    known += (known.empty() ? "" : ", ") + sub->get_name();
+  }
+  throw physgrad::Error((name.empty() ? std::string("a subcommand is required")
+                                      : "unknown subcommand '" + name + "'") +
+                        " (known: " + known + ")");
+}
+
 int usage_error(const std::string& message) {
   std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << one_line(message) << '\n';
   return physgrad::cli::end_run(kUsageError);  // under mpirun: ends the other ranks too
+}
+
+// OpenBLAS (Debian's build) takes a work buffer of 128 MiB per thread at its first level-3 call
+// and retries for ever when it cannot have it. Check that an address-space limit (ulimit -v)
+// leaves room for it, then take it now with one tiny dsyrk, before the run's own data: a later
+// shortage is an ordinary allocation failure with a message. Without room the process ends at
+// once: a BLAS thread may already be retrying, and exit() would wait for it.
+void reserve_blas_buffer() {
+  constexpr double kMiB = 1024.0 * 1024.0;
+  try {
+    physgrad::require_memory(160 * kMiB,
+                             "the BLAS library's 128 MiB work buffer with 32 MiB to spare");
+  } catch (const physgrad::Error& e) {
+    std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << one_line(e.what())
+              << std::endl;
+    std::_Exit(kUsageError);
+  }
+  const double one = 1;
+  double product = 0;
+  cblas_dsyrk(CblasColMajor, CblasLower, CblasNoTrans, 1, 1, 1.0, &one, 1, 0.0, &product, 1);
 }
 
 void print_table(const ex::RunContext::Table& table) {
@@ -283,7 +338,10 @@ int main(int argc, char** argv) {
   }
 
   try {
-    // Name an unknown experiment explicitly instead of CLI11's generic "not expected".
+    check_arguments(argc, argv);
+    // Name an unknown subcommand or experiment explicitly instead of CLI11's generic "A
+    // subcommand is required" or "not expected".
+    if (argc == 1 || argv[1][0] != '-') check_subcommand(app, argc > 1 ? argv[1] : "");
     if (argc > 2 && std::string(argv[1]) == "run" && argv[2][0] != '-') {
       ex::find_experiment(argv[2]);
     }
@@ -311,6 +369,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (bench.parsed()) {
+      reserve_blas_buffer();
       bench.run(std::cout);
       return 0;
     }
@@ -324,6 +383,7 @@ int main(int argc, char** argv) {
       print_table(ex::options_table(ex::find_experiment(describe_name)));
       return 0;
     }
+    reserve_blas_buffer();
     ex::install_interrupt_handlers();
     if (resume->parsed()) return resume_run(resume_folder);
     for (const auto& experiment : ex::registry()) {
@@ -341,6 +401,9 @@ int main(int argc, char** argv) {
       }
       return start_run(*experiment, given, command_line);
     }
+  } catch (const std::bad_alloc&) {
+    return usage_error("out of memory: a size given (samples, batch, grid, list) needs more than "
+                       "this machine or its limits (ulimit -v) allow");
   } catch (const std::exception& e) {
     return usage_error(e.what());
   }

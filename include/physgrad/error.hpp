@@ -9,9 +9,24 @@ namespace physgrad {
 
 // Bad input: a mismatched dimension, a value out of range, an unknown name. The CLI prints the
 // message as one line and exits with 2.
+// what() is a C string: a NUL inside the message (from a value quoted in it) is written as \x00
+// so that it cannot cut the message short.
 class Error : public std::runtime_error {
  public:
-  explicit Error(const std::string& message) : std::runtime_error(message) {}
+  explicit Error(const std::string& message) : std::runtime_error(without_nul(message)) {}
+
+ private:
+  static std::string without_nul(const std::string& message) {
+    std::string text;
+    for (const char c : message) {
+      if (c == '\0') {
+        text += "\\x00";
+      } else {
+        text += c;
+      }
+    }
+    return text;
+  }
 };
 
 // Numerical trouble below an update rule: a non-finite operand, a factorization that did not

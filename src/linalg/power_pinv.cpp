@@ -72,6 +72,9 @@ Vector svd_apply(const Matrix& j, const Vector& g, double kappa, PowerPinvInfo& 
                               vt.data(), k),
                "dgesdd");
   info.sigma_max = sigma(0);
+  if (!std::isfinite(info.sigma_max)) {
+    throw NumericalError("power_pinv_apply: the largest singular value of J overflows");
+  }
   info.rank = (sigma.array() > info.rcond_used * info.sigma_max).count();
   Vector c = u.leftCols(info.rank).transpose() * g;
   c.array() *= sigma.head(info.rank).array().pow(-kappa);
@@ -82,6 +85,9 @@ Vector svd_apply(const Matrix& j, const Vector& g, double kappa, PowerPinvInfo& 
 // over the kept σ, which are the trailing ones (dsyevd sorts ascending).
 Vector eigen_apply(Matrix& w, const Vector& x, double kappa, PowerPinvInfo& info) {
   const lapack_int n = lapack_dim(w.rows());
+  if (!all_finite(w) || !all_finite(x)) {
+    throw NumericalError("power_pinv_apply: J Jᵀ, JᵀJ or Jᵀg overflows (non-finite entry)");
+  }
   Vector lambda(n);
   check_lapack(LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', n, w.data(), n, lambda.data()),
                "dsyevd");

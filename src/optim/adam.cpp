@@ -1,6 +1,8 @@
 #include "physgrad/optim/adam.hpp"
 
 #include <cmath>
+#include <sstream>
+#include <utility>
 
 #include "physgrad/error.hpp"
 #include "physgrad/serialize.hpp"
@@ -26,9 +28,19 @@ Vector AdamState::update(const Vector& gradient) {
     v_ = Vector::Zero(gradient.size());
     t_ = 0;
   }
+  // A gradient whose square overflows would make v infinite and the step silently zero: refuse
+  // it, leaving the moments as they were.
+  Vector m = options_.beta1 * m_ + (1 - options_.beta1) * gradient;
+  Vector v = options_.beta2 * v_ + (1 - options_.beta2) * gradient.cwiseAbs2();
+  if (!all_finite(m) || !all_finite(v)) {
+    std::ostringstream msg;
+    msg << "Adam's moment estimates are not finite (largest |gradient| entry "
+        << gradient.cwiseAbs().maxCoeff() << ")";
+    throw NumericalError(msg.str());
+  }
   ++t_;
-  m_ = options_.beta1 * m_ + (1 - options_.beta1) * gradient;
-  v_ = options_.beta2 * v_ + (1 - options_.beta2) * gradient.cwiseAbs2();
+  m_ = std::move(m);
+  v_ = std::move(v);
   const double m_correction = 1 - std::pow(options_.beta1, static_cast<double>(t_));
   const double v_correction = 1 - std::pow(options_.beta2, static_cast<double>(t_));
   return -options_.lr * (m_ / m_correction).array() /

@@ -127,6 +127,7 @@ class Search {
     trial.value = objective_.value_and_gradient(x_ + step * direction_, trial.gradient);
     trial.slope = trial.gradient.dot(direction_);
     ++result_.evaluations;
+    if (!trial.finite()) ++result_.non_finite;
     if (trial.finite() && sufficient_decrease(trial) && trial.value < result_.value) {
       record(trial);
     }

@@ -189,14 +189,16 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
   while (!stop && !done) {
     if (summary.iterations >= options.max_iterations) break;
 
+    // Numerical failures name the iteration, the rule and the place.
+    const std::string where =
+        "iteration " + std::to_string(summary.iterations + 1) + " of " + optimizer.id() + ": ";
     Step step;
     const auto step_start = Clock::now();
     try {
       step = optimizer.step(objective, summary.x, domain);
     } catch (const NumericalError& e) {
       summary.termination = Termination::kNumericalFailure;
-      summary.message = "iteration " + std::to_string(summary.iterations + 1) + " of " +
-                        optimizer.id() + ": " + e.what();
+      summary.message = where + e.what();
       break;
     }
     summary.step_seconds += since(step_start);
@@ -217,7 +219,7 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
     }
     if (!all_finite(step.dx)) {
       summary.termination = Termination::kNumericalFailure;
-      summary.message = "non-finite step at iteration " + std::to_string(summary.iterations + 1);
+      summary.message = where + "non-finite step";
       break;
     }
     // The rule keeps x + Δx in the box; the projection only removes rounding in the sum.
@@ -233,7 +235,7 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
     if (!std::isfinite(loss_next)) {
       summary.termination = Termination::kNumericalFailure;
       std::ostringstream msg;
-      msg << "loss became " << loss_next << " at iteration " << summary.iterations + 1;
+      msg << where << "the loss at the new point is " << loss_next;
       summary.message = msg.str();
       break;
     }

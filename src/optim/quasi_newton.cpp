@@ -1,7 +1,11 @@
 #include "physgrad/optim/quasi_newton.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <sstream>
 #include <utility>
+
+#include "physgrad/error.hpp"
 
 namespace physgrad {
 
@@ -41,6 +45,12 @@ LineSearchResult QuasiNewton::search(const Objective& objective, const Vector& x
   const Vector p = s.cwiseProduct(pz);  // the direction in x
   const double first = has_curvature() ? initial_step_
                                        : initial_step_ * std::min(1.0, 1 / pz.stableNorm());
+  if (!(first > 0 && std::isfinite(first))) {
+    std::ostringstream msg;
+    msg << "line search: the first trial step along a direction of norm " << pz.stableNorm()
+        << " is " << first;
+    throw NumericalError(msg.str());
+  }
   return strong_wolfe_line_search(objective, x, value_, g_, p, first, line_search_,
                                   domain.max_step(x, p));
 }
@@ -54,11 +64,7 @@ Step QuasiNewton::propose(const Objective& objective, const Vector& x, const Dom
     x_ = x;
     ++out.evaluations;
   }
-  if (!all_finite(g_)) {
-    out.status = Step::Status::kFailed;
-    out.message = id() + ": the gradient at x is not finite";
-    return out;
-  }
+  if (!all_finite(g_)) throw NumericalError("the gradient at x is not finite");
   // Everything below is in z = x ⊘ s: gradient D g, pairs (D⁻¹s, D y), direction p_z.
   const Vector scale = domain.scale(n);
   const std::vector<bool> free = domain.free_variables(x, g_);
@@ -80,6 +86,10 @@ Step QuasiNewton::propose(const Objective& objective, const Vector& x, const Dom
     pz = restrict(domain, x, free, -gz);
     result = search(objective, x, pz, domain);
     out.evaluations += result.evaluations;
+  }
+  if (!result.success && result.evaluations > 0 && result.non_finite == result.evaluations) {
+    throw NumericalError("line search: all " + std::to_string(result.evaluations) +
+                         " trial points gave a non-finite loss or gradient");
   }
   if (!result.success) {
     out.status = Step::Status::kFailed;

@@ -1,11 +1,11 @@
 #include "physgrad/train/checkpoint_file.hpp"
 
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 #include <string>
 
 #include "physgrad/error.hpp"
+#include "physgrad/json_file.hpp"
 #include "physgrad/report/atomic_file.hpp"
 
 namespace physgrad {
@@ -14,6 +14,10 @@ namespace {
 
 constexpr const char* kMagic = "physgrad-checkpoint";
 constexpr int kVersion = 1;
+// What a checkpoint may hold: nesting as deep as a trainer state's with room to spare, and
+// θ and the rule's state of a network of some ten million weights.
+constexpr std::size_t kMaxDepth = 64;
+constexpr std::size_t kMaxBytes = std::size_t{4} << 30;
 
 std::string hex64(std::uint64_t value) {
   char text[17];
@@ -68,18 +72,20 @@ nlohmann::json parse_checkpoint(std::string_view text, const std::string& source
   }
   if (hex64(fnv1a64(body)) != checksum) throw fail("checksum mismatch: the file is corrupted");
   try {
-    return nlohmann::json::parse(body);
-  } catch (const nlohmann::json::exception& e) {
-    throw fail(std::string("invalid JSON: ") + e.what());
+    return parse_json_text(body, kMaxDepth);
+  } catch (const Error& e) {
+    throw fail(e.what());
   }
 }
 
 nlohmann::json read_checkpoint_file(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("checkpoint '" + path.string() + "': cannot be read");
-  std::ostringstream content;
-  content << in.rdbuf();
-  return parse_checkpoint(content.str(), path.string());
+  std::string content;
+  try {
+    content = read_regular_file(path, kMaxBytes);
+  } catch (const Error& e) {
+    throw Error("checkpoint '" + path.string() + "': " + e.what());
+  }
+  return parse_checkpoint(content, path.string());
 }
 
 }  // namespace physgrad

@@ -30,6 +30,7 @@ struct LineSearchResult {
   double value = 0;      // φ(α) = L(x + αp)
   Vector gradient;       // ∇L(x + αp)
   int evaluations = 0;   // value-and-gradient evaluations spent
+  int non_finite = 0;    // of them, those whose value or gradient was not finite
   std::string message;   // why, when !success
 };
 

@@ -18,8 +18,10 @@ std::uint64_t fnv1a64(std::string_view bytes);
 // checkpoint, never a mix. Throws Error naming the path when it cannot.
 void write_checkpoint_file(const std::filesystem::path& path, const nlohmann::json& document);
 
-// Throws Error "checkpoint 'PATH': …" when the file is missing, is not a checkpoint, has another
-// version, is truncated or longer than stated, fails its checksum or holds invalid JSON.
+// Throws Error "checkpoint 'PATH': …" when the file is missing, is not a regular file (read
+// without blocking on a FIFO or device), is larger than 4 GiB, is not a checkpoint, has another
+// version, is truncated or longer than stated, fails its checksum, holds invalid JSON, or nests
+// deeper than 64 levels.
 nlohmann::json read_checkpoint_file(const std::filesystem::path& path);
 // The same checks on a checkpoint's bytes; `source` names it in errors.
 nlohmann::json parse_checkpoint(std::string_view text, const std::string& source);
