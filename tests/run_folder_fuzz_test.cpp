@@ -83,8 +83,8 @@ class RunFolderFuzz : public Cli {
   }
 
   std::string spelling(const std::string& folder) {
-    std::vector<std::string> forms = {folder, folder + "/", "./" + folder, folder + "/.",
-                                      folder + "//", (dir_ / folder).string() + "/"};
+    std::vector<std::string> forms = {folder, folder + "/", (fs::path(".") / folder).string(),
+                                      folder + "/.", folder + "//", (dir_ / folder).string() + "/"};
     if (folder == "b") forms.insert(forms.end(), {"lb", "lb/", "lb/."});
     return forms[pick(forms.size())];
   }
@@ -161,12 +161,13 @@ TEST_F(RunFolderFuzz, SeededOperationsNeverLoseAFinishedResultNorLeaveAnUnresuma
         concurrent = true;
         const std::size_t n = 2 + pick(2);
         std::vector<pid_t> pids;
+        const std::vector<std::string> tags = {"p0", "p1", "p2"};
         for (std::size_t i = 0; i < n; ++i) {
           const std::string args = resuming() ? resume : start;
           op += args + " & ";
-          pids.push_back(spawn(args, "", "p" + std::to_string(i)));
+          pids.push_back(spawn(args, "", tags[i]));
         }
-        for (std::size_t i = 0; i < n; ++i) exits.push_back(wait_for(pids[i], "p" + std::to_string(i)));
+        for (std::size_t i = 0; i < n; ++i) exits.push_back(wait_for(pids[i], tags[i]));
         break;
       }
       default: {  // the user removes a folder by hand
