@@ -46,13 +46,17 @@ ExperimentCheckpoint::ExperimentCheckpoint(fs::path folder, nlohmann::json confi
   const std::string experiment = string_from_json(resumed, "experiment");
   if (experiment != config_.at("experiment").get<std::string>()) {
     throw Error("the checkpoint belongs to experiment '" + experiment + "', config.json to '" +
-                config_.at("experiment").get<std::string>() + "'");
+                config_.at("experiment").get<std::string>() +
+                "': config.json was changed after the run started; put back the checkpoint's "
+                "experiment");
   }
   const nlohmann::json& settings = object_from_json(resumed, "settings");
   for (const auto& [name, value] : config_.at("settings").items()) {
     if (name != "out" && settings.value(name, nlohmann::json()) != value) {
       throw Error("config.json and the checkpoint disagree on --" + name + " (" + value.dump() +
-                  " vs " + settings.value(name, nlohmann::json()).dump() + ")");
+                  " vs " + settings.value(name, nlohmann::json()).dump() +
+                  "): config.json was changed after the run started; put back the checkpoint's "
+                  "value");
     }
   }
   if (!resumed.contains("finished") || !resumed.at("finished").is_array()) {

@@ -94,6 +94,20 @@ std::vector<fs::path> make_parents(const fs::path& path, const std::string& opti
   return created;
 }
 
+// Refuses a folder inside the folder of a run (config.json with summary.json or checkpoint.pgc):
+// the new run would change a finished result, or mix its files with an unfinished one.
+void refuse_inside_run(const fs::path& path, const std::string& what) {
+  std::error_code ignored;
+  for (fs::path p = path.parent_path(); !p.empty(); p = p.parent_path()) {
+    if (fs::exists(p / kConfigFile, ignored) &&
+        (fs::exists(p / kSummaryFile, ignored) || fs::exists(p / kCheckpointFile, ignored))) {
+      throw Error(what + " lies inside the run folder " + in_quotes(p.string()) +
+                  "; choose a folder outside it");
+    }
+    if (p == p.root_path()) break;
+  }
+}
+
 // Opens `path` and takes its lock; -1 when there is no folder there (any more). The identity
 // check catches a folder removed or replaced between the open and the lock.
 int open_locked(const fs::path& path, const std::string& what) {
@@ -173,6 +187,7 @@ RunFolder::~RunFolder() {
 
 RunFolder RunFolder::create(const FolderPath& out) {
   const std::string what = "--out: " + in_quotes(out.shown);
+  refuse_inside_run(out.path, what);
   std::vector<fs::path> parents = make_parents(out.path, "--out");
   for (int attempt = 0; attempt < 16; ++attempt) {
     const bool made = ::mkdir(out.path.c_str(), 0777) == 0;
@@ -214,6 +229,7 @@ RunFolder RunFolder::create(const FolderPath& out) {
 
 RunFolder RunFolder::create_unique(const fs::path& parent, const std::string& stem) {
   const FolderPath first = locate_folder((parent / stem).string(), "--out");
+  refuse_inside_run(first.path, "--out: " + in_quotes(first.shown));
   std::vector<fs::path> parents = make_parents(first.path, "--out");
   for (int n = 1; n <= 1000; ++n) {
     std::string suffix;

@@ -69,6 +69,11 @@ TEST_F(RunFolderCli, EverySpellingOfAFinishedFolderLeavesItAsItIs) {
     expect_refused("resume " + out, "nothing to resume");
   }
   expect_refused("resume .", "nothing to resume", "r");
+  // Nor does a run inside it add to it.
+  for (const std::string& out : std::vector<std::string>{"r/sub", "r/a/b/", abs + "/sub"}) {
+    expect_refused("run comparison --out " + out, "lies inside the run folder");
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "r" / "sub") || fs::exists(dir_ / "r" / "a"));
   EXPECT_EQ(snapshot(dir_ / "r"), finished);
   // An existing empty folder, named with a trailing slash, is used in place and kept.
   fs::create_directory(dir_ / "e");

@@ -269,10 +269,18 @@ int resume_run(const std::string& text) {
   if (!config.is_object() || !config.contains("experiment") || !config["experiment"].is_string()) {
     throw physgrad::Error("'" + where.shown + "/" + ex::kConfigFile + "' names no experiment");
   }
-  const ex::Experiment& experiment = ex::find_experiment(config["experiment"].get<std::string>());
-  ex::OptionTexts given = ex::config_options(experiment, config);
-  given.emplace_back("out", where.shown);
-  const ex::Settings settings = ex::resolve_settings(experiment, given);
+  // The saved settings are read as a config file would be, errors naming the file.
+  const auto settings = [&] {
+    try {
+      const ex::Experiment& named = ex::find_experiment(config["experiment"].get<std::string>());
+      ex::OptionTexts given = ex::config_options(named, config);
+      given.emplace_back("out", where.shown);
+      return std::make_pair(&named, ex::resolve_settings(named, given));
+    } catch (const physgrad::Error& e) {
+      throw physgrad::Error("resume: '" + where.shown + "/" + ex::kConfigFile + "': " + e.what());
+    }
+  }();
+  const ex::Experiment& experiment = *settings.first;
   nlohmann::json resumed;
   if (fs::exists(where.path / ex::kCheckpointFile)) {
     resumed = physgrad::read_checkpoint_file(where.path / ex::kCheckpointFile);
@@ -282,7 +290,7 @@ int resume_run(const std::string& text) {
   }
   const std::string command =
       config.contains("command") && config["command"].is_string() ? config["command"].get<std::string>() : "";
-  return run_experiment(experiment, settings, command, folder, where.path, resumed);
+  return run_experiment(experiment, settings.second, command, folder, where.path, resumed);
 }
 
 }  // namespace
