@@ -348,10 +348,23 @@ void LearningSweep::add_metric_figure(RunContext& context,
                                                    : "iteration";
   options.y_label = y_label;
   options.log_y = log_y;
+  // Rules that run for one time budget can end hundreds of iterations apart (HIG's step costs
+  // what hundreds of Adam steps do): a log x axis keeps the shorter runs visible.
+  double shortest = 0, longest = 0;
+  for (const Series& s : series) {
+    if (s.x.empty()) continue;
+    shortest = shortest == 0 ? s.x.back() : std::min(shortest, s.x.back());
+    longest = std::max(longest, s.x.back());
+  }
+  options.log_x = progress != Progress::kTime && shortest > 0 && longest >= 30 * shortest;
   const std::string caption =
       title + ". " +
       (several_seeds ? "Line: median over the seeds; band: their minimum to maximum. " : "") +
-      "Dots: evaluations.";
+      "Dots: evaluations." +
+      (options.log_x ? " Log x axis (the start is not drawn): the rules ran " +
+                           format_value(shortest) + " to " + format_value(longest) + " " +
+                           options.x_label + "s in the same budget."
+                     : "");
   context.add_figure({file, caption, line_plot_svg(series, options)});
 }
 
