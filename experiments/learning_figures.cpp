@@ -1,0 +1,244 @@
+// LearningSweep's presentation: runs grouped per rule, loss and metric figures (median and band
+// over seeds), and the tables of final test losses, saturation and step times.
+#include <algorithm>
+#include <cmath>
+
+#include "learning_runs.hpp"
+#include "physgrad/report/colors.hpp"
+#include "physgrad/report/line_plot.hpp"
+#include "physgrad/report/seed_band.hpp"
+
+namespace physgrad::experiments {
+
+namespace {
+
+std::string rule_label(const std::string& id) {
+  return find_rule(RuleKind::kLearning, id).label;
+}
+
+double final_test_loss(const LearningResult& r) { return r.summary.history.back().test_loss; }
+
+std::string milliseconds(double seconds, long long steps) {
+  return steps > 0 ? format_value(1e3 * seconds / static_cast<double>(steps)) : "–";
+}
+
+}  // namespace
+
+Series held_controls(const std::string& label, const Vector& u, double dt,
+                     const std::string& color) {
+  Series s{label, {}, std::vector<double>(u.data(), u.data() + u.size()), color};
+  for (Index k = 0; k <= u.size(); ++k) s.x.push_back(dt * static_cast<double>(k));
+  if (u.size() > 0) s.y.push_back(s.y.back());
+  s.steps = true;
+  return s;
+}
+
+std::vector<const LearningResult*> LearningSweep::first_seed_runs(const std::string& tag) const {
+  std::vector<const LearningResult*> runs;
+  for (const LearningResult& r : results_) {
+    const bool seen = std::any_of(runs.begin(), runs.end(),
+                                  [&](const LearningResult* other) { return other->id == r.id; });
+    if (r.tag == tag && !seen) runs.push_back(&r);
+  }
+  return runs;
+}
+
+std::vector<std::vector<const LearningResult*>> LearningSweep::rule_groups(
+    const std::string& tag) const {
+  std::vector<std::vector<const LearningResult*>> groups;
+  for (const LearningResult& r : results_) {
+    if (r.tag != tag) continue;
+    const auto group = std::find_if(groups.begin(), groups.end(), [&](const auto& g) {
+      return g.front()->id == r.id;
+    });
+    if (group == groups.end()) {
+      groups.push_back({&r});
+    } else {
+      group->push_back(&r);
+    }
+  }
+  return groups;
+}
+
+void LearningSweep::add_metric_figure(RunContext& context,
+                                      const std::vector<std::vector<const LearningResult*>>& groups,
+                                      const std::string& file, const std::string& title,
+                                      const std::string& y_label,
+                                      const std::function<double(const TrainingRecord&)>& value,
+                                      Progress progress, bool log_y) {
+  std::vector<Series> series;
+  bool several_seeds = false;
+  for (const auto& group : groups) {
+    std::vector<Curve> curves;
+    long long stopped = 0;
+    for (const LearningResult* run : group) {
+      Curve& c = curves.emplace_back();
+      for (const TrainingRecord& r : run->summary.history) {
+        c.x.push_back(progress == Progress::kTime    ? r.train_seconds
+                      : progress == Progress::kEpoch ? r.epoch
+                                                     : static_cast<double>(r.iteration));
+        c.y.push_back(value(r));
+      }
+      stopped += run->summary.termination == TrainingTermination::kNumericalFailure ? 1 : 0;
+    }
+    const std::size_t n = group.size();
+    several_seeds = several_seeds || n > 1;
+    const LearningResult& first = *group.front();
+    Series s = median_band(first.label + (n > 1 ? ", median of " + std::to_string(n) : ""),
+                           curves, color_for(first.id), log_y);
+    s.markers = true;
+    // Over time the seeds are evaluated at different moments: each holds its last value, so
+    // median and band change in steps.
+    s.steps = n > 1 && progress == Progress::kTime;
+    // A loss that ends above where it started (a diverging rule) does not set the axis range.
+    if (log_y && s.y.size() > 1 && s.y.back() > s.y.front()) {
+      s.sets_range = false;
+      s.end_label = "diverging: ends at ×" + format_value(s.y.back() / s.y.front()) + " its start";
+    }
+    if (stopped > 0) {
+      s.end_label = n > 1 ? std::to_string(stopped) + " of " + std::to_string(n) +
+                                " runs stopped: not finite"
+                          : "stopped: not finite after iteration " +
+                                std::to_string(first.summary.iterations);
+    }
+    series.push_back(std::move(s));
+  }
+  LinePlotOptions options;
+  options.title = title;
+  options.x_label = progress == Progress::kTime    ? "training time (s, evaluations excluded)"
+                    : progress == Progress::kEpoch ? "epoch"
+                                                   : "iteration";
+  options.y_label = y_label;
+  options.log_y = log_y;
+  // Rules that run for one time budget can end hundreds of iterations apart (HIG's step costs
+  // what hundreds of Adam steps do): a log x axis keeps the shorter runs visible.
+  double shortest = 0, longest = 0;
+  for (const Series& s : series) {
+    if (s.x.empty()) continue;
+    shortest = shortest == 0 ? s.x.back() : std::min(shortest, s.x.back());
+    longest = std::max(longest, s.x.back());
+  }
+  options.log_x = progress != Progress::kTime && shortest > 0 && longest >= 30 * shortest;
+  const std::string caption =
+      title + ". " +
+      (several_seeds ? "Line: median over the seeds; band: their minimum to maximum. " : "") +
+      "Dots: evaluations." +
+      (options.log_x ? " Log x axis (the start is not drawn): the rules ran " +
+                           format_value(shortest) + " to " + format_value(longest) + " " +
+                           options.x_label + "s in the same budget."
+                     : "");
+  context.add_figure({file, caption, line_plot_svg(series, options)});
+}
+
+void LearningSweep::add_loss_figures(RunContext& context, const std::string& tag,
+                                     const std::string& file_tag, bool by_epoch,
+                                     const std::string& loss_label) const {
+  const auto test_loss = [](const TrainingRecord& r) { return r.test_loss; };
+  const auto groups = rule_groups(tag);
+  for (const Progress progress :
+       {by_epoch ? Progress::kEpoch : Progress::kIteration, Progress::kTime}) {
+    const std::string axis = progress == Progress::kTime    ? "time"
+                             : progress == Progress::kEpoch ? "epoch"
+                                                            : "iteration";
+    add_metric_figure(context, groups, "loss_vs_" + axis + "_" + file_tag + ".svg",
+                      "Test loss vs " +
+                          std::string(progress == Progress::kTime ? "training time" : axis) +
+                          " (" + tag + ")",
+                      loss_label, test_loss, progress);
+  }
+}
+
+void LearningSweep::add_tables() const {
+  std::vector<std::string> tags, ids;
+  std::vector<long long> seeds;
+  for (const LearningResult& r : results_) {
+    if (std::find(tags.begin(), tags.end(), r.tag) == tags.end()) tags.push_back(r.tag);
+    if (std::find(ids.begin(), ids.end(), r.id) == ids.end()) ids.push_back(r.id);
+    if (std::find(seeds.begin(), seeds.end(), r.seed) == seeds.end()) seeds.push_back(r.seed);
+  }
+  const auto find = [&](const std::string& tag, const std::string& id, long long seed) {
+    const auto it = std::find_if(results_.begin(), results_.end(), [&](const LearningResult& r) {
+      return r.tag == tag && r.id == id && r.seed == seed;
+    });
+    return it == results_.end() ? nullptr : &*it;
+  };
+  const bool has_saturation =
+      !results_.empty() && results_.front().summary.history.back().extras.contains(
+                               "saturated_fraction");
+
+  for (const std::string& tag : tags) {
+    RunContext::Table losses{"Final test loss per seed (" + tag +
+                                 "): the mean loss over the test set after the last iteration, "
+                                 "with the median and the worst over the seeds",
+                             {"rule"}, {}};
+    RunContext::Table saturation{"Saturated hidden neurons at the end, per seed (" + tag +
+                                     "): the fraction (0 to 1) of hidden neurons with |tanh| > "
+                                     "0.99 on every test input",
+                                 {"rule"}, {}};
+    for (const long long seed : seeds) {
+      losses.header.push_back("seed " + std::to_string(seed));
+      saturation.header.push_back("seed " + std::to_string(seed));
+    }
+    losses.header.insert(losses.header.end(), {"median", "worst"});
+    for (const std::string& id : ids) {
+      std::vector<std::string> row = {rule_label(id)}, saturated = {rule_label(id)};
+      std::vector<double> values;
+      for (const long long seed : seeds) {
+        const LearningResult* r = find(tag, id, seed);
+        if (r == nullptr) {
+          row.push_back("–");
+          saturated.push_back("–");
+          continue;
+        }
+        values.push_back(final_test_loss(*r));
+        row.push_back(format_value(values.back()) +
+                      (r->summary.termination == TrainingTermination::kNumericalFailure ? " (NaN stop)"
+                                                                                   : ""));
+        if (has_saturation) {
+          saturated.push_back(format_value(r->summary.history.back().extras["saturated_fraction"]));
+        }
+      }
+      std::sort(values.begin(), values.end());
+      const std::size_t n = values.size();
+      const double median = n == 0 ? NAN
+                            : n % 2 ? values[n / 2]
+                                    : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+      row.push_back(format_value(median));
+      row.push_back(n == 0 ? "–" : format_value(values.back()));
+      losses.rows.push_back(std::move(row));
+      saturation.rows.push_back(std::move(saturated));
+    }
+    context_.add_table(std::move(losses));
+    if (has_saturation) context_.add_table(std::move(saturation));
+  }
+
+  RunContext::Table timing{"Time per training step in milliseconds, mean over seeds: the "
+                           "forward pass of network, physics and loss; the gradient or stacked "
+                           "Jacobian; the inversion inside gn/hig; the rest of the update",
+                           {"rule", "setting", "forward (ms)", "gradient or Jacobian (ms)",
+                            "inversion (ms)", "update (ms)", "total (ms)"},
+                           {}};
+  for (const std::string& tag : tags) {
+    for (const std::string& id : ids) {
+      TrainingSummary total;
+      for (const LearningResult& r : results_) {
+        if (r.tag != tag || r.id != id) continue;
+        total.iterations += r.summary.iterations;
+        total.forward_seconds += r.summary.forward_seconds;
+        total.derivative_seconds += r.summary.derivative_seconds;
+        total.inversion_seconds += r.summary.inversion_seconds;
+        total.update_seconds += r.summary.update_seconds;
+        total.train_seconds += r.summary.train_seconds;
+      }
+      const long long steps = total.iterations;
+      timing.rows.push_back({rule_label(id), tag, milliseconds(total.forward_seconds, steps),
+                             milliseconds(total.derivative_seconds, steps),
+                             milliseconds(total.inversion_seconds, steps),
+                             milliseconds(total.update_seconds, steps),
+                             milliseconds(total.train_seconds, steps)});
+    }
+  }
+  context_.add_table(std::move(timing));
+}
+
+}  // namespace physgrad::experiments
