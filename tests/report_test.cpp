@@ -9,7 +9,6 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -29,6 +28,23 @@
 
 namespace physgrad {
 namespace {
+
+// A coordinate of five or more digits before any point (after ' ', ',', 'M' or '-').
+bool has_long_coordinate(const std::string& svg) {
+  std::size_t digits = 0;
+  char before = ' ';
+  for (const char c : svg) {
+    if (c >= '0' && c <= '9') {
+      if (++digits >= 5 && (before == ' ' || before == ',' || before == 'M' || before == '-')) {
+        return true;
+      }
+    } else {
+      digits = 0;
+      before = c;
+    }
+  }
+  return false;
+}
 
 namespace fs = std::filesystem;
 
@@ -360,7 +376,7 @@ TEST(SvgLandscape, RadialFieldHasOneIsolinePerLevelAndTrajectories) {
     EXPECT_NE(svg.find("clipPath"), std::string::npos);
     EXPECT_FALSE(has_non_finite_text(svg));
     // The far-away iterates are cut to a neighbourhood of the plot, not printed as is.
-    EXPECT_FALSE(std::regex_search(svg, std::regex("[ ,M-][0-9]{5,}")));
+    EXPECT_FALSE(has_long_coordinate(svg));
   }
 }
 
