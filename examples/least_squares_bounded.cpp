@@ -77,14 +77,15 @@ Fit fit(const std::string& id, const physgrad::RuleSettings& settings,
 }
 
 // The first-order rules have a step size to choose: the fewest iterations over η = 10⁻ʲ,
-// j = 0, …, 12.
+// j = 0, …, 12 (once one step size reaches the loss, the others need only run as long).
 Fit best_step_size(const std::string& id, const physgrad::Objective& objective,
                    const Vector& start, const physgrad::MinimizeOptions& options, int budget,
                    double& best_lr) {
   Fit best{budget, 0, false, true, INFINITY, ""};
   for (int j = 0; j <= 12; ++j) {
     const double lr = std::pow(10.0, -j);
-    const Fit f = fit(id, {.lr = lr}, objective, start, options, budget);
+    const Fit f = fit(id, {.lr = lr}, objective, start, options,
+                      best.reached ? best.iterations : budget);
     if (!f.feasible) best.feasible = false;
     if (!best.reached && f.loss < best.loss) best.loss = f.loss;
     if (f.reached && (!best.reached || f.iterations < best.iterations)) {

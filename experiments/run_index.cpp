@@ -25,7 +25,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct RunFolder {
+struct IndexedFolder {
   std::string name;
   nlohmann::json summary;
   std::string command;
@@ -49,7 +49,7 @@ nlohmann::json read_json(const fs::path& path) {
   }
 }
 
-std::vector<RunFolder> find_run_folders(const fs::path& dir) {
+std::vector<IndexedFolder> find_run_folders(const fs::path& dir) {
   std::vector<fs::path> paths;
   for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
     if (entry.is_directory() && fs::exists(entry.path() / "summary.json")) {
@@ -57,9 +57,9 @@ std::vector<RunFolder> find_run_folders(const fs::path& dir) {
     }
   }
   std::sort(paths.begin(), paths.end());
-  std::vector<RunFolder> folders;
+  std::vector<IndexedFolder> folders;
   for (const fs::path& path : paths) {
-    RunFolder folder;
+    IndexedFolder folder;
     folder.name = path.filename().string();
     folder.summary = read_json(path / "summary.json");
     if (!folder.summary.is_object() || !folder.summary.value("runs", nlohmann::json()).is_array()) {
@@ -101,7 +101,7 @@ double number_in(const nlohmann::json& object, const char* key) {
 
 // One row per run folder and run label with its setting (the parameters that vary among that
 // label's runs, seeds aside); the figures are medians over the seeds.
-HtmlTable runs_table(const std::vector<RunFolder>& folders) {
+HtmlTable runs_table(const std::vector<IndexedFolder>& folders) {
   HtmlTable table{{"run folder", "experiment", "run", "setting", "runs", "final loss",
                    "final test loss", "iterations", "ended by", "seconds"},
                   {},
@@ -113,7 +113,7 @@ HtmlTable runs_table(const std::vector<RunFolder>& folders) {
                   "excluded; direct optimization: wall-clock seconds). A folder's name links to "
                   "its report.",
                   {}};
-  for (const RunFolder& folder : folders) {
+  for (const IndexedFolder& folder : folders) {
     const std::string experiment = folder.summary.value("experiment", std::string("?"));
     const nlohmann::json& runs = folder.summary.at("runs");
     // The parameters that vary among the runs of each label (seed aside).
@@ -200,9 +200,9 @@ std::map<std::string, std::vector<Curve>> curves_by_label(const CsvData& metrics
 }
 
 // Per experiment with learning runs: the test loss of every run of every folder vs time.
-std::vector<HtmlFigure> overlays(const std::vector<RunFolder>& folders) {
+std::vector<HtmlFigure> overlays(const std::vector<IndexedFolder>& folders) {
   std::vector<std::string> experiments;
-  for (const RunFolder& f : folders) {
+  for (const IndexedFolder& f : folders) {
     const std::string e = f.summary.value("experiment", std::string("?"));
     if (std::find(experiments.begin(), experiments.end(), e) == experiments.end()) {
       experiments.push_back(e);
@@ -212,7 +212,7 @@ std::vector<HtmlFigure> overlays(const std::vector<RunFolder>& folders) {
   for (const std::string& experiment : experiments) {
     std::vector<Series> series;
     std::size_t count = 0;
-    for (const RunFolder& f : folders) {
+    for (const IndexedFolder& f : folders) {
       if (f.summary.value("experiment", std::string("?")) != experiment || !f.metrics) continue;
       std::vector<std::string> order;
       const auto curves = curves_by_label(*f.metrics, order);
@@ -251,12 +251,12 @@ std::size_t write_run_index(const fs::path& dir) {
   if (!fs::is_directory(dir, error)) {
     throw Error("report: '" + dir.string() + "' is not a directory");
   }
-  const std::vector<RunFolder> folders = find_run_folders(dir);
+  const std::vector<IndexedFolder> folders = find_run_folders(dir);
   if (folders.empty()) {
     throw Error("report: '" + dir.string() + "' holds no run folder (a folder with summary.json)");
   }
   std::string commands;
-  for (const RunFolder& f : folders) {
+  for (const IndexedFolder& f : folders) {
     if (!f.command.empty()) commands += f.name + ": " + f.command + "\n\n";
   }
   const std::vector<HtmlSection> sections = {
