@@ -111,14 +111,15 @@ void LearningSweep::add_metric_figure(RunContext& context,
   options.y_label = y_label;
   options.log_y = log_y;
   // Rules that run for one time budget can end hundreds of iterations apart (HIG's step costs
-  // what hundreds of Adam steps do): a log x axis keeps the shorter runs visible.
+  // what hundreds of Adam steps do): a log x axis keeps the shorter runs visible. Runs that
+  // stopped or diverged (an end label) do not count.
   double shortest = 0, longest = 0;
   for (const Series& s : series) {
-    if (s.x.empty()) continue;
+    if (s.x.empty() || !s.end_label.empty()) continue;
     shortest = shortest == 0 ? s.x.back() : std::min(shortest, s.x.back());
     longest = std::max(longest, s.x.back());
   }
-  options.log_x = progress != Progress::kTime && shortest > 0 && longest >= 30 * shortest;
+  options.log_x = progress != Progress::kTime && shortest > 0 && longest >= 10 * shortest;
   const std::string caption =
       title + ". " +
       (several_seeds ? "Line: median over the seeds; band: their minimum to maximum. " : "") +
