@@ -270,17 +270,16 @@ int resume_run(const std::string& text) {
     throw physgrad::Error("'" + where.shown + "/" + ex::kConfigFile + "' names no experiment");
   }
   // The saved settings are read as a config file would be, errors naming the file.
-  const auto settings = [&] {
-    try {
-      const ex::Experiment& named = ex::find_experiment(config["experiment"].get<std::string>());
-      ex::OptionTexts given = ex::config_options(named, config);
-      given.emplace_back("out", where.shown);
-      return std::make_pair(&named, ex::resolve_settings(named, given));
-    } catch (const physgrad::Error& e) {
-      throw physgrad::Error("resume: '" + where.shown + "/" + ex::kConfigFile + "': " + e.what());
-    }
-  }();
-  const ex::Experiment& experiment = *settings.first;
+  const ex::Experiment* experiment = nullptr;
+  std::optional<ex::Settings> settings;
+  try {
+    experiment = &ex::find_experiment(config["experiment"].get<std::string>());
+    ex::OptionTexts given = ex::config_options(*experiment, config);
+    given.emplace_back("out", where.shown);
+    settings.emplace(ex::resolve_settings(*experiment, given));
+  } catch (const physgrad::Error& e) {
+    throw physgrad::Error("resume: '" + where.shown + "/" + ex::kConfigFile + "': " + e.what());
+  }
   nlohmann::json resumed;
   if (fs::exists(where.path / ex::kCheckpointFile)) {
     resumed = physgrad::read_checkpoint_file(where.path / ex::kCheckpointFile);
@@ -290,7 +289,7 @@ int resume_run(const std::string& text) {
   }
   const std::string command =
       config.contains("command") && config["command"].is_string() ? config["command"].get<std::string>() : "";
-  return run_experiment(experiment, settings.second, command, folder, where.path, resumed);
+  return run_experiment(*experiment, *settings, command, folder, where.path, resumed);
 }
 
 }  // namespace
