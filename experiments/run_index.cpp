@@ -51,8 +51,10 @@ nlohmann::json read_json(const fs::path& path) {
 
 std::vector<IndexedFolder> find_run_folders(const fs::path& dir) {
   std::vector<fs::path> paths;
+  // Entries that cannot be followed (a looping or dangling link) are not run folders.
   for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
-    if (entry.is_directory() && fs::exists(entry.path() / "summary.json")) {
+    std::error_code error;
+    if (entry.is_directory(error) && fs::exists(entry.path() / "summary.json", error)) {
       paths.push_back(entry.path());
     }
   }

@@ -143,6 +143,10 @@ TEST_F(ReportPages, EverySvgIsWellFormedAndInsideItsViewBox) {
 
 TEST_F(ReportPages, ReportOfAFolderWithoutRunFoldersIsAOneLineError) {
   fs::create_directories(dir_ / "empty" / "not-a-run");
+  // Links that lead nowhere are passed over, not a filesystem error.
+  fs::create_directory_symlink("loop2", dir_ / "empty" / "loop1");
+  fs::create_directory_symlink("loop1", dir_ / "empty" / "loop2");
+  fs::create_directory_symlink("gone", dir_ / "empty" / "dangling");
   for (const char* args : {"report empty", "report missing"}) {
     const physgrad::testing::Outcome outcome = run(args);
     EXPECT_EQ(outcome.exit_code, 2) << args;
