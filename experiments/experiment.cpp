@@ -359,6 +359,14 @@ std::string format_value(double value) {
   return out.str();
 }
 
+double median(std::vector<double> values) {
+  std::erase_if(values, [](double v) { return std::isnan(v); });
+  if (values.empty()) return NAN;
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
 const Experiment& find_experiment(const std::string& name) {
   std::vector<std::string> known;
   for (const auto& experiment : registry()) {

@@ -191,6 +191,9 @@ Settings resolve_settings(const Experiment& experiment,
 
 // Compact number formatting for tables and labels: 4 significant digits.
 std::string format_value(double value);
+// The median of the values that are not NaN (the mean of the middle two for an even count);
+// NaN when there are none.
+double median(std::vector<double> values);
 
 // Every registered experiment, in display order.
 const std::vector<std::unique_ptr<Experiment>>& registry();

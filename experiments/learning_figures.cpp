@@ -199,13 +199,9 @@ void LearningSweep::add_tables() const {
           saturated.push_back(format_value(r->summary.history.back().extras["saturated_fraction"]));
         }
       }
-      std::sort(values.begin(), values.end());
-      const std::size_t n = values.size();
-      const double median = n == 0 ? NAN
-                            : n % 2 ? values[n / 2]
-                                    : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-      row.push_back(format_value(median));
-      row.push_back(n == 0 ? "–" : format_value(values.back()));
+      row.push_back(format_value(median(values)));
+      row.push_back(values.empty() ? "–"
+                                   : format_value(*std::max_element(values.begin(), values.end())));
       losses.rows.push_back(std::move(row));
       saturation.rows.push_back(std::move(saturated));
     }

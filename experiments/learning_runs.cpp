@@ -210,17 +210,6 @@ TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Mlp& network,
     state = checkpoint->in_progress(key, count);
     if (state) {
       check_saved_history(key, state->summary, network, test_set != nullptr, options);
-      // Every epoch takes the same number of batches, so the position follows from the count.
-      const Index batch = std::min(options.batch_size, train_set.size());
-      const long long batches = (train_set.size() + batch - 1) / batch;
-      if (state->batch_start % batch != 0 ||
-          state->epoch != state->summary.iterations / batches ||
-          state->batch_start / batch != state->summary.iterations % batches) {
-        throw Error("checkpoint: " + key.describe() + ": epoch " + std::to_string(state->epoch) +
-                    " and batch start " + std::to_string(state->batch_start) +
-                    " do not follow from its " + std::to_string(state->summary.iterations) +
-                    " iterations (" + std::to_string(batches) + " batches per epoch)");
-      }
       options.resume = &*state;
     }
     if (settings_.has("checkpoint-every")) {

@@ -57,14 +57,6 @@ const std::map<std::string, RuleDefaults>& rule_defaults() {
   return defaults;
 }
 
-// |⟨a|b⟩|² of two states in the real layout [Re ψ, Im ψ].
-double overlap(const Vector& a, const Vector& b) {
-  const Index m = a.size() / 2;
-  const double re = a.head(m).dot(b.head(m)) + a.tail(m).dot(b.tail(m));
-  const double im = a.head(m).dot(b.tail(m)) - a.tail(m).dot(b.head(m));
-  return re * re + im * im;
-}
-
 // For one test target and each rule's trained controls: the infidelity 1 − |⟨ψ*|ψ(t)⟩|² along
 // the way, the density |ψ(x, T)|² against the target's, and the controls u(t).
 void add_state_figures(RunContext& context, const QuantumDipoleConfig& config,
@@ -84,21 +76,21 @@ void add_state_figures(RunContext& context, const QuantumDipoleConfig& config,
                                                 "#000000", true, true}},
                                   controls;
   std::string finals;
+  const FidelityLoss infidelity_of;  // 1 − |⟨ψ*|ψ⟩|²
   for (const auto& [run, network] : trained) {
     const Vector u = network.forward(target).col(0);
     Series s{run->label, {}, {}, color_for(run->id)};
+    // The evolution in pieces of `every` steps (the last one shorter), each from where the
+    // previous one ended.
     Vector psi = start;
-    for (Index k = 0; k <= steps; k += every) {
-      QuantumDipoleConfig part = config;
-      part.steps = k;
-      psi = k == 0 ? start : Vector(QuantumDipole(part).forward_batch(u.head(k), start).col(0));
+    for (Index k = 0;;) {
       s.x.push_back(config.dt * static_cast<double>(k));
-      s.y.push_back(1 - overlap(target, psi));
-    }
-    if (s.x.back() != config.dt * static_cast<double>(steps)) {
-      psi = QuantumDipole(config).forward_batch(u, start).col(0);
-      s.x.push_back(config.dt * static_cast<double>(steps));
-      s.y.push_back(1 - overlap(target, psi));
+      s.y.push_back(infidelity_of.value(psi, target));
+      if (k == steps) break;
+      QuantumDipoleConfig piece = config;
+      piece.steps = std::min(every, steps - k);
+      psi = QuantumDipole(piece).forward_batch(u.segment(k, piece.steps), psi).col(0);
+      k += piece.steps;
     }
     finals += (finals.empty() ? "" : ", ") + run->label + " " + format_value(s.y.back());
     infidelity.push_back(std::move(s));

@@ -12,6 +12,7 @@
 #include <map>
 
 #include "checkpoint.hpp"
+#include "config_file.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/report/atomic_file.hpp"
 #include "run_folder.hpp"
@@ -94,15 +95,24 @@ std::vector<fs::path> make_parents(const fs::path& path, const std::string& opti
   return created;
 }
 
-// Refuses a folder inside the folder of a run (config.json with summary.json or checkpoint.pgc):
-// the new run would change a finished result, or mix its files with an unfinished one.
+// Refuses a folder inside the folder of a run: the new run would change a finished result, or
+// its files would be committed with an unfinished one's. An ancestor is a run's folder when its
+// config.json is one a run wrote (naming an experiment and its settings); a config.json of
+// something else further up does not count.
 void refuse_inside_run(const fs::path& path, const std::string& what) {
-  std::error_code ignored;
   for (fs::path p = path.parent_path(); !p.empty(); p = p.parent_path()) {
-    if (fs::exists(p / kConfigFile, ignored) &&
-        (fs::exists(p / kSummaryFile, ignored) || fs::exists(p / kCheckpointFile, ignored))) {
-      throw Error(what + " lies inside the run folder " + in_quotes(p.string()) +
-                  "; choose a folder outside it");
+    std::error_code error;
+    if (fs::is_regular_file(p / kConfigFile, error)) {
+      bool a_run = false;
+      try {
+        const nlohmann::json config = read_config_document(p / kConfigFile);
+        a_run = config.is_object() && config.contains("experiment") && config.contains("settings");
+      } catch (const Error&) {
+      }
+      if (a_run) {
+        throw Error(what + " lies inside the run folder " + in_quotes(p.string()) +
+                    "; choose a folder outside it");
+      }
     }
     if (p == p.root_path()) break;
   }
@@ -141,10 +151,8 @@ int open_locked(const fs::path& path, const std::string& what) {
 FolderPath locate_folder(const std::string& text, const std::string& option) {
   if (text.empty()) throw Error(option + ": the folder name is empty");
   const std::string named = option + ": " + in_quotes(text);
-  for (const char c : text) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) {
-      throw Error(named + " contains a control character");
-    }
+  if (const std::string problem = text_problem(text); !problem.empty()) {
+    throw Error(named + " " + problem);
   }
   FolderPath where{text, {}};
   while (where.shown.size() > 1 && where.shown.back() == '/') where.shown.pop_back();

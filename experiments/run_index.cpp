@@ -2,15 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "physgrad/error.hpp"
+#include "physgrad/json_file.hpp"
 #include "physgrad/report/atomic_file.hpp"
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/csv.hpp"
@@ -18,6 +17,7 @@
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
 #include "report_page.hpp"
+#include "run_folder.hpp"
 
 namespace physgrad::experiments {
 
@@ -33,19 +33,21 @@ struct IndexedFolder {
   bool has_report = false;
 };
 
+// All of a regular file of a run folder (never blocking on a FIFO), errors naming it.
 std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("report: cannot read '" + path.string() + "'");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  try {
+    return read_regular_file(path, std::size_t{1} << 32);
+  } catch (const Error& e) {
+    throw Error("report: '" + path.string() + "': " + e.what());
+  }
 }
 
 nlohmann::json read_json(const fs::path& path) {
+  const std::string text = read_text(path);
   try {
-    return nlohmann::json::parse(read_text(path));
-  } catch (const nlohmann::json::exception& e) {
-    throw Error("report: '" + path.string() + "' is not valid JSON: " + e.what());
+    return parse_json_text(text, 64);
+  } catch (const Error& e) {
+    throw Error("report: '" + path.string() + "': " + e.what());
   }
 }
 
@@ -54,7 +56,7 @@ std::vector<IndexedFolder> find_run_folders(const fs::path& dir) {
   // Entries that cannot be followed (a looping or dangling link) are not run folders.
   for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
     std::error_code error;
-    if (entry.is_directory(error) && fs::exists(entry.path() / "summary.json", error)) {
+    if (entry.is_directory(error) && fs::exists(entry.path() / kSummaryFile, error)) {
       paths.push_back(entry.path());
     }
   }
@@ -63,21 +65,22 @@ std::vector<IndexedFolder> find_run_folders(const fs::path& dir) {
   for (const fs::path& path : paths) {
     IndexedFolder folder;
     folder.name = path.filename().string();
-    folder.summary = read_json(path / "summary.json");
+    folder.summary = read_json(path / kSummaryFile);
     if (!folder.summary.is_object() || !folder.summary.value("runs", nlohmann::json()).is_array()) {
-      throw Error("report: '" + (path / "summary.json").string() + "' has no list of runs");
+      throw Error("report: '" + (path / kSummaryFile).string() + "' has no list of runs");
     }
-    if (fs::exists(path / "config.json")) {
-      folder.command = read_json(path / "config.json").value("command", std::string());
+    std::error_code error;  // a link inside the folder that leads nowhere counts as absent
+    if (fs::exists(path / kConfigFile, error)) {
+      folder.command = read_json(path / kConfigFile).value("command", std::string());
     }
-    if (fs::exists(path / "metrics.csv")) {
+    if (fs::exists(path / "metrics.csv", error)) {
       try {
         folder.metrics = parse_csv(read_text(path / "metrics.csv"));
       } catch (const Error& e) {
         throw Error("report: '" + (path / "metrics.csv").string() + "': " + e.what());
       }
     }
-    folder.has_report = fs::exists(path / "report.html");
+    folder.has_report = fs::exists(path / "report.html", error);
     folders.push_back(std::move(folder));
   }
   return folders;
@@ -85,15 +88,6 @@ std::vector<IndexedFolder> find_run_folders(const fs::path& dir) {
 
 std::string text_of(const nlohmann::json& value) {
   return value.is_string() ? value.get<std::string>() : format_number(value);
-}
-
-double median_of(std::vector<double> values) {
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return std::isnan(v); }),
-               values.end());
-  if (values.empty()) return NAN;
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 double number_in(const nlohmann::json& object, const char* key) {
@@ -170,9 +164,9 @@ HtmlTable runs_table(const std::vector<IndexedFolder>& folders) {
         return v == std::round(v) && std::abs(v) < 1e15 ? std::to_string(std::llround(v)) : cell(v);
       };
       table.rows.push_back({folder.name, experiment, key.first, key.second,
-                            std::to_string(members[key].size()), cell(median_of(loss)),
-                            cell(median_of(test)), whole(median_of(iterations)), ended,
-                            cell(median_of(seconds))});
+                            std::to_string(members[key].size()), cell(median(loss)),
+                            cell(median(test)), whole(median(iterations)), ended,
+                            cell(median(seconds))});
       table.links.push_back(std::vector<std::string>(table.header.size()));
       if (folder.has_report) table.links.back()[0] = folder.name + "/report.html";
     }

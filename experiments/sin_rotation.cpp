@@ -54,12 +54,6 @@ double x_distance(const SinRotation& physics, const Matrix& x, const Matrix& tar
   return sum / static_cast<double>(x.cols());
 }
 
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
 class SinRotationExperiment final : public Experiment {
  public:
   std::string name() const override { return "sin-rotation"; }

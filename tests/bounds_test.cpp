@@ -207,12 +207,15 @@ TEST(Bounds, AnalyticPhysicalGradientIsProjected) {
 }
 
 TEST(Bounds, LineSearchStopsAtTheBoundaryWhileTheLossStillDecreases) {
-  // L = ½x² from x = 2 along p = −1 with the box x ≥ 1: the ray leaves the box at α = 1.
+  // L = ½x² from x = 2 along p = −1 with the box x ≥ 1: the ray leaves the box at α = 1, where
+  // the slope is still −1. With c2 = 0.1 the curvature condition (|−1| ≤ 0.1·2) fails there, so
+  // only the stop at the boundary accepts that step.
   const DiagonalScale physics(Vector{{1.0}});
   const L2Loss loss;
   const Objective objective(physics, loss, Vector::Zero(1));
   const Vector x{{2.0}}, g{{2.0}}, p{{-1.0}};
-  const LineSearchResult r = strong_wolfe_line_search(objective, x, 2.0, g, p, 5.0, {}, 1.0);
+  const LineSearchResult r =
+      strong_wolfe_line_search(objective, x, 2.0, g, p, 5.0, {.c2 = 0.1}, 1.0);
   EXPECT_TRUE(r.success) << r.message;
   EXPECT_EQ(r.step, 1.0);
   EXPECT_EQ(r.value, 0.5);

@@ -111,6 +111,9 @@ TEST_F(Hostile, ControlCharactersAndBytesThatAreNotUtf8AreRefusedInEveryTextValu
   expect_refused("run comparison --iters 2 --out r --pg-inverse " + bytes("gn\\tlbfgs"),
                  "--pg-inverse: 'gn\\x09lbfgs' contains the control character 0x09 at byte 2");
   expect_refused("resume " + bytes("r\\001"), "argument 2: 'r\\x01' contains the control");
+  // In an option's name, the whole argument is named.
+  expect_refused("run comparison " + bytes("\\055-o\\001ut=abc"),  // \055: '-' (printf)
+                 "argument 3: '--o\\x01ut=abc' contains the control character 0x01 at byte 3");
   expect_refused("bench " + bytes("hig-toy\\033"), "'hig-toy\\x1b' contains the control");
   // Config files: a NUL in "out" once led to another folder; nothing is touched now.
   fs::create_directories(dir_ / ".victim");
@@ -217,7 +220,8 @@ TEST_F(Hostile, CraftedCheckpointsAreRefusedAndTheIntactOneResumes) {
   with([](nlohmann::json& d) { d["current"]["state"]["summary"]["iterations"] = 5000; },
        "run 1 (gn, λ=1, seed 0) has 5000 iterations, more than the run's 1000");
   with([](nlohmann::json& d) { d["current"]["state"]["epoch"] = 123456789; },
-       "run 1 (gn, λ=1, seed 0): epoch 123456789 and batch start 0 do not follow from its ");
+       "run 1 (gn, λ=1, seed 0): cannot resume training from this state: epoch 123456789 and "
+       "batch start 0 do not follow from its ");
   // Nothing was changed by the refusals: the intact checkpoint resumes to a complete result.
   std::ofstream(path, std::ios::binary) << original;
   const Outcome resumed = run("resume part");

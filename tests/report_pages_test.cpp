@@ -5,6 +5,7 @@
 // pages are also loaded at 420 px wide: no SVG error in the console and nothing wider than the
 // page outside a table's scroll box.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -154,6 +155,24 @@ TEST_F(ReportPages, ReportOfAFolderWithoutRunFoldersIsAOneLineError) {
     EXPECT_NE(outcome.err.find("physgrad: error: report: "), std::string::npos) << outcome.err;
   }
   EXPECT_FALSE(fs::exists(dir_ / "empty" / "index.html"));
+
+  // A summary.json that is a FIFO is refused without blocking.
+  fs::create_directories(dir_ / "fifo" / "a");
+  ASSERT_EQ(::mkfifo((dir_ / "fifo" / "a" / "summary.json").c_str(), 0600), 0);
+  const physgrad::testing::Outcome fifo = run("report fifo");
+  EXPECT_EQ(fifo.exit_code, 2);
+  EXPECT_NE(fifo.err.find("summary.json': is not a regular file (a FIFO)"), std::string::npos)
+      << fifo.err;
+  // Links inside a run folder that lead nowhere count as absent files.
+  fs::create_directories(dir_ / "links" / "a");
+  std::ofstream(dir_ / "links" / "a" / "summary.json") << R"({"experiment": "comparison", "runs": []})";
+  for (const char* file : {"config.json", "metrics.csv", "report.html"}) {
+    fs::create_symlink(file, dir_ / "links" / "a" / (std::string(file) + ".loop"));
+    fs::create_symlink(std::string(file) + ".loop", dir_ / "links" / "a" / file);
+  }
+  const physgrad::testing::Outcome links = run("report links");
+  EXPECT_EQ(links.exit_code, 0) << links.err;
+  EXPECT_TRUE(fs::exists(dir_ / "links" / "index.html"));
 }
 
 TEST_F(ReportPages, ChromiumShowsThemWithoutErrorsAt420PixelsWide) {

@@ -75,6 +75,14 @@ TEST_F(RunFolderCli, EverySpellingOfAFinishedFolderLeavesItAsItIs) {
   }
   EXPECT_FALSE(fs::exists(dir_ / "r" / "sub") || fs::exists(dir_ / "r" / "a"));
   EXPECT_EQ(snapshot(dir_ / "r"), finished);
+  // Nor inside an unfinished one that holds only its settings (killed at its claim), while a
+  // config.json of something else further up does not count.
+  EXPECT_NE(run("run comparison --out u", "PHYSGRAD_FAULT=kill@claimed:1").exit_code, 0);
+  ASSERT_TRUE(fs::exists(dir_ / "u" / "config.json"));
+  expect_refused("run comparison --out u/sub", "lies inside the run folder");
+  fs::create_directory(dir_ / "other");
+  std::ofstream(dir_ / "other" / "config.json") << "{\"a\": 1}";
+  EXPECT_EQ(run("run comparison --iters 2 --out other/run").exit_code, 0);
   // An existing empty folder, named with a trailing slash, is used in place and kept.
   fs::create_directory(dir_ / "e");
   ASSERT_EQ(run("run comparison --out e/").exit_code, 0);

@@ -91,9 +91,12 @@ void check_arguments(int argc, char** argv) {
     if (problem.empty()) continue;
     const std::size_t equals = argument.find('=');
     const std::string previous = i > 1 ? argv[i - 1] : "";
-    if (argument.starts_with("--") && equals != std::string::npos) {
-      throw physgrad::Error(argument.substr(0, equals) + ": '" + argument.substr(equals + 1) +
-                            "' " + ex::text_problem(argument.substr(equals + 1)));
+    if (argument.starts_with("--") && equals != std::string::npos) {  // --name=value
+      const std::string value = argument.substr(equals + 1);
+      const std::string value_problem = ex::text_problem(value);
+      if (!value_problem.empty()) {
+        throw physgrad::Error(argument.substr(0, equals) + ": '" + value + "' " + value_problem);
+      }
     }
     const std::string owner =
         previous.starts_with("--") ? previous : "argument " + std::to_string(i);
@@ -266,13 +269,13 @@ int resume_run(const std::string& text) {
   std::optional<ex::RunFolder> folder;
   if (physgrad::cli::is_writer()) folder.emplace(ex::RunFolder::reopen(where));
   const nlohmann::json config = ex::read_config_document(where.path / ex::kConfigFile);
-  if (!config.is_object() || !config.contains("experiment") || !config["experiment"].is_string()) {
-    throw physgrad::Error("'" + where.shown + "/" + ex::kConfigFile + "' names no experiment");
-  }
   // The saved settings are read as a config file would be, errors naming the file.
   const ex::Experiment* experiment = nullptr;
   std::optional<ex::Settings> settings;
   try {
+    if (!config.is_object() || !config.contains("experiment") || !config["experiment"].is_string()) {
+      throw physgrad::Error("names no experiment");
+    }
     experiment = &ex::find_experiment(config["experiment"].get<std::string>());
     ex::OptionTexts given = ex::config_options(*experiment, config);
     given.emplace_back("out", where.shown);

@@ -86,7 +86,6 @@ class StoppingRules {
     return false;
   }
 
-  // The tests on a step from x (loss `before`) by dx to loss `after`.
   // The tests on a step from x (loss `before`) by dx to loss `after`; the function tolerance
   // only when the step was taken (`moved`).
   bool after_step(double before, double after, const Vector& x, const Vector& dx,

@@ -12,6 +12,19 @@ namespace physgrad {
 namespace {
 // A curvature pair is used only when yᵀs > kCurvatureTolerance·‖s‖‖y‖.
 constexpr double kCurvatureTolerance = 1e-10;
+
+// Zeroes the components of a z-direction that may not move: the held variables (`free`), and
+// free ones at a bound that p would push out of the box (held along −p). For those gᵢ pᵢ ≥ 0,
+// so dropping them keeps p a descent direction. Scaling keeps signs, so z and x agree.
+Vector restrict(const Domain& domain, const Vector& x, const std::vector<bool>& free, Vector p) {
+  if (!domain.bounded()) return p;
+  const std::vector<bool> movable = domain.free_variables(x, -p);
+  for (Index i = 0; i < p.size(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (!free[k] || !movable[k]) p(i) = 0;
+  }
+  return p;
+}
 }  // namespace
 
 QuasiNewton::QuasiNewton(double initial_step, const LineSearchOptions& line_search)
@@ -23,20 +36,6 @@ void QuasiNewton::reset() {
   clear_curvature();
   x_.resize(0);
   g_.resize(0);
-}
-
-// Zeroes the components of a z-direction that may not move: the held variables, and free ones
-// at a bound that p would push out of the box. For those gᵢ pᵢ ≥ 0, so dropping them keeps p a
-// descent direction.
-Vector QuasiNewton::restrict(const Domain& domain, const Vector& x, const std::vector<bool>& free,
-                             Vector p) const {
-  if (!domain.bounded()) return p;
-  const Vector lower = domain.lower(x.size()), upper = domain.upper(x.size());
-  for (Index i = 0; i < p.size(); ++i) {
-    const bool outward = (x(i) <= lower(i) && p(i) < 0) || (x(i) >= upper(i) && p(i) > 0);
-    if (!free[static_cast<std::size_t>(i)] || outward) p(i) = 0;
-  }
-  return p;
 }
 
 LineSearchResult QuasiNewton::search(const Objective& objective, const Vector& x,

@@ -115,14 +115,10 @@ Vector CoupledOscillators::time_reversal(const Vector& y, const Vector& context)
     throw Error(name() + ": time reversal needs the initial state as input "
                 "(OscillatorInput::kInitialState)");
   }
-  if (y.size() != state_dim()) {
-    throw Error(name() + ".time_reversal: y has " + std::to_string(y.size()) +
-                " entries, expected " + std::to_string(state_dim()));
-  }
-  check_batch(Matrix(Matrix::Zero(state_dim(), 1)), context, "time_reversal");
-  const Matrix controls = context.size() == 0 ? Matrix(Matrix::Zero(config_.steps, 1))
-                                              : Matrix(context);
-  Array s = y.array();
+  check_batch(y, context, "time_reversal");  // y, like x, is a state
+  Matrix controls, state;
+  split(y, context, controls, state);
+  Array s = state.array();
   Workspace w;
   for (Index n = config_.steps - 1; n >= 0; --n) rk4_step(s, controls, n, -config_.dt, w, nullptr);
   return s.matrix();

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <utility>
 
+#include "physgrad/hash.hpp"
+
 namespace physgrad {
 
 namespace {
@@ -32,12 +34,6 @@ std::string interpolate(const std::array<Rgb, N>& stops, double t) {
   return buf.data();
 }
 
-std::uint64_t fnv1a(std::string_view s) {
-  std::uint64_t h = 14695981039346656037ULL;
-  for (const unsigned char c : s) h = (h ^ c) * 1099511628211ULL;
-  return h;
-}
-
 }  // namespace
 
 std::string color_for(std::string_view key) {
@@ -59,7 +55,7 @@ std::string color_for(std::string_view key) {
   for (const auto& [id, color] : kFixed) {
     if (id == key) return color;
   }
-  return kPalette[fnv1a(key) % kPalette.size()];
+  return kPalette[fnv1a64(key) % kPalette.size()];
 }
 
 std::string palette_color(std::size_t index) { return kPalette[index % kPalette.size()]; }

@@ -15,13 +15,6 @@ double Scale::operator()(double v) const {
   return p0 + (t - lo) / (hi - lo) * (p1 - p0);
 }
 
-double Scale::value_at(double p) const {
-  const double t = lo + (p - p0) / (p1 - p0) * (hi - lo);
-  return log ? std::pow(10.0, t) : t;
-}
-
-bool Scale::usable(double v) const { return plot::usable(v, log); }
-
 bool usable(double v, bool log) { return std::isfinite(v) && (!log || v > 0); }
 
 namespace {

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <cstdio>
 
+#include "physgrad/hash.hpp"
+
 namespace physgrad {
 
 std::string xml_escape(std::string_view text) {
@@ -25,16 +27,6 @@ std::string xml_escape(std::string_view text) {
 }
 
 namespace svg {
-
-namespace {
-
-std::uint64_t fnv1a(std::string_view s) {
-  std::uint64_t h = 14695981039346656037ULL;
-  for (const unsigned char c : s) h = (h ^ c) * 1099511628211ULL;
-  return h;
-}
-
-}  // namespace
 
 Box grow(const Box& b, double dx, double dy) {
   return {b.left - dx, b.top - dy, b.right + dx, b.bottom + dy};
@@ -95,7 +87,7 @@ std::string clipped(const Box& b, const std::string& content) {
                           num(b.width()) + "\" height=\"" + num(b.height()) + "\"";
   std::array<char, 24> id{};
   std::snprintf(id.data(), id.size(), "clip%016llx",
-                static_cast<unsigned long long>(fnv1a(box + content)));
+                static_cast<unsigned long long>(fnv1a64(box + content)));
   return "<defs><clipPath id=\"" + std::string(id.data()) + "\"><rect " + box +
          "/></clipPath></defs>\n<g clip-path=\"url(#" + id.data() + ")\">\n" + content + "</g>\n";
 }

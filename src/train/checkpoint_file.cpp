@@ -27,15 +27,6 @@ std::string hex64(std::uint64_t value) {
 
 }  // namespace
 
-std::uint64_t fnv1a64(std::string_view bytes) {
-  std::uint64_t hash = 0xcbf29ce484222325ULL;
-  for (const char c : bytes) {
-    hash ^= static_cast<unsigned char>(c);
-    hash *= 0x100000001b3ULL;
-  }
-  return hash;
-}
-
 void write_checkpoint_file(const std::filesystem::path& path, const nlohmann::json& document) {
   const std::string body = document.dump();
   const std::string header = std::string(kMagic) + " " + std::to_string(kVersion) + " " +

@@ -178,6 +178,14 @@ void TrainingRun::restore(const TrainerState& state) {
     problem = "epoch " + std::to_string(state.epoch) + ", batch start " +
               std::to_string(state.batch_start) + " do not fit " + std::to_string(n_) +
               " samples in batches of " + std::to_string(batch_size_);
+  } else if (const long long batches = (n_ + batch_size_ - 1) / batch_size_;
+             state.epoch != state.summary.iterations / batches ||
+             state.batch_start / batch_size_ != state.summary.iterations % batches) {
+    // Every epoch takes the same number of batches, so the position follows from the count.
+    problem = "epoch " + std::to_string(state.epoch) + " and batch start " +
+              std::to_string(state.batch_start) + " do not follow from its " +
+              std::to_string(state.summary.iterations) + " iterations (" +
+              std::to_string(batches) + " batches per epoch)";
   } else if (state.summary.history.empty() || state.summary.termination) {
     problem = "it has no history or belongs to a finished run";
   }

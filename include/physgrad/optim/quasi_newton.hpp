@@ -45,8 +45,6 @@ class QuasiNewton : public Optimizer {
 
  private:
   Step propose(const Objective& objective, const Vector& x, const Domain& domain) final;
-  Vector restrict(const Domain& domain, const Vector& x, const std::vector<bool>& free,
-                  Vector p) const;
   LineSearchResult search(const Objective& objective, const Vector& x, const Vector& pz,
                           const Domain& domain) const;
 

@@ -34,7 +34,7 @@ struct OscillatorConfig {
 //
 // Time reversal (kInitialState only): RK4 with step −dt from s(T) through the controls in
 // reverse order. RK4 is not time-reversible, so P(R(y)) = y only up to the scheme's truncation
-// error (measured in tests/oscillators_test.cpp).
+// error (measured in tests/time_reversal_test.cpp).
 class CoupledOscillators final : public Simulator {
  public:
   // Throws Error unless N ≥ 1, Nt ≥ 1, dt > 0 and every coefficient is finite.

@@ -20,7 +20,7 @@ struct FpuChainConfig {
 // Velocity Verlet is time-reversible: flipping the momenta, taking the same Nt steps and
 // flipping them back retraces the trajectory, so the time reversal R(y) is the exact inverse
 // of P up to rounding (P(R(y)) = y to ~1e-14 relative for the default chain, measured in
-// tests/fpu_chain_test.cpp).
+// tests/time_reversal_test.cpp).
 class FpuChain final : public Simulator {
  public:
   // Throws Error unless N ≥ 1, Nt ≥ 1, dt finite and > 0, β finite.

@@ -17,10 +17,6 @@ struct Scale {
   bool log;
   double p0, p1;  // pixels of lo and hi
   double operator()(double v) const;
-  // The data value at pixel p.
-  double value_at(double p) const;
-  // True when v can be drawn on this axis (finite, and > 0 on a log axis).
-  bool usable(double v) const;
 };
 
 struct Tick {

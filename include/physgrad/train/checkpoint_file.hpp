@@ -10,9 +10,9 @@
 #include <string>
 #include <string_view>
 
-namespace physgrad {
+#include "physgrad/hash.hpp"
 
-std::uint64_t fnv1a64(std::string_view bytes);
+namespace physgrad {
 
 // Writes atomically (temporary file, fsync, rename): the file holds the old or the new
 // checkpoint, never a mix. Throws Error naming the path when it cannot.
