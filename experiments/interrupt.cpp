@@ -15,12 +15,10 @@ namespace physgrad::experiments {
 
 namespace {
 
-std::atomic<bool> stop{false};
 std::atomic<int> signal_number{0};
-std::atomic<bool> reached{false};
 std::atomic<double> grace{10.0};
 sem_t requested;  // posted by the first signal, for the watcher thread
-static_assert(std::atomic<bool>::is_always_lock_free && std::atomic<int>::is_always_lock_free,
+static_assert(std::atomic<int>::is_always_lock_free,
               "the signal handler needs lock-free atomics");
 
 // Ends the process by `number` with its default action (termination).
@@ -30,12 +28,12 @@ void end_by(int number) {
 }
 
 extern "C" void on_signal(int number) {
-  if (stop.load()) {
+  if (stop_requested()) {
     end_by(number);  // the second one: end now
     return;
   }
   signal_number.store(number);
-  stop.store(true);
+  request_stop();
   ::sem_post(&requested);  // async-signal-safe
 }
 
@@ -46,10 +44,10 @@ void watch() {
   }
   const auto deadline = std::chrono::steady_clock::now() +
                         std::chrono::duration<double>(grace.load());
-  while (!reached.load() && std::chrono::steady_clock::now() < deadline) {
+  while (!stop_acknowledged() && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  if (reached.load()) return;
+  if (stop_acknowledged()) return;
   const int number = signal_number.load();
   std::fprintf(stderr,
                "\nphysgrad: %s: no stop point reached within %g s (blocked in a step that does "
@@ -82,10 +80,10 @@ void install_interrupt_handlers(double grace_seconds) {
   });
 }
 
-const std::atomic<bool>& stop_flag() { return stop; }
+const std::atomic<bool>& stop_flag() { return stop_request_flag(); }
 
 int received_signal() { return signal_number.load(); }
 
-void stop_point_reached() { reached.store(true); }
+void stop_point_reached() { acknowledge_stop(); }
 
 }  // namespace physgrad::experiments

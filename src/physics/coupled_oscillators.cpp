@@ -4,6 +4,8 @@
 #include <sstream>
 
 #include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
+#include "physgrad/stop.hpp"
 
 namespace physgrad {
 
@@ -21,6 +23,13 @@ CoupledOscillators::CoupledOscillators(OscillatorConfig config) : config_(config
     msg << "coefficients must be finite, got linear " << config_.linear_coupling << ", cubic "
         << config_.cubic_coupling << ", control " << config_.control_factor;
   } else {
+    // A sample: its Nt controls (and a copy), its state and RK4's work arrays (about 10N); in
+    // double, so sizes whose 2N or Nt overflow Index are refused here too.
+    const double values = 2.0 * static_cast<double>(config_.steps) +
+                          10.0 * static_cast<double>(config_.oscillators);
+    require_memory(8.0 * values, "coupled_oscillators: " + std::to_string(config_.oscillators) +
+                                     " oscillators, " + std::to_string(config_.steps) +
+                                     " steps (one sample's controls, state and work arrays)");
     return;
   }
   throw Error(msg.str());
@@ -99,7 +108,10 @@ CoupledOscillators::Array CoupledOscillators::integrate(const Matrix& controls,
                                                         Array* stage_positions) const {
   Array s = initial.array();
   Workspace w;
-  for (Index n = 0; n < config_.steps; ++n) rk4_step(s, controls, n, config_.dt, w, stage_positions);
+  for (Index n = 0; n < config_.steps; ++n) {
+    throw_if_stop_requested("coupled_oscillators");
+    rk4_step(s, controls, n, config_.dt, w, stage_positions);
+  }
   return s;
 }
 
@@ -120,7 +132,10 @@ Vector CoupledOscillators::time_reversal(const Vector& y, const Vector& context)
   split(y, context, controls, state);
   Array s = state.array();
   Workspace w;
-  for (Index n = config_.steps - 1; n >= 0; --n) rk4_step(s, controls, n, -config_.dt, w, nullptr);
+  for (Index n = config_.steps - 1; n >= 0; --n) {
+    throw_if_stop_requested("coupled_oscillators.time_reversal");
+    rk4_step(s, controls, n, -config_.dt, w, nullptr);
+  }
   return s.matrix();
 }
 
@@ -134,6 +149,11 @@ Matrix CoupledOscillators::vjp_batch(const Matrix& x, const Matrix& context,
         << output_dim() << "×" << B;
     throw Error(msg.str());
   }
+  require_memory(8.0 * static_cast<double>(N) * 4 * static_cast<double>(config_.steps) *
+                     static_cast<double>(B),
+                 name() + ".vjp: the stage positions of " + std::to_string(N) +
+                     " oscillators over " + std::to_string(config_.steps) + " steps for " +
+                     std::to_string(B) + " samples");
   Matrix controls, initial;
   split(x, context, controls, initial);
   Array positions(N, 4 * config_.steps * B);
@@ -147,6 +167,7 @@ Matrix CoupledOscillators::vjp_batch(const Matrix& x, const Matrix& context,
   Array lambda = gy.array(), next(2 * N, B), a(2 * N, B), za(2 * N, B);
   Matrix gx(config_.steps, B);
   for (Index n = config_.steps - 1; n >= 0; --n) {
+    throw_if_stop_requested("coupled_oscillators.vjp");
     a = (dt / 6) * lambda;
     gx.row(n) = a.row(last).matrix();
     rhs_adjoint(stage(n, 3), a, za);

@@ -4,6 +4,8 @@
 #include <sstream>
 
 #include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
+#include "physgrad/stop.hpp"
 
 namespace physgrad {
 
@@ -19,6 +21,11 @@ FpuChain::FpuChain(FpuChainConfig config) : config_(config) {
   } else if (!std::isfinite(config_.beta)) {
     msg << "beta must be finite, got " << config_.beta;
   } else {
+    // A state has 2N values and a step's work arrays about 6N more; the product is taken in
+    // double, so a chain whose 2N overflows Index is refused here too.
+    require_memory(64.0 * static_cast<double>(config_.masses),
+                   "fpu_chain: " + std::to_string(config_.masses) +
+                       " masses (a state and its work arrays, 64 B per mass)");
     return;
   }
   throw Error(msg.str());
@@ -60,6 +67,7 @@ FpuChain::Array FpuChain::integrate(Array s, Array* positions) const {
   auto p = s.bottomRows(N);
   Array a = acceleration(q);
   for (Index n = 0; n < config_.steps; ++n) {
+    throw_if_stop_requested("fpu_chain");
     if (positions) positions->middleCols(n * B, B) = q;
     p += (0.5 * h) * a;
     q += h * p;
@@ -84,6 +92,11 @@ Matrix FpuChain::vjp_batch(const Matrix& x, const Matrix& context, const Matrix&
         << output_dim() << "×" << B;
     throw Error(msg.str());
   }
+  require_memory(8.0 * static_cast<double>(N) * (static_cast<double>(config_.steps) + 1) *
+                     static_cast<double>(B),
+                 name() + ".vjp: the positions of " + std::to_string(N) + " masses over " +
+                     std::to_string(config_.steps) + " steps for " + std::to_string(B) +
+                     " samples");
   Array positions(N, (config_.steps + 1) * B);
   integrate(x.array(), &positions);
   const auto at = [&](Index n) { return Array(positions.middleCols(n * B, B)); };
@@ -93,6 +106,7 @@ Matrix FpuChain::vjp_batch(const Matrix& x, const Matrix& context, const Matrix&
   const double h = config_.dt;
   Array lq = gy.topRows(N).array(), lp = gy.bottomRows(N).array();
   for (Index n = config_.steps - 1; n >= 0; --n) {
+    throw_if_stop_requested("fpu_chain.vjp");
     lq += (0.5 * h) * acceleration_jvp(at(n + 1), lp);  // p' = p½ + h/2 a(q')
     lp += h * lq;                                       // q' = q + h p½
     lq += (0.5 * h) * acceleration_jvp(at(n), lp);      // p½ = p + h/2 a(q)

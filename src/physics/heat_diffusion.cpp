@@ -13,6 +13,8 @@
 #pragma GCC diagnostic pop
 
 #include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
+#include "physgrad/stop.hpp"
 
 namespace physgrad {
 
@@ -70,6 +72,12 @@ HeatDiffusion::HeatDiffusion(HeatConfig config) : config_(config) {
   require(config.dims == 1 || config.dims == 2, "dims must be 1 or 2", config.dims);
   require(std::isfinite(config.amount) && config.amount >= 0, "amount must be finite and ≥ 0",
           config.amount);
+  // The kernel, its logarithm and a field's complex spectra in both passes, about 8 reals per
+  // cell; in double, so an n whose n² overflows Index is refused here too.
+  const double cells = std::pow(static_cast<double>(config.n), config.dims);
+  require_memory(8.0 * 8.0 * cells, "heat_diffusion: " + std::to_string(config.n) +
+                                        " cells per axis in " + std::to_string(config.dims) +
+                                        "-D (kernels and spectra, 64 B per cell)");
   const Index n = config.n, cols = config.dims == 2 ? n : 1;
   size_ = n * cols;
   log_kernel_.resize(size_);
@@ -89,6 +97,7 @@ Matrix HeatDiffusion::diffuse(const Matrix& fields) const {
   Fft fft;
   Matrix out(size_, fields.cols());
   for (Index b = 0; b < fields.cols(); ++b) {
+    throw_if_stop_requested("heat_diffusion");
     const Eigen::Map<const Matrix> field(fields.col(b).data(), n, cols);
     const ComplexMatrix spectrum =
         transform(fft, field.cast<Complex>(), false).cwiseProduct(kernel_grid.cast<Complex>());

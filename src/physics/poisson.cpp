@@ -1,10 +1,12 @@
 #include "physgrad/physics/poisson.hpp"
 
 #include <Eigen/SparseCholesky>
+#include <cmath>
 #include <sstream>
 #include <vector>
 
 #include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
 
 namespace physgrad {
 
@@ -18,6 +20,13 @@ Poisson::Poisson(Index n) : n_(n) {
     msg << "poisson: grid size must be ≥ 1, got " << n;
     throw Error(msg.str());
   }
+  // The assembly (5 entries a cell) and the Cholesky factor, whose fill grows like 6·log₂ n
+  // entries a cell (measured up to n = 512: about 700 B a cell in all); in double, so an n
+  // whose n² overflows Index is refused here too.
+  const double cells = static_cast<double>(n) * static_cast<double>(n);
+  require_memory(cells * (200 + 96 * std::log2(static_cast<double>(n) + 1)),
+                 "poisson: " + std::to_string(n) + "×" + std::to_string(n) +
+                     " grid (its Laplacian and Cholesky factor)");
   std::vector<Eigen::Triplet<double, Index>> entries;
   for (Index j = 0; j < n; ++j) {
     for (Index i = 0; i < n; ++i) {

@@ -6,6 +6,8 @@
 #include <sstream>
 
 #include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
+#include "physgrad/stop.hpp"
 
 namespace physgrad {
 
@@ -50,6 +52,13 @@ QuantumDipole::QuantumDipole(QuantumDipoleConfig config) : config_(config) {
   } else if (!(std::isfinite(config_.length) && config_.length > 0)) {
     msg << "length must be finite and > 0, got " << config_.length;
   } else {
+    // A sample: its Nt controls, its state and the solver's four complex work arrays (about
+    // 12 reals per point); in double, so sizes whose 2M overflows Index are refused here too.
+    require_memory(8.0 * (static_cast<double>(config_.steps) +
+                          12.0 * static_cast<double>(config_.points)),
+                   "quantum_dipole: " + std::to_string(config_.points) + " points, " +
+                       std::to_string(config_.steps) +
+                       " steps (one sample's controls, state and work arrays)");
     dx_ = config_.length / static_cast<double>(config_.points - 1);
     return;
   }
@@ -75,6 +84,7 @@ QuantumDipole::CArray QuantumDipole::integrate(const Matrix& x, const Matrix& co
   psi.real() = context.topRows(M).array();
   psi.imag() = context.bottomRows(M).array();
   for (Index n = 0; n < config_.steps; ++n) {
+    throw_if_stop_requested("quantum_dipole");
     if (trajectory) trajectory->middleCols(n * B, B) = psi;
     step_diagonal(x, n, diag);
     conj_diag = diag.conjugate();
@@ -104,6 +114,11 @@ Matrix QuantumDipole::vjp_batch(const Matrix& x, const Matrix& context, const Ma
         << output_dim() << "×" << B;
     throw Error(msg.str());
   }
+  require_memory(16.0 * static_cast<double>(M) * (static_cast<double>(config_.steps) + 1) *
+                     static_cast<double>(B),
+                 name() + ".vjp: the states of " + std::to_string(M) + " points over " +
+                     std::to_string(config_.steps) + " steps for " + std::to_string(B) +
+                     " samples");
   CArray trajectory(M, (config_.steps + 1) * B);
   integrate(x, context, &trajectory);
 
@@ -117,6 +132,7 @@ Matrix QuantumDipole::vjp_batch(const Matrix& x, const Matrix& context, const Ma
   lambda.imag() = gy.bottomRows(M).array();
   Matrix gx(config_.steps, B);
   for (Index n = config_.steps - 1; n >= 0; --n) {
+    throw_if_stop_requested("quantum_dipole.vjp");
     step_diagonal(x, n, diag);
     conj_diag = diag.conjugate();
     solve_tridiagonal(conj_diag, std::conj(off), lambda, work);  // λ ← μ

@@ -182,44 +182,56 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
   const auto start = Clock::now();
   StepReport report;
   UpdateStep step;
-  for (;;) {
-    BatchTiming timing;
-    const BatchState evaluated = evaluate_batch(network, problem, batch, update.need(),
-                                                *state.cache, options.shard, &timing);
-    report.forward_seconds += timing.forward;
-    report.derivative_seconds += timing.derivatives;
-    report.loss = evaluated.loss;
-    report.failure = !std::isfinite(evaluated.loss)           ? StepFailure::kLoss
-                     : !all_finite(evaluated.gradient)        ? StepFailure::kGradient
-                     : !all_finite(evaluated.loss_gradient_y) ? StepFailure::kLossGradient
-                                                              : StepFailure::kNone;
-    if (report.applied()) {
-      const auto update_start = Clock::now();
-      try {
-        step = update.step(evaluated);
-        if (!all_finite(step.delta)) {
+  // Halving moves θ before the next evaluation; an exception there (a StopRequested from the
+  // simulator, say) puts θ and the step back, so the step leaves no trace but the cache.
+  Vector whole_last_step;
+  try {
+    for (;;) {
+      BatchTiming timing;
+      const BatchState evaluated = evaluate_batch(network, problem, batch, update.need(),
+                                                  *state.cache, options.shard, &timing);
+      report.forward_seconds += timing.forward;
+      report.derivative_seconds += timing.derivatives;
+      report.loss = evaluated.loss;
+      report.failure = !std::isfinite(evaluated.loss)           ? StepFailure::kLoss
+                       : !all_finite(evaluated.gradient)        ? StepFailure::kGradient
+                       : !all_finite(evaluated.loss_gradient_y) ? StepFailure::kLossGradient
+                                                                : StepFailure::kNone;
+      if (report.applied()) {
+        const auto update_start = Clock::now();
+        try {
+          step = update.step(evaluated);
+          if (!all_finite(step.delta)) {
+            report.failure = StepFailure::kUpdate;
+            report.detail = step.problem;
+          }
+        } catch (const NumericalError& e) {
+          step = {};
           report.failure = StepFailure::kUpdate;
-          report.detail = step.problem;
+          report.detail = e.what();
         }
-      } catch (const NumericalError& e) {
-        step = {};
-        report.failure = StepFailure::kUpdate;
-        report.detail = e.what();
+        report.inversion_seconds += step.inversion_seconds;
+        report.derivative_seconds += step.jacobian_seconds;
+        report.update_seconds +=
+            seconds_since(update_start) - step.inversion_seconds - step.jacobian_seconds;
       }
-      report.inversion_seconds += step.inversion_seconds;
-      report.derivative_seconds += step.jacobian_seconds;
-      report.update_seconds +=
-          seconds_since(update_start) - step.inversion_seconds - step.jacobian_seconds;
+      if (report.applied()) break;
+      // The batch at θ is broken. If θ came from a step that can be halved, try half of it.
+      if (!state.last_step_halvable || state.last_step.size() == 0 ||
+          report.halvings == options.max_step_halvings) {
+        break;
+      }
+      if (report.halvings == 0) whole_last_step = state.last_step;
+      state.last_step *= 0.5;
+      network.parameters() = state.before_last_step + state.last_step;
+      ++report.halvings;
     }
-    if (report.applied()) break;
-    // The batch at θ is broken. If θ came from a step that can be halved, try half of it.
-    if (!state.last_step_halvable || state.last_step.size() == 0 ||
-        report.halvings == options.max_step_halvings) {
-      break;
+  } catch (...) {
+    if (report.halvings > 0) {
+      state.last_step = std::move(whole_last_step);
+      network.parameters() = state.before_last_step + state.last_step;
     }
-    state.last_step *= 0.5;
-    network.parameters() = state.before_last_step + state.last_step;
-    ++report.halvings;
+    throw;
   }
   report.total_seconds = seconds_since(start);
   if (!report.applied()) {

@@ -4,10 +4,12 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <utility>
 
 #include "physgrad/error.hpp"
+#include "physgrad/stop.hpp"
 
 namespace physgrad {
 
@@ -91,6 +93,8 @@ class TrainingRun {
   void stop_for_numbers(const std::string& message);
   bool checkpoint_due() const;
   void checkpoint();
+  // Saves a checkpoint and ends with kInterrupted and `message`.
+  TrainingSummary interrupted(std::string message);
   bool ended() const { return summary_.termination.has_value(); }
 
   Network& network_;
@@ -114,6 +118,9 @@ class TrainingRun {
 };
 
 TrainingSummary TrainingRun::run() {
+  // Ranks stop together at an iteration boundary (requests()); none may leave a step alone.
+  std::optional<DeferStopPolls> ranks_stop_together;
+  if (step_options_.shard.active()) ranks_stop_together.emplace();
   update_.reset();
   if (options_.resume != nullptr) {
     restore(*options_.resume);
@@ -135,11 +142,8 @@ TrainingSummary TrainingRun::run() {
     while (batch_start_ < n_ && !ended()) {
       const Requests pending = requests();
       if (pending.stop) {
-        checkpoint();
-        summary_.termination = TrainingTermination::kInterrupted;
-        summary_.message = "stopped on request after iteration " +
-                           std::to_string(summary_.iterations);
-        return summary_;
+        return interrupted("stopped on request after iteration " +
+                           std::to_string(summary_.iterations));
       }
       if (pending.evaluate && !evaluate()) break;
       if (checkpoint_due()) checkpoint();
@@ -151,7 +155,12 @@ TrainingSummary TrainingRun::run() {
       if (ended()) break;
       const Index count = std::min(batch_size_, n_ - batch_start_);
       const auto first = order.begin() + batch_start_;
-      if (!step(std::vector<Index>(first, first + count))) break;
+      try {
+        if (!step(std::vector<Index>(first, first + count))) break;
+      } catch (const StopRequested&) {  // train_step() left θ as it was before the step
+        return interrupted("stopped on request during iteration " +
+                           std::to_string(summary_.iterations + 1) + " (not applied)");
+      }
       batch_start_ += batch_size_;
       if (options_.eval_every && summary_.iterations % *options_.eval_every == 0) evaluate();
     }
@@ -263,12 +272,19 @@ void TrainingRun::stop_for_numbers(const std::string& message) {
   summary_.message += (summary_.message.empty() ? "" : "; then ") + message;
 }
 
+TrainingSummary TrainingRun::interrupted(std::string message) {
+  checkpoint();
+  summary_.termination = TrainingTermination::kInterrupted;
+  summary_.message = std::move(message);
+  return summary_;
+}
+
 TrainingRun::Requests TrainingRun::requests() const {
   const bool evaluation_due =
       options_.eval_seconds && !evaluated_ &&
       summary_.train_seconds - summary_.history.back().train_seconds >= *options_.eval_seconds;
   double flags[3] = {
-      options_.stop != nullptr && options_.stop->load() ? 1.0 : 0.0,
+      (options_.stop != nullptr && options_.stop->load()) || stop_requested() ? 1.0 : 0.0,
       options_.time_budget_seconds && summary_.train_seconds >= *options_.time_budget_seconds
           ? 1.0
           : 0.0,

@@ -37,7 +37,10 @@ struct OscillatorConfig {
 // error (measured in tests/time_reversal_test.cpp).
 class CoupledOscillators final : public Simulator {
  public:
-  // Throws Error unless N ≥ 1, Nt ≥ 1, dt > 0 and every coefficient is finite.
+  // Throws Error unless N ≥ 1, Nt ≥ 1, dt > 0 and every coefficient is finite, and unless one
+  // sample's arrays fit in memory (physgrad/memory.hpp). The time loops (forward, VJP, time
+  // reversal) poll for a stop request (physgrad/stop.hpp) every step; the VJP checks the memory
+  // of the 4·Nt stage positions it keeps before it allocates them.
   explicit CoupledOscillators(OscillatorConfig config = OscillatorConfig::paper());
 
   std::string name() const override { return "coupled_oscillators"; }

@@ -23,7 +23,10 @@ struct FpuChainConfig {
 // tests/time_reversal_test.cpp).
 class FpuChain final : public Simulator {
  public:
-  // Throws Error unless N ≥ 1, Nt ≥ 1, dt finite and > 0, β finite.
+  // Throws Error unless N ≥ 1, Nt ≥ 1, dt finite and > 0, β finite, and unless one state and
+  // its work arrays fit in memory (physgrad/memory.hpp). The time loops poll for a stop request
+  // (physgrad/stop.hpp) every step; the VJP checks the memory of the Nt + 1 positions it keeps
+  // before it allocates them.
   explicit FpuChain(FpuChainConfig config = {});
 
   std::string name() const override { return "fpu_chain"; }

@@ -17,7 +17,9 @@ struct HeatConfig {
 // the VJP is P(gy) and the second derivatives vanish. Batched: one field per column.
 class HeatDiffusion final : public Simulator {
  public:
-  // Throws Error unless n ≥ 1, dims ∈ {1, 2} and amount is finite and ≥ 0.
+  // Throws Error unless n ≥ 1, dims ∈ {1, 2} and amount is finite and ≥ 0, and unless the
+  // kernels and a field's spectra fit in memory (physgrad/memory.hpp). A batch polls for a stop
+  // request (physgrad/stop.hpp) before each field.
   explicit HeatDiffusion(HeatConfig config = {});
 
   std::string name() const override { return "heat_diffusion"; }

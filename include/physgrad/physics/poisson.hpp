@@ -13,7 +13,8 @@ namespace physgrad {
 // solves laplace(x) = y exactly with a sparse Cholesky factor of −L computed once.
 class Poisson final : public Simulator {
  public:
-  // Throws Error unless n ≥ 1.
+  // Throws Error unless n ≥ 1 and the Laplacian and its factor fit in memory
+  // (physgrad/memory.hpp).
   explicit Poisson(Index n = 8);
 
   std::string name() const override { return "poisson"; }

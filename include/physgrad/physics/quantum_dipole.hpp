@@ -24,7 +24,10 @@ struct QuantumDipoleConfig {
 // tridiagonal system by the Thomas algorithm; the VJP is the exact discrete adjoint.
 class QuantumDipole final : public Simulator {
  public:
-  // Throws Error unless points ≥ 3, steps ≥ 1 and dt, length are finite and > 0.
+  // Throws Error unless points ≥ 3, steps ≥ 1 and dt, length are finite and > 0, and unless one
+  // sample's arrays fit in memory (physgrad/memory.hpp). The time loops poll for a stop request
+  // (physgrad/stop.hpp) every step; the VJP checks the memory of the Nt + 1 states it keeps
+  // before it allocates them.
   explicit QuantumDipole(QuantumDipoleConfig config = QuantumDipoleConfig::paper());
 
   std::string name() const override { return "quantum_dipole"; }

@@ -89,6 +89,9 @@ struct StepReport {
 // retried at half length (θ moves back accordingly); if that does not help, or the step cannot
 // be halved, the previous step is undone (θ as before it) unless only this Δθ was bad, and the
 // report says where it failed. Throws Error on mismatched dimensions (see check_problem()).
+// An exception from below (a StopRequested from the simulator) leaves θ and `state` as they were
+// before the call, and so the state of the library's rules, which change it only after their
+// last simulator call: the step can be made again.
 StepReport train_step(Network& network, LearningUpdate& update, const LearningProblem& problem,
                       const Dataset& batch, StepState& state, const StepOptions& options = {});
 

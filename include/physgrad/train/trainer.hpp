@@ -19,7 +19,7 @@ enum class TrainingTermination {
   kMaxEpochs,         // max_epochs epochs were completed
   kTimeBudget,        // time_budget_seconds of training time were spent
   kNumericalFailure,  // a step or an evaluation was not finite (see train())
-  kInterrupted,       // *TrainerOptions::stop became true; continue with `resume`
+  kInterrupted,       // a stop was requested (TrainerOptions::stop); continue with `resume`
 };
 // "max_iterations", "max_epochs", "time_budget", "numerical_failure", "interrupted".
 std::string to_string(TrainingTermination termination);
@@ -88,8 +88,12 @@ struct TrainerOptions {
   std::function<void(const TrainingRecord&)> on_progress;
 
   // Checkpoints: on_checkpoint receives the state every checkpoint_every iterations and/or
-  // every checkpoint_seconds of wall time, and when *stop becomes true; training then ends
-  // with termination kInterrupted (no final evaluation), to be continued with `resume`.
+  // every checkpoint_seconds of wall time, and on a stop request; training then ends with
+  // termination kInterrupted (no final evaluation), to be continued with `resume`. A stop
+  // request is *stop becoming true or request_stop() (physgrad/stop.hpp): seen between
+  // iterations, and inside a step when the simulator polls for it, whose step is then dropped
+  // (θ as before it). A data-parallel run defers the simulators' polls (DeferStopPolls): its
+  // ranks stop together between iterations.
   std::function<void(const TrainerState&)> on_checkpoint;
   std::optional<long long> checkpoint_every;
   std::optional<double> checkpoint_seconds;
@@ -108,7 +112,8 @@ struct TrainerOptions {
 // below the rule, never reaches θ; a failed step ends training with kNumericalFailure and a
 // message naming the rule, the iteration and the place. An evaluation whose train or test loss
 // is not finite also stops training, with θ restored to the last evaluated parameters, so
-// neither θ nor the history ever holds a non-finite loss.
+// neither θ nor the history ever holds a non-finite loss. A StopRequested thrown during an
+// evaluation is not caught: training ends without a checkpoint of its own (the last one stays).
 TrainingSummary train(Network& network, LearningUpdate& update, const LearningProblem& problem,
                       const Dataset& train_set, const Dataset* test_set,
                       const TrainerOptions& options);
