@@ -54,23 +54,45 @@ std::string format_number(double value) {
   return out.str();
 }
 
+// Decimal notation, the one form of a number on the command line and in config files: an
+// optional sign, digits with at most one point (reals), and for reals an optional exponent
+// (e or E, an optional sign, digits). What strtod would read besides — hexadecimal (0x10,
+// 0x1p4), inf, nan, leading white space — is not a number here.
+bool is_decimal(const std::string& item, bool whole) {
+  std::size_t at = item.empty() || (item[0] != '+' && item[0] != '-') ? 0 : 1;
+  const auto digits = [&item, &at] {
+    const std::size_t first = at;
+    while (at < item.size() && item[at] >= '0' && item[at] <= '9') ++at;
+    return at - first;
+  };
+  std::size_t mantissa = digits();
+  if (!whole && at < item.size() && item[at] == '.') {
+    ++at;
+    mantissa += digits();
+  }
+  if (mantissa == 0) return false;
+  if (!whole && at < item.size() && (item[at] == 'e' || item[at] == 'E')) {
+    ++at;
+    if (at < item.size() && (item[at] == '+' || item[at] == '-')) ++at;
+    if (digits() == 0) return false;
+  }
+  return at == item.size();
+}
+
 double parse_real(const OptionSpec& spec, const std::string& text) {
   const std::string item = trim(text);
-  // strtod, not stod: a value below the normal range (1e-310) is kept as the subnormal it is.
-  char* end = nullptr;
-  errno = 0;
-  const double value = std::strtod(item.c_str(), &end);
-  const bool range = errno == ERANGE;
-  if (item.empty() || end != item.c_str() + item.size()) {
-    throw Error(flag(spec) + ": '" + text + "' is not a number");
+  if (!is_decimal(item, false)) {
+    throw Error(flag(spec) + ": '" + text + "' is not a number (decimal, like 16, -2.5 or 1e-3)");
   }
-  if (range && std::isinf(value)) {
+  // strtod, not stod: a value below the normal range (1e-310) is kept as the subnormal it is.
+  errno = 0;
+  const double value = std::strtod(item.c_str(), nullptr);
+  if (errno == ERANGE && std::isinf(value)) {
     throw Error(flag(spec) + ": '" + text + "' is out of the range of a double");
   }
-  if (range && value == 0) {
+  if (errno == ERANGE && value == 0) {
     throw Error(flag(spec) + ": '" + text + "' is too close to 0 for a double (it would read 0)");
   }
-  if (!std::isfinite(value)) throw Error(flag(spec) + ": must be finite, got '" + text + "'");
   const bool below = spec.min_exclusive ? !(value > spec.min) : !(value >= spec.min);
   if (below || value > spec.max || (spec.nonzero && value == 0)) {
     throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got '" + text + "'");
@@ -80,19 +102,12 @@ double parse_real(const OptionSpec& spec, const std::string& text) {
 
 long long parse_integer(const OptionSpec& spec, const std::string& text) {
   const std::string item = trim(text);
-  long long value = 0;
-  std::size_t used = 0;
-  bool beyond = false;  // a whole number beyond ±9.2e18
-  try {
-    value = std::stoll(item, &used);
-  } catch (const std::out_of_range&) {
-    beyond = item.find_first_not_of("+-0123456789") == std::string::npos;
-  } catch (const std::exception&) {
-    used = 0;
+  if (!is_decimal(item, true)) {
+    throw Error(flag(spec) + ": '" + text + "' is not a whole number (decimal digits, like 16)");
   }
-  if (!beyond && (item.empty() || used != item.size())) {
-    throw Error(flag(spec) + ": '" + text + "' is not a whole number");
-  }
+  errno = 0;
+  const long long value = std::strtoll(item.c_str(), nullptr, 10);
+  const bool beyond = errno == ERANGE;  // a whole number beyond ±9.2e18
   const auto as_double = static_cast<double>(value);
   if (beyond || as_double < spec.min || as_double > spec.max || (spec.nonzero && value == 0)) {
     throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got '" + text + "'");

@@ -63,8 +63,11 @@ OptionSpec text_option(std::string name, std::string default_text, std::string h
 OptionSpec real_list_option(std::string name, std::string default_text, std::string help);
 OptionSpec text_list_option(std::string name, std::string default_text, std::string help);
 
-// Parses `text` for `spec` into JSON (number, integer, string or array). Throws Error such as
-// "--lr: 'abc' is not a number" or "--iters: must be ≥ 1, got 0".
+// Parses `text` for `spec` into JSON (number, integer, string or array): the one parser of the
+// command line and of config files. Numbers are decimal: an optional sign (+ or −), digits, and
+// for reals a point and an exponent (16, -2.5, +1e-3, .5); hexadecimal, inf and nan are not
+// numbers. Throws Error such as "--lr: 'abc' is not a number (…)" or "--iters: must be ≥ 1,
+// got 0".
 nlohmann::json parse_option(const OptionSpec& spec, const std::string& text);
 // Empty when `text` is valid UTF-8 free of control characters (C0, DEL, C1: a NUL would cut a
 // path short, a newline split a message or a CSV line); else what is wrong with it, e.g.

@@ -108,7 +108,7 @@ TEST_F(Cli, BadConfigFileIsOneLineExitTwoAndWritesNothing) {
       {R"({"lr": true})", "--lr: expected a number, got true"},
       {R"({"iters": 0})", "--iters: must be in [1, 1000000000], got '0'"},
       {R"({"iters": 2.5})", "--iters: '2.5' is not a whole number"},
-      {R"({"lr": "nan"})", "--lr: must be finite, got 'nan'"},
+      {R"({"lr": "nan"})", "--lr: 'nan' is not a number"},
       {R"({"lr": 1e999})", "invalid JSON at line 1, column 12: number overflow"},
       {R"({"optimizers": []})", "--optimizers: needs at least one value"},
       {R"({"optimizers": ["gd", "gd"]})", "--optimizers: 'gd' is listed twice"},

@@ -127,12 +127,38 @@ TEST(ExperimentSettings, DefaultsResolveAndBadValuesNameTheOption) {
   EXPECT_EQ(message("lr", "1e400"), "--lr: '1e400' is out of the range of a double");
   EXPECT_EQ(message("alpha", "1,2,"), "--alpha: empty entry in list '1,2,'");
   EXPECT_EQ(message("alpha", " "), "--alpha: needs at least one value");
-  EXPECT_EQ(message("iters", "ten"), "--iters: 'ten' is not a whole number");
+  EXPECT_EQ(message("iters", "ten"),
+            "--iters: 'ten' is not a whole number (decimal digits, like 16)");
   EXPECT_EQ(message("optimizers", "gd,gd"), "--optimizers: 'gd' is listed twice");
   EXPECT_EQ(message("alpha", "1,,2"), "--alpha: empty entry in list '1,,2'");
   EXPECT_EQ(message("tol-mode", "loose"),
             "--tol-mode: unknown value 'loose' (known: relative, absolute)");
   EXPECT_THROW(find_experiment("scaled_toy"), Error);
+}
+
+// One number syntax for reals and integers, on the command line and in config files: decimal,
+// with an optional sign; what strtod reads besides is not a number.
+TEST(ExperimentSettings, NumbersAreDecimal) {
+  const Experiment& experiment = find_experiment("scaled-toy");
+  const auto read = [&](const std::string& name, const std::string& text) {
+    return resolve_settings(experiment, {{name, text}});
+  };
+  EXPECT_EQ(read("lr", "+0.5").real("lr"), 0.5);
+  EXPECT_EQ(read("lr", ".5").real("lr"), 0.5);
+  EXPECT_EQ(read("lr", "5.").real("lr"), 5);
+  EXPECT_EQ(read("lr", "2.5E-1").real("lr"), 0.25);
+  EXPECT_EQ(read("lr", "1e+2").real("lr"), 100);
+  EXPECT_EQ(read("iters", "+12").integer("iters"), 12);
+  EXPECT_EQ(read("iters", " 12 ").integer("iters"), 12);
+  EXPECT_EQ(read("start", "+1, -0.5e1 ").reals("start"), (std::vector<double>{1, -5}));
+  for (const std::string text : {"0x10", "0X1P4", "inf", "-Infinity", "nan", "1e", "1e+", ".",
+                                 "+", "-.e1", "1.2.3", "١", "1 2", "\n5", "5f", "--5", "+-5"}) {
+    EXPECT_THROW(read("lr", text), Error) << text;
+    EXPECT_THROW(read("start", "1," + text), Error) << text;
+  }
+  for (const std::string text : {"0x10", "1e3", "1.0", "12.", ".5", "inf", "+", "1_000"}) {
+    EXPECT_THROW(read("iters", text), Error) << text;
+  }
 }
 
 }  // namespace
