@@ -131,6 +131,7 @@ class HeatInverse final : public Experiment {
                        sizeof(double),
                    "--n: " + std::to_string(size) + " cells (a network of ~8·" +
                        std::to_string(size) + "² weights)");
+    require_learning_sizes(settings, size, widths(size));
   }
 
   void run(const Settings& given, RunContext& context) const override {

@@ -95,6 +95,10 @@ class HigToy final : public Experiment {
   std::vector<std::string> default_optimizers() const override { return {"adam", "gn", "hig"}; }
   long long default_iterations() const override { return 10000; }
 
+  void validate(const Settings& settings) const override {
+    require_learning_sizes(settings, 2, {1, kHidden, 2});
+  }
+
   void run(const Settings& settings, RunContext& context) const override {
     LearningSweep sweep(settings, context, rule_defaults());
     for (const double lambda : settings.reals("lambda")) {

@@ -8,6 +8,7 @@
 #include "direct_runs.hpp"
 #include "interrupt.hpp"
 #include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
 #include "physgrad/serialize.hpp"
 
 namespace physgrad::experiments {
@@ -74,15 +75,70 @@ void require_training_limit(const Settings& settings, const std::string& experim
   }
 }
 
+void require_learning_sizes(const Settings& settings, Index outputs,
+                            const std::vector<Index>& widths) {
+  double parameters = 0;
+  for (std::size_t i = 0; i + 1 < widths.size(); ++i) {
+    parameters += static_cast<double>(widths[i] + 1) * static_cast<double>(widths[i + 1]);
+  }
+  const double train_size = static_cast<double>(settings.integer("train-size"));
+  bool jacobian = !settings.has("optimizers");  // the default rules may include gn or hig
+  for (const std::string& id : settings.has("optimizers") ? settings.texts("optimizers")
+                                                          : std::vector<std::string>{}) {
+    jacobian = jacobian || id == "gn" || id == "hig";
+  }
+  if (jacobian && settings.has("batch")) {
+    const long long given = settings.integer("batch");
+    const double rows =
+        static_cast<double>(outputs) * std::min(static_cast<double>(given), train_size);
+    const double k = std::min(rows, parameters);
+    const auto whole = [](double value) { return std::to_string(static_cast<long long>(value)); };
+    const std::string what = "--batch: " + std::to_string(given) + " (a gn or hig step forms a " +
+                             whole(k) + "² matrix from " + whole(rows) + " Jacobian rows of " +
+                             whole(parameters) + " weights)";
+    // The matrix with the eigendecomposition's copy and workspace; the rows when they are
+    // formed (the normal path, rows > weights).
+    require_memory(8 * (3 * k * k + (rows > parameters ? rows * parameters : 0)), what);
+    const double work = rows * parameters * k + k * k * k;
+    if (work > kMaxStepMultiplyAdds) {
+      throw Error(what + " takes " + format_value(work) + " multiply-adds, more than the " +
+                  format_value(kMaxStepMultiplyAdds) + " (about two minutes) a step may take");
+    }
+  }
+  // Each evaluation keeps a record and a metrics row per run (about 1 KiB).
+  if (settings.has("eval-every") && (settings.has("iters") || settings.has("epochs"))) {
+    // The fewest iterations the limit allows: a batch of every sample unless one is given.
+    const double batch = settings.has("batch")
+                             ? std::min(static_cast<double>(settings.integer("batch")), train_size)
+                             : train_size;
+    const double iterations =
+        settings.has("iters")
+            ? static_cast<double>(settings.integer("iters"))
+            : static_cast<double>(settings.integer("epochs")) * std::ceil(train_size / batch);
+    const double runs = settings.has("optimizers")
+                            ? static_cast<double>(settings.texts("optimizers").size())
+                            : 1.0;
+    const long long every = settings.integer("eval-every");
+    require_memory(1024 * runs * (iterations / static_cast<double>(every) + 2),
+                   "--eval-every: " + std::to_string(every) + " (" + format_value(iterations) +
+                       " iterations, each run keeping every evaluation)");
+  }
+}
+
 std::vector<OptionSpec> learning_options(const std::string& default_time,
                                          const std::string& default_eval_every) {
   return {
-      integer_option("batch", "", "mini-batch size for every rule (default: each rule's own)")
+      integer_option("batch", "",
+                     "mini-batch size for every rule (default: each rule's own); with gn or hig "
+                     "one step may take at most 10¹² multiply-adds, B·m·|θ|·min(B·m, |θ|) for m "
+                     "outputs (about two minutes)")
           .at_least(1),
       real_option("rcond", "", "relative truncation τ of gn and hig (default: each rule's own)")
           .at_least(0)
           .at_most(0.5),
-      integer_option("epochs", "", "epochs per run").at_least(1),
+      integer_option("epochs", "", "epochs per run (at most 10⁹, as --iters)")
+          .at_least(1)
+          .at_most(1e9),
       real_option("time", default_time,
                   "training-time budget per run in seconds, evaluations excluded (the first of "
                   "--iters, --epochs, --time reached ends a run; a run limited by --time alone is "

@@ -52,6 +52,15 @@ OptionSpec sample_count_option(std::string name, std::string default_text, std::
 double sample_bytes(const std::vector<Index>& widths, Index data_values);
 // Throws Error unless --iters, --epochs or --time limits the training.
 void require_training_limit(const Settings& settings, const std::string& experiment);
+// Throws Error naming --batch when a Gauss-Newton or HIG step (when one is selected) on the
+// given batch with `outputs` physics outputs per sample and a network of `widths` would not fit
+// in memory or would take more than kMaxStepMultiplyAdds, and naming --eval-every when the
+// evaluations an iteration or epoch limit allows would not fit in memory.
+void require_learning_sizes(const Settings& settings, Index outputs,
+                            const std::vector<Index>& widths);
+// A Jacobian step forms a k × k matrix, k = min(B·m, |θ|), from B·m rows of |θ| entries: about
+// B·m·|θ|·k + k³ multiply-adds, at most this many (about two minutes on one core).
+inline constexpr double kMaxStepMultiplyAdds = 1e12;
 
 // Controls u₀ … u_{N−1}, each held for dt, as steps over [0, N·dt].
 Series held_controls(const std::string& label, const Vector& u, double dt,

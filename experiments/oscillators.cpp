@@ -167,6 +167,8 @@ class Oscillators final : public Experiment {
 
   void validate(const Settings& settings) const override {
     require_training_limit(settings, "oscillators");
+    const CoupledOscillators physics(configuration(settings.text("variant")).physics);
+    require_learning_sizes(settings, physics.output_dim(), widths(physics));
   }
 
   void run(const Settings& settings, RunContext& context) const override {

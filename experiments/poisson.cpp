@@ -119,6 +119,8 @@ class PoissonExperiment final : public Experiment {
 
   void validate(const Settings& settings) const override {
     require_training_limit(settings, "poisson");
+    const Index grid = settings.integer("grid");
+    require_learning_sizes(settings, grid * grid, widths(grid));
   }
 
   void run(const Settings& settings, RunContext& context) const override {

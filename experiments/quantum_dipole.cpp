@@ -160,6 +160,8 @@ class QuantumDipoleExperiment final : public Experiment {
 
   void validate(const Settings& settings) const override {
     require_training_limit(settings, "quantum-dipole");
+    const QuantumDipole physics(configuration(settings));
+    require_learning_sizes(settings, physics.output_dim(), widths(physics));
     for (const std::string& id : settings.texts("optimizers")) {
       if (id == "sip") throw Error("quantum-dipole: --optimizers sip needs an inverse simulator; "
                                    "this one has none");

@@ -88,6 +88,10 @@ class SinRotationExperiment final : public Experiment {
   std::vector<std::string> default_optimizers() const override { return {"sip", "adam", "sgd"}; }
   long long default_iterations() const override { return 0; }
 
+  void validate(const Settings& settings) const override {
+    require_learning_sizes(settings, 2, kWidths);
+  }
+
   void run(const Settings& settings, RunContext& context) const override {
     const double phi = settings.real("phi");
     const std::string form = settings.text("form");

@@ -3,6 +3,7 @@
 // PG through numerical local inverses (L-BFGS, Gauss-Newton) and Gauss-Newton, LM and GD, on a
 // velocity-Verlet FPU chain (reversible: R is exact to rounding) and on RK4 coupled oscillators
 // (R is exact only to RK4's truncation error), by iterations, simulator passes and time.
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <map>
@@ -89,6 +90,63 @@ Problem make_problem(const std::string& key, const Settings& settings, std::uint
   return p;
 }
 
+// N·Nt of the FPU chain: one simulator pass then takes about 30 s.
+constexpr double kMaxMassSteps = 1e9;
+// What each coordinate of an iterate holds: its entry in the iterate and in the metrics row
+// (167 B measured over 10 iterates of 2·10⁵ coordinates).
+constexpr double kCoordinateBytes = 170;
+
+// Samples in the widest simulator call of the selected rules on a state of `dim` values:
+// Newton's Hessian differences 2·dim VJPs, a Jacobian takes dim (gn, lm, ig, PG through the
+// Gauss-Newton inverse), every other rule one sample at a time.
+double widest_batch(const Settings& settings, double dim) {
+  double widest = 1;
+  const std::vector<std::string> inverses = settings.texts("pg-inverse");
+  const bool pg_gn = std::find(inverses.begin(), inverses.end(), "gn") != inverses.end();
+  for (const std::string& id : settings.texts("optimizers")) {
+    if (id == "newton") widest = std::max(widest, 2 * dim);
+    if (id == "gn" || id == "lm" || id == "ig" || (id == "pg" && pg_gn)) {
+      widest = std::max(widest, dim);
+    }
+  }
+  return widest;
+}
+
+// The runs per problem: one per rule, PG one per local inverse.
+double runs_per_problem(const Settings& settings) {
+  double runs = 0;
+  for (const std::string& id : settings.texts("optimizers")) {
+    runs += id == "pg" ? static_cast<double>(settings.texts("pg-inverse").size()) : 1;
+  }
+  return runs;
+}
+
+bool has_problem(const Settings& settings, const std::string& key) {
+  const std::vector<std::string> problems = settings.texts("problems");
+  return std::find(problems.begin(), problems.end(), key) != problems.end();
+}
+
+// Per mass of the FPU chain: the positions the widest VJP keeps (Nt + 1 per sample), a 2N × 2N
+// Jacobian or Hessian with three copies for its factorisation, every iterate's 2 coordinates
+// per mass in every run, and the chain's own state and work arrays.
+double fpu_bytes_per_mass(const Settings& settings) {
+  if (!has_problem(settings, "fpu")) return 0;
+  const double masses = static_cast<double>(settings.integer("masses"));
+  const double steps = static_cast<double>(settings.integer("fpu-steps"));
+  const double widest = widest_batch(settings, 2 * masses);
+  const double matrix = widest > 1 ? 4 * 8 * 4 * masses : 0;
+  const double iterates = static_cast<double>(settings.integer("iters")) + 1;
+  return 8 * widest * (steps + 1) + matrix +
+         iterates * runs_per_problem(settings) * 2 * kCoordinateBytes + 64;
+}
+
+// Per RK4 step of the two oscillators: the positions of its 4 stages (2 values each) and its
+// control, for each sample of the widest VJP.
+double oscillator_bytes_per_step(const Settings& settings) {
+  if (!has_problem(settings, "oscillators")) return 0;
+  return 8 * (4 * 2 + 1) * widest_batch(settings, 4);
+}
+
 class TimeReversal final : public Experiment {
  public:
   std::string name() const override { return "time-reversal"; }
@@ -101,9 +159,27 @@ class TimeReversal final : public Experiment {
         text_list_option("problems", "fpu,oscillators", "the simulations").one_of({"fpu", "oscillators"}),
         text_list_option("pg-inverse", "time_reversal,lbfgs,gn", "local inverses PG runs with, one run each")
             .one_of({"time_reversal", "lbfgs", "gn"}),
-        integer_option("masses", "8", "masses of the FPU chain").at_least(1),
-        integer_option("fpu-steps", "100", "velocity-Verlet steps of the FPU chain (dt 0.1)").at_least(1),
-        integer_option("osc-steps", "96", "RK4 steps of the oscillators (dt 0.125)").at_least(1),
+        integer_option("masses", "8",
+                       "masses N of the FPU chain (N·Nt at most 10⁹: a simulator pass of the "
+                       "chain then takes about 30 s; checked against memory with the "
+                       "trajectories the rules' VJPs keep)")
+            .at_least(1)
+            .at_most(kMaxMassSteps)
+            .needs_bytes_each(fpu_bytes_per_mass)
+            .quick("4"),
+        integer_option("fpu-steps", "100",
+                       "velocity-Verlet steps Nt of the FPU chain, dt 0.1 (at most 10⁷: a "
+                       "simulator pass of the 8-mass chain then takes about 7 s)")
+            .at_least(1)
+            .at_most(1e7)
+            .quick("10"),
+        integer_option("osc-steps", "96",
+                       "RK4 steps of the oscillators, dt 0.125 (at most 10⁶: a simulator pass "
+                       "then takes about 2 s)")
+            .at_least(1)
+            .at_most(1e6)
+            .needs_bytes_each(oscillator_bytes_per_step)
+            .quick("8"),
         real_option("amplitude", "0.5", "the FPU chain's true state is drawn from U(−a, a)").above(0),
         real_option("tol", "1e-16", "loss counted as converged").above(0),
     };
@@ -115,6 +191,21 @@ class TimeReversal final : public Experiment {
     return {"pg", "gn", "lm", "gd"};
   }
   long long default_iterations() const override { return 200; }
+
+  // Every run keeps its iterates (require_iterate_memory); one simulator pass of the chain
+  // costs about N·Nt·30 ns (measured at N = 10⁵, Nt = 100; 90 ns at N = 8).
+  void validate(const Settings& settings) const override {
+    require_iterate_memory(settings, settings.texts("problems").size() *
+                                         static_cast<std::size_t>(runs_per_problem(settings)));
+    const double mass_steps = static_cast<double>(settings.integer("masses")) *
+                              static_cast<double>(settings.integer("fpu-steps"));
+    if (has_problem(settings, "fpu") && mass_steps > kMaxMassSteps) {
+      throw Error("--masses " + std::to_string(settings.integer("masses")) + " × --fpu-steps " +
+                  std::to_string(settings.integer("fpu-steps")) + ": " + format_value(mass_steps) +
+                  " mass-steps per simulator pass, more than the 1e+09 (about 30 s a pass) "
+                  "this experiment allows");
+    }
+  }
 
   void run(const Settings& settings, RunContext& context) const override {
     const auto iterations = static_cast<int>(settings.integer("iters"));

@@ -83,6 +83,18 @@ class Hostile : public Cli {
     return pid;
   }
 
+  // Sends SIGTERM to `pid` half a second after it started and waits for it: its exit status
+  // and the seconds from the signal to its end.
+  static std::pair<int, double> terminate_after_half_a_second(pid_t pid) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    const auto signalled = std::chrono::steady_clock::now();
+    ::kill(pid, SIGTERM);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return {status,
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count()};
+  }
+
   std::size_t entries() const {
     return static_cast<std::size_t>(
         std::distance(fs::directory_iterator(dir_), fs::directory_iterator()));
@@ -245,6 +257,90 @@ TEST_F(Hostile, SizesBeyondMemoryOrRangeAreRefusedNamingTheValue) {
   expect_refused("bench hig-toy --steps 9223372036854775807", "--steps: must be in [1, 1000000]");
 }
 
+// Every size of time-reversal is checked before anything runs: against its range, the work of
+// one simulator pass, and the memory its runs keep.
+TEST_F(Hostile, TimeReversalSizesBeyondTimeOrMemoryAreRefusedAtOnce) {
+  expect_refused_promptly("run time-reversal --iters 1000000000",
+                          "--iters: 1000000000 (12 runs keeping every iterate) needs ");
+  expect_refused_promptly("run time-reversal --masses 100000000",
+                          "--masses 100000000 × --fpu-steps 100: 1e+10 mass-steps per simulator "
+                          "pass, more than the 1e+09");
+  expect_refused_promptly("run time-reversal --masses 1152921504606846976",
+                          "--masses: must be in [1, 1000000000], got '1152921504606846976'");
+  expect_refused_promptly("run time-reversal --fpu-steps 9223372036854775807",
+                          "--fpu-steps: must be in [1, 10000000], got '9223372036854775807'");
+  expect_refused_promptly("run time-reversal --osc-steps 2000000",
+                          "--osc-steps: must be in [1, 1000000]");
+  // Gauss-Newton's Jacobian of a 10⁵-mass chain keeps 2·10⁵ trajectories; PG through the time
+  // reversal alone needs one.
+  expect_refused_promptly("run time-reversal --masses 100000",
+                          "--masses: 100000 (items of at least ");
+  expect_refused_promptly("run time-reversal --problems fpu --masses 1000 --fpu-steps 1000000",
+                          "--masses: 1000 (items of at least 14.9 GiB each) needs 14.5 TiB");
+  const Outcome alone = run(
+      "run time-reversal --problems fpu --masses 100000 --optimizers pg --pg-inverse "
+      "time_reversal --iters 1 --out alone");
+  EXPECT_EQ(alone.exit_code, 0) << alone.err;
+}
+
+// The learning experiments check a given --batch against the memory and the work of a
+// Gauss-Newton or HIG step, and --eval-every against the evaluations the limits allow.
+TEST_F(Hostile, LearningStepsAndEvaluationsBeyondTimeOrMemoryAreRefused) {
+  expect_refused_promptly("run heat-inverse --optimizers hig --batch 4096",
+                          "--batch: 4096 (a gn or hig step forms a 33088² matrix from 262144 "
+                          "Jacobian rows of 33088 weights) needs ");
+  expect_refused_promptly("run heat-inverse --optimizers adam,gn --batch 128",
+                          "--batch: 128 (a gn or hig step forms a 8192² matrix from 8192 Jacobian "
+                          "rows of 33088 weights) takes 2.77e+12 multiply-adds, more than the "
+                          "1e+12");
+  expect_refused_promptly("run hig-toy --iters 1000000000 --eval-every 1",
+                          "--eval-every: 1 (1e+09 iterations, each run keeping every evaluation) "
+                          "needs ");
+  expect_refused_promptly("run poisson --epochs 10000000000",
+                          "--epochs: must be in [1, 1000000000]");
+  // Rules without a Jacobian take any batch the samples allow.
+  const Outcome adam = run("run heat-inverse --optimizers adam --batch 4096 --iters 1 "
+                           "--train-size 16 --test-size 8 --out adam");
+  EXPECT_EQ(adam.exit_code, 0) << adam.err;
+}
+
+// A stop request during one long simulation ends it at the simulator's next time step: the
+// first forward pass of a chain of 10⁷ steps takes seconds, the process ends within a second of
+// SIGTERM, at a stop point (not killed after the grace period), and keeps nothing.
+TEST_F(Hostile, AStopSignalEndsALongSimulationAtItsNextTimeStep) {
+  const pid_t pid = spawn(
+      "run time-reversal --problems fpu --fpu-steps 10000000 --optimizers pg --pg-inverse "
+      "time_reversal --out long");
+  const auto [status, seconds] = terminate_after_half_a_second(pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM);
+  EXPECT_LT(seconds, 1.0);
+  const std::string err = read_file(configs_ / "spawned.err");
+  EXPECT_NE(err.find("physgrad: fpu_chain: stopped on request; nothing was kept"),
+            std::string::npos)
+      << err;
+  EXPECT_FALSE(fs::exists(dir_ / "long"));
+}
+
+// In a learning run the stop inside a step drops that step and saves the state before it.
+TEST_F(Hostile, AStopSignalInsideALongTrainingStepSavesTheStateBeforeIt) {
+  const std::string args =
+      "run quantum-dipole --optimizers adam --train-size 16 --test-size 8 --batch 16 --steps "
+      "20000 --iters 5 --eval-every 100 --checkpoint-every 1 --out part";
+  const pid_t pid = spawn(args);
+  // The checkpoint after step 1 is written just before step 2 (about 0.7 s) begins.
+  const int status =
+      interrupt_when(pid, dir_ / "part" / "checkpoint.pgc", "\"iterations\":1", SIGTERM);
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM);
+  const std::string err = read_file(configs_ / "spawned.err");
+  EXPECT_NE(err.find("stopped on request during iteration 2 (not applied); checkpoint kept"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(read_file(dir_ / "part" / "checkpoint.pgc").find("\"iterations\":1"),
+            std::string::npos);
+}
+
 // Numbers at the ends of their range: a subnormal is read as itself, a real that would read 0 or
 // overflow and a whole number beyond 64 bits are named, and settings whose untrained loss
 // overflows name the run.
@@ -289,13 +385,7 @@ TEST_F(Hostile, AStopSignalEndsAProcessThatNeverReachesAStopPoint) {
   ::setenv("PHYSGRAD_STOP_GRACE", "1", 1);
   const pid_t pid = spawn("run poisson --train-size 200000 --iters 1 --out busy");
   ::unsetenv("PHYSGRAD_STOP_GRACE");
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  const auto signalled = std::chrono::steady_clock::now();
-  ::kill(pid, SIGTERM);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  const auto [status, seconds] = terminate_after_half_a_second(pid);
   ASSERT_TRUE(WIFSIGNALED(status)) << status;
   EXPECT_EQ(WTERMSIG(status), SIGTERM);
   EXPECT_GE(seconds, 0.9);
