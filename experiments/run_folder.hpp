@@ -23,8 +23,8 @@ namespace physgrad::experiments {
 inline constexpr const char* kConfigFile = "config.json";
 inline constexpr const char* kSummaryFile = "summary.json";
 
-// A path a user typed, checked and resolved: no control characters, trailing slashes dropped,
-// symbolic links to folders followed (a dangling or looping link, or a file, is refused).
+// A path a user typed, checked and resolved: not blank, no control characters, trailing slashes
+// dropped, symbolic links to folders followed (a dangling or looping link, or a file, is refused).
 struct FolderPath {
   std::string shown;           // as typed, without trailing slashes: used in messages
   std::filesystem::path path;  // absolute, symbolic links resolved

@@ -149,8 +149,10 @@ int open_locked(const fs::path& path, const std::string& what) {
 }  // namespace
 
 FolderPath locate_folder(const std::string& text, const std::string& option) {
-  if (text.empty()) throw Error(option + ": the folder name is empty");
   const std::string named = option + ": " + in_quotes(text);
+  if (text.find_first_not_of(" \t\n\v\f\r") == std::string::npos) {
+    throw Error(named + " is blank; name a folder");
+  }
   if (const std::string problem = text_problem(text); !problem.empty()) {
     throw Error(named + " " + problem);
   }

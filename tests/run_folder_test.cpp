@@ -105,6 +105,20 @@ TEST_F(RunFolderCli, AControlCharacterInAFolderNameIsRefused) {
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
 }
 
+TEST_F(RunFolderCli, ABlankFolderNameIsRefusedNotTakenForTheDefault) {
+  // The shell words after --out, and the value they give.
+  const std::vector<std::pair<std::string, std::string>> blanks = {
+      {" ' '", " "}, {" '   '", "   "}, {" ''", ""}, {"=' '", " "}};
+  for (const auto& [words, value] : blanks) {
+    expect_refused("run comparison --iters 2 --out" + words,
+                   "--out: '" + value + "' is blank; name a folder");
+  }
+  expect_refused("run comparison --config " + write_config("blank.json", "{\"out\": \"  \"}"),
+                 "--out: '  ' is blank");
+  expect_refused("resume ' '", "resume: ' ' is blank");
+  EXPECT_TRUE(fs::is_empty(dir_));  // no runs/comparison-<timestamp> either
+}
+
 TEST_F(RunFolderCli, ConcurrentRunsOnOneFolderLeaveOneResultAndNeverPointToResume) {
   std::vector<pid_t> pids;
   for (int i = 0; i < 3; ++i) {

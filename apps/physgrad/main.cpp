@@ -191,11 +191,20 @@ void print_rules(bool markdown) {
 
 // Claims the run folder: --out, or a new runs/NAME-<timestamp>[-N]. Only the writing rank
 // claims one (under mpirun every rank trains its share; rank 0 alone prints and writes).
+// A blank --out is refused (locate_folder) as it was typed, from `given`: the settings hold it
+// without surrounding blanks.
 std::optional<ex::RunFolder> claim_new_folder(const ex::Experiment& experiment,
-                                              const ex::Settings& settings) {
+                                              const ex::Settings& settings,
+                                              const ex::OptionTexts& given) {
   if (!physgrad::cli::is_writer()) return std::nullopt;
-  if (settings.has("out") && !settings.text("out").empty()) {
-    return ex::RunFolder::create(ex::locate_folder(settings.text("out"), "--out"));
+  if (settings.has("out")) {
+    std::string out = settings.text("out");
+    if (out.empty()) {
+      for (const auto& [name, text] : given) {
+        if (name == "out") out = text;  // the last one counts, as in the settings
+      }
+    }
+    return ex::RunFolder::create(ex::locate_folder(out, "--out"));
   }
   return ex::RunFolder::create_unique("runs", experiment.name() + "-" + timestamp());
 }
@@ -257,7 +266,7 @@ int run_experiment(const ex::Experiment& experiment, const ex::Settings& setting
 int start_run(const ex::Experiment& experiment, const ex::OptionTexts& given,
               const std::string& command_line) {
   const ex::Settings settings = ex::resolve_settings(experiment, given);
-  std::optional<ex::RunFolder> folder = claim_new_folder(experiment, settings);
+  std::optional<ex::RunFolder> folder = claim_new_folder(experiment, settings, given);
   return run_experiment(experiment, settings, command_line, folder,
                         folder ? folder->path() : fs::path());
 }
