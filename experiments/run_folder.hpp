@@ -5,8 +5,9 @@
 // checkpoint removed after it. A folder is therefore always in one of four states, whatever
 // moment a run is killed at:
 //   empty       nothing of a run (scratch of a killed one aside): a new run may take it;
-//   unfinished  config.json, and checkpoint.pgc if a learning run saved one: `physgrad resume`
-//               continues it (from the start of the run when there is no checkpoint);
+//   unfinished  config.json, checkpoint.pgc if a learning run saved one, and the results a commit
+//               cut short moved in: `physgrad resume` continues it (from the start of the run
+//               when there is no checkpoint);
 //   finished    summary.json and no checkpoint: never written again;
 //   foreign     anything else: refused.
 // Nothing is ever removed but the run's own files, and only while the lock is held.
@@ -42,7 +43,7 @@ class RunFolder {
   // --out: two runs started in the same second get a folder each).
   static RunFolder create_unique(const std::filesystem::path& parent, const std::string& stem);
   // Claims the folder of an unfinished run for `physgrad resume`. Throws Error when it is
-  // finished, holds no run, or another process uses it.
+  // finished, holds no run, holds a file that is not the run's, or another process uses it.
   static RunFolder reopen(const FolderPath& folder);
 
   RunFolder(RunFolder&& other) noexcept;
@@ -87,6 +88,9 @@ nlohmann::json config_document(const Experiment& experiment, const Settings& set
 void write_run_folder(const std::filesystem::path& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
                       const std::string& command_line);
+// True for the name of a file write_run_folder() writes: what a commit cut short leaves in an
+// unfinished folder besides config.json and the checkpoint.
+bool is_result_file(const std::string& name);
 
 // The summary.json document: {"experiment": NAME, "runs": [...]}.
 nlohmann::json summary_document(const Experiment& experiment, const RunContext& context);

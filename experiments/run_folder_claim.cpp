@@ -35,8 +35,11 @@ struct Contents {
   bool checkpoint = false;
   bool summary = false;
   std::vector<std::string> scratch;  // staging folder and temporary files of a killed process
-  std::vector<std::string> other;    // results, or anything else
-  bool empty() const { return !config && !checkpoint && !summary && other.empty(); }
+  std::vector<std::string> results;  // the other files a run writes (a commit cut short)
+  std::vector<std::string> other;    // anything else, sorted
+  bool empty() const {
+    return !config && !checkpoint && !summary && results.empty() && other.empty();
+  }
   bool finished() const { return summary && !checkpoint; }
   bool unfinished() const { return config && !finished(); }
 };
@@ -54,11 +57,14 @@ Contents read_contents(const fs::path& folder, const std::string& shown) {
       contents.summary = true;
     } else if (name == kStaging || name == kPendingSummary || is_atomic_write_temp(name)) {
       contents.scratch.push_back(name);
+    } else if (is_result_file(name)) {
+      contents.results.push_back(name);
     } else {
       contents.other.push_back(name);
     }
   }
   if (error) throw Error(in_quotes(shown) + ": cannot list the folder: " + error.message());
+  std::sort(contents.other.begin(), contents.other.end());
   return contents;
 }
 
@@ -275,6 +281,11 @@ RunFolder RunFolder::reopen(const FolderPath& where) {
   if (!contents.unfinished()) {
     folder.ended_ = true;
     throw Error(what + " holds no run to resume (no " + kConfigFile + ")");
+  }
+  if (!contents.other.empty()) {
+    folder.ended_ = true;
+    throw Error(what + " holds " + in_quotes(contents.other.front()) +
+                ", which is no file of a run; move it out of the folder to resume the run");
   }
   remove_scratch(folder.path_, contents);
   return folder;

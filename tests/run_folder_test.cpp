@@ -119,6 +119,28 @@ TEST_F(RunFolderCli, ABlankFolderNameIsRefusedNotTakenForTheDefault) {
   EXPECT_TRUE(fs::is_empty(dir_));  // no runs/comparison-<timestamp> either
 }
 
+TEST_F(RunFolderCli, AnUnfinishedFolderWithAFileOfSomeoneElseIsNotResumed) {
+  make_reference();
+  ASSERT_EQ(run(kLearning + "u", "PHYSGRAD_FAULT=kill@checkpoint:3").exit_code, 128 + SIGKILL);
+  for (const std::string foreign : {"notes.txt", "metrics.csv.bak", "sub"}) {
+    if (foreign == "sub") {
+      fs::create_directory(dir_ / "u" / foreign);
+    } else {
+      std::ofstream(dir_ / "u" / foreign) << "mine";
+    }
+    const auto before = snapshot(dir_ / "u");
+    expect_refused("resume u", "resume: 'u' holds '" + foreign + "', which is no file of a run");
+    EXPECT_EQ(snapshot(dir_ / "u"), before);
+    EXPECT_TRUE(fs::exists(dir_ / "u" / foreign));
+    fs::remove(dir_ / "u" / foreign);
+  }
+  // What a commit cut short moved in is the run's own: such a folder resumes (see
+  // KilledAtAnyStepTheFolderResumesToTheSameResults); so does this one, once the file is gone.
+  const Outcome resumed = run("resume u");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  expect_same_results("u");
+}
+
 TEST_F(RunFolderCli, ConcurrentRunsOnOneFolderLeaveOneResultAndNeverPointToResume) {
   std::vector<pid_t> pids;
   for (int i = 0; i < 3; ++i) {
