@@ -9,8 +9,6 @@
 
 namespace physgrad::experiments {
 
-namespace fs = std::filesystem;
-
 namespace {
 
 constexpr const char* kMetricsFile = "metrics.csv";
@@ -72,24 +70,24 @@ bool is_result_file(const std::string& name) {
          name == kNetworksFile || name == kReportFile || is_figure_file(name);
 }
 
-void write_run_folder(const fs::path& staging, const Experiment& experiment,
+void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
                       const std::string& command_line) {
-  write_file_atomic(staging / kConfigFile,
+  write_file_atomic(staging, kConfigFile,
                     config_document(experiment, settings, command_line).dump(2) + "\n");
-  write_file_atomic(staging / kMetricsFile, metrics_csv(context));
-  write_file_atomic(staging / kSummaryFile, summary_document(experiment, context).dump(2) + "\n");
+  write_file_atomic(staging, kMetricsFile, metrics_csv(context));
+  write_file_atomic(staging, kSummaryFile, summary_document(experiment, context).dump(2) + "\n");
   for (const RunContext::Figure& figure : context.figures()) {
     if (!is_figure_file(figure.file)) {
       throw Error("figure file '" + figure.file + "': expected a name NAME.svg");
     }
-    write_file_atomic(staging / figure.file, figure.svg);
+    write_file_atomic(staging, figure.file, figure.svg);
   }
   if (!context.networks().empty()) {
-    write_file_atomic(staging / kNetworksFile,
+    write_file_atomic(staging, kNetworksFile,
                       nlohmann::json{{"networks", context.networks()}}.dump() + "\n");
   }
-  write_file_atomic(staging / kReportFile,
+  write_file_atomic(staging, kReportFile,
                     report_page_html(experiment, settings, context, command_line));
 }
 
