@@ -7,8 +7,6 @@
 
 namespace physgrad::experiments {
 
-namespace fs = std::filesystem;
-
 nlohmann::json RunKey::json() const {
   return {{"index", index}, {"optimizer", optimizer}, {"tag", tag}, {"seed", seed}};
 }
@@ -39,9 +37,9 @@ bool is_run(const nlohmann::json& entry, const RunKey& key) {
 
 }  // namespace
 
-ExperimentCheckpoint::ExperimentCheckpoint(fs::path folder, nlohmann::json config,
-                                           nlohmann::json resumed, bool writes)
-    : folder_(std::move(folder)), config_(std::move(config)), writes_(writes) {
+ExperimentCheckpoint::ExperimentCheckpoint(const FolderHandle* folder, nlohmann::json config,
+                                           nlohmann::json resumed)
+    : folder_(folder), config_(std::move(config)) {
   if (resumed.is_null()) return;
   const std::string experiment = string_from_json(resumed, "experiment");
   if (experiment != config_.at("experiment").get<std::string>()) {
@@ -121,8 +119,8 @@ void ExperimentCheckpoint::save_progress(const RunKey& key, const TrainerState& 
 }
 
 void ExperimentCheckpoint::write(const nlohmann::json& current) {
-  if (!writes_) return;
-  write_checkpoint_file(folder_ / kCheckpointFile,
+  if (folder_ == nullptr) return;
+  write_checkpoint_file(*folder_, kCheckpointFile,
                         {{"experiment", config_.at("experiment")},
                          {"settings", config_.at("settings")},
                          {"environment", environment_},

@@ -5,11 +5,11 @@
 // one where it stopped.
 #pragma once
 
-#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 
+#include "physgrad/folder_handle.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad::experiments {
@@ -34,12 +34,13 @@ struct FinishedRun {
 
 class ExperimentCheckpoint {
  public:
-  // `config` is the config.json document of the run; `resumed` a checkpoint document read back
-  // with read_checkpoint_file() (null for a fresh run); without `writes` (the other ranks of a
-  // data-parallel run) nothing is written. Throws Error when `resumed` is not the checkpoint of
-  // this experiment with these settings.
-  ExperimentCheckpoint(std::filesystem::path folder, nlohmann::json config,
-                       nlohmann::json resumed = nullptr, bool writes = true);
+  // `folder` is the run folder the checkpoint file is written into, through its handle; without
+  // one (the other ranks of a data-parallel run) nothing is written. `config` is the config.json
+  // document of the run; `resumed` a checkpoint document read back with read_checkpoint_file()
+  // (null for a fresh run). Throws Error when `resumed` is not the checkpoint of this experiment
+  // with these settings. `folder` must outlive the checkpoint.
+  ExperimentCheckpoint(const FolderHandle* folder, nlohmann::json config,
+                       nlohmann::json resumed = nullptr);
 
   // The run `key` as the resumed checkpoint has it: finished, or in progress. Throws Error when
   // the checkpoint holds another run at this position or an invalid state.
@@ -55,19 +56,17 @@ class ExperimentCheckpoint {
   // for each entry that differs from `environment` (empty when all agree).
   std::string set_environment(nlohmann::json environment);
 
-  const std::filesystem::path& folder() const { return folder_; }
   bool written() const { return written_; }  // the folder has a checkpoint file
 
  private:
   void write(const nlohmann::json& current);
 
-  std::filesystem::path folder_;
+  const FolderHandle* folder_ = nullptr;
   nlohmann::json config_;
   nlohmann::json finished_ = nlohmann::json::array();
   nlohmann::json resumed_current_;  // the run in progress when the checkpoint was taken
   nlohmann::json resumed_environment_;
   nlohmann::json environment_ = nlohmann::json::object();
-  bool writes_ = true;
   bool written_ = false;
 };
 

@@ -163,6 +163,14 @@ nlohmann::json read_config_document(const std::filesystem::path& path) {
   }
 }
 
+nlohmann::json read_config_document(const FolderHandle& folder, const std::string& name) {
+  try {
+    return parse_config_json(read_regular_file(folder, name, kMaxBytes));
+  } catch (const Error& e) {
+    throw Error("config file '" + folder.shown(name) + "': " + e.what());
+  }
+}
+
 OptionTexts read_config_file(const Experiment& experiment, const std::filesystem::path& path) {
   const nlohmann::json document = read_config_document(path);
   try {

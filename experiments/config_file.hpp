@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "experiment.hpp"
+#include "physgrad/folder_handle.hpp"
 
 namespace physgrad::experiments {
 
@@ -28,6 +29,8 @@ OptionTexts config_options(const Experiment& experiment, const nlohmann::json& d
 // Reads and parses a config file (without checking its values); errors start with
 // "config file 'PATH': ".
 nlohmann::json read_config_document(const std::filesystem::path& path);
+// The same for the file `name` in `folder`, opened through the folder's handle.
+nlohmann::json read_config_document(const FolderHandle& folder, const std::string& name);
 // Reads, parses and checks a config file; errors start with "config file 'PATH': ".
 OptionTexts read_config_file(const Experiment& experiment, const std::filesystem::path& path);
 

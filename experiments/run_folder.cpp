@@ -9,9 +9,17 @@
 
 namespace physgrad::experiments {
 
-namespace fs = std::filesystem;
-
 namespace {
+
+constexpr const char* kMetricsFile = "metrics.csv";
+constexpr const char* kNetworksFile = "networks.json";
+constexpr const char* kReportFile = "report.html";
+
+// A figure: NAME.svg, a plain file name that is not hidden.
+bool is_figure_file(const std::string& name) {
+  return name.size() > 4 && name.ends_with(".svg") && name[0] != '.' &&
+         name.find('/') == std::string::npos;
+}
 
 CsvCell to_cell(const nlohmann::json& value) {
   if (value.is_number_integer()) return value.get<long long>();
@@ -57,21 +65,29 @@ nlohmann::json summary_document(const Experiment& experiment, const RunContext& 
   return {{"experiment", experiment.name()}, {"runs", context.runs()}};
 }
 
-void write_run_folder(const fs::path& staging, const Experiment& experiment,
+bool is_result_file(const std::string& name) {
+  return name == kConfigFile || name == kMetricsFile || name == kSummaryFile ||
+         name == kNetworksFile || name == kReportFile || is_figure_file(name);
+}
+
+void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
                       const std::string& command_line) {
-  write_file_atomic(staging / kConfigFile,
+  write_file_atomic(staging, kConfigFile,
                     config_document(experiment, settings, command_line).dump(2) + "\n");
-  write_file_atomic(staging / "metrics.csv", metrics_csv(context));
-  write_file_atomic(staging / kSummaryFile, summary_document(experiment, context).dump(2) + "\n");
+  write_file_atomic(staging, kMetricsFile, metrics_csv(context));
+  write_file_atomic(staging, kSummaryFile, summary_document(experiment, context).dump(2) + "\n");
   for (const RunContext::Figure& figure : context.figures()) {
-    write_file_atomic(staging / figure.file, figure.svg);
+    if (!is_figure_file(figure.file)) {
+      throw Error("figure file '" + figure.file + "': expected a name NAME.svg");
+    }
+    write_file_atomic(staging, figure.file, figure.svg);
   }
   if (!context.networks().empty()) {
-    write_file_atomic(staging / "networks.json",
+    write_file_atomic(staging, kNetworksFile,
                       nlohmann::json{{"networks", context.networks()}}.dump() + "\n");
   }
-  write_file_atomic(staging / "report.html",
+  write_file_atomic(staging, kReportFile,
                     report_page_html(experiment, settings, context, command_line));
 }
 

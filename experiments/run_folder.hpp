@@ -5,11 +5,15 @@
 // checkpoint removed after it. A folder is therefore always in one of four states, whatever
 // moment a run is killed at:
 //   empty       nothing of a run (scratch of a killed one aside): a new run may take it;
-//   unfinished  config.json, and checkpoint.pgc if a learning run saved one: `physgrad resume`
-//               continues it (from the start of the run when there is no checkpoint);
+//   unfinished  config.json, checkpoint.pgc if a learning run saved one, and the results a commit
+//               cut short moved in: `physgrad resume` continues it (from the start of the run
+//               when there is no checkpoint);
 //   finished    summary.json and no checkpoint: never written again;
 //   foreign     anything else: refused.
-// Nothing is ever removed but the run's own files, and only while the lock is held.
+// Every write, rename and removal of a run goes through the handle of the folder it claimed
+// (openat, renameat, unlinkat), never through its path: when the folder is renamed mid-run and
+// another one put at its path, the run's files follow the folder it claimed and the other one is
+// not touched. Nothing is ever removed but the run's own files, and only while the lock is held.
 #pragma once
 
 #include <filesystem>
@@ -17,14 +21,15 @@
 #include <vector>
 
 #include "experiment.hpp"
+#include "physgrad/folder_handle.hpp"
 
 namespace physgrad::experiments {
 
 inline constexpr const char* kConfigFile = "config.json";
 inline constexpr const char* kSummaryFile = "summary.json";
 
-// A path a user typed, checked and resolved: no control characters, trailing slashes dropped,
-// symbolic links to folders followed (a dangling or looping link, or a file, is refused).
+// A path a user typed, checked and resolved: not blank, no control characters, trailing slashes
+// dropped, symbolic links to folders followed (a dangling or looping link, or a file, is refused).
 struct FolderPath {
   std::string shown;           // as typed, without trailing slashes: used in messages
   std::filesystem::path path;  // absolute, symbolic links resolved
@@ -42,19 +47,23 @@ class RunFolder {
   // --out: two runs started in the same second get a folder each).
   static RunFolder create_unique(const std::filesystem::path& parent, const std::string& stem);
   // Claims the folder of an unfinished run for `physgrad resume`. Throws Error when it is
-  // finished, holds no run, or another process uses it.
+  // finished, holds no run, holds a file that is not the run's, or another process uses it.
   static RunFolder reopen(const FolderPath& folder);
 
   RunFolder(RunFolder&& other) noexcept;
   RunFolder& operator=(RunFolder&&) = delete;
   ~RunFolder();  // abandon() unless committed, then releases the lock
 
-  const std::filesystem::path& path() const { return path_; }
-  const std::string& shown() const { return shown_; }
+  // The claimed folder, locked: what the run writes and reads goes through it.
+  const FolderHandle& handle() const { return folder_; }
+  const std::string& shown() const { return folder_.shown(); }
+  // The folder as messages name it: as typed, or where it is now when it has been moved since it
+  // was claimed.
+  std::string shown_now() const;
   bool resuming() const { return resuming_; }
 
   // An empty folder OUT/.staging for the results (made anew on each call).
-  std::filesystem::path staging() const;
+  const FolderHandle& staging();
   // Moves the staged files into the folder (summary.json last), then removes the checkpoint
   // and the staging folder: the folder is finished.
   void commit();
@@ -65,11 +74,13 @@ class RunFolder {
   std::string abandon() noexcept;
 
  private:
-  RunFolder(FolderPath where, int lock_fd, bool resuming);
+  RunFolder(const FolderPath& where, FolderHandle folder, bool resuming);
+  // Throws Error "'FOLDER': cannot STEP: REASON" (err: the errno of the failed call).
+  [[noreturn]] void fail(const std::string& step, int err) const;
 
-  std::filesystem::path path_;
-  std::string shown_;
-  int lock_fd_ = -1;
+  std::filesystem::path path_;  // where the folder was claimed (it may be moved since)
+  FolderHandle folder_;         // holds the lock
+  FolderHandle staging_;
   bool resuming_ = false;
   bool created_ = false;                              // this process made the folder
   std::vector<std::filesystem::path> created_parents_;  // innermost first
@@ -83,18 +94,24 @@ nlohmann::json config_document(const Experiment& experiment, const Settings& set
                                const std::string& command_line);
 
 // Writes config.json, metrics.csv, summary.json, the figures, networks.json and report.html
-// into `staging`.
-void write_run_folder(const std::filesystem::path& staging, const Experiment& experiment,
+// into `staging`, through its handle.
+void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
                       const std::string& command_line);
+// True for the name of a file write_run_folder() writes: what a commit cut short leaves in an
+// unfinished folder besides config.json and the checkpoint.
+bool is_result_file(const std::string& name);
 
 // The summary.json document: {"experiment": NAME, "runs": [...]}.
 nlohmann::json summary_document(const Experiment& experiment, const RunContext& context);
 
 // Fault injection for tests: with PHYSGRAD_FAULT=ACTION@NAME:K the K-th pass through the point
-// NAME ("claimed": the folder is claimed and config.json written; "checkpoint": a checkpoint
-// was written; "commit": a result was moved into place) kills the process (ACTION "kill",
-// SIGKILL) or throws an Error ("fail"). Does nothing without the variable.
+// NAME ("claimed": the folder is claimed, and a new run's config.json written; "checkpoint": a
+// checkpoint was written; "commit": a result was moved into place) kills the process (ACTION
+// "kill", SIGKILL), throws an Error ("fail"), or stops it ("stop", SIGSTOP: it waits, exactly
+// there, until it gets SIGCONT; a test that sees it stopped with waitpid(WUNTRACED) changes the
+// folders meanwhile, at a known step instead of after a guessed sleep). Does nothing without the
+// variable.
 void fault_point(const char* name);
 
 }  // namespace physgrad::experiments

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <climits>
 #include <cstdlib>
 #include <cstring>
 #include <map>
@@ -35,17 +36,18 @@ struct Contents {
   bool checkpoint = false;
   bool summary = false;
   std::vector<std::string> scratch;  // staging folder and temporary files of a killed process
-  std::vector<std::string> other;    // results, or anything else
-  bool empty() const { return !config && !checkpoint && !summary && other.empty(); }
+  std::vector<std::string> results;  // the other files a run writes (a commit cut short)
+  std::vector<std::string> other;    // anything else, sorted
+  bool empty() const {
+    return !config && !checkpoint && !summary && results.empty() && other.empty();
+  }
   bool finished() const { return summary && !checkpoint; }
   bool unfinished() const { return config && !finished(); }
 };
 
-Contents read_contents(const fs::path& folder, const std::string& shown) {
+Contents read_contents(const FolderHandle& folder) {
   Contents contents;
-  std::error_code error;
-  for (fs::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
-    const std::string name = it->path().filename().string();
+  for (const std::string& name : folder.names()) {
     if (name == kConfigFile) {
       contents.config = true;
     } else if (name == kCheckpointFile) {
@@ -54,17 +56,18 @@ Contents read_contents(const fs::path& folder, const std::string& shown) {
       contents.summary = true;
     } else if (name == kStaging || name == kPendingSummary || is_atomic_write_temp(name)) {
       contents.scratch.push_back(name);
+    } else if (is_result_file(name)) {
+      contents.results.push_back(name);
     } else {
       contents.other.push_back(name);
     }
   }
-  if (error) throw Error(in_quotes(shown) + ": cannot list the folder: " + error.message());
+  std::sort(contents.other.begin(), contents.other.end());
   return contents;
 }
 
-void remove_scratch(const fs::path& folder, const Contents& contents) {
-  std::error_code ignored;
-  for (const std::string& name : contents.scratch) fs::remove_all(folder / name, ignored);
+void remove_scratch(const FolderHandle& folder, const Contents& contents) {
+  for (const std::string& name : contents.scratch) folder.remove_all(name);
 }
 
 // Removes the folders in `folders` (innermost first) while they are empty.
@@ -118,30 +121,26 @@ void refuse_inside_run(const fs::path& path, const std::string& what) {
   }
 }
 
-// Opens `path` and takes its lock; -1 when there is no folder there (any more). The identity
-// check catches a folder removed or replaced between the open and the lock.
-int open_locked(const fs::path& path, const std::string& what) {
+// Opens `path` and takes its lock; no handle when there is no folder there (any more). The
+// identity check catches a folder removed or replaced between the open and the lock.
+FolderHandle open_locked(const fs::path& path, const std::string& shown, const std::string& what) {
   for (int attempt = 0; attempt < 16; ++attempt) {
     const int fd = ::open(path.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
     if (fd < 0) {
-      if (errno == ENOENT) return -1;
-      throw Error(what + ": cannot open the folder: " + system_reason(errno));
+      const int err = errno;
+      if (err == ENOENT) return {};
+      throw Error(what + ": cannot open the folder: " + system_reason(err));
     }
+    FolderHandle folder(fd, shown);
     if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
       const int err = errno;
-      ::close(fd);
       if (err == EWOULDBLOCK) {
         throw Error(what + " is in use by another physgrad process; wait for it to end or choose "
                            "another folder");
       }
       throw Error(what + ": cannot lock the folder: " + system_reason(err));
     }
-    struct stat held {}, now {};
-    if (::fstat(fd, &held) == 0 && ::stat(path.c_str(), &now) == 0 &&
-        held.st_dev == now.st_dev && held.st_ino == now.st_ino) {
-      return fd;
-    }
-    ::close(fd);
+    if (folder.is_at(path)) return folder;
   }
   throw Error(what + ": the folder keeps being replaced by another process");
 }
@@ -149,8 +148,10 @@ int open_locked(const fs::path& path, const std::string& what) {
 }  // namespace
 
 FolderPath locate_folder(const std::string& text, const std::string& option) {
-  if (text.empty()) throw Error(option + ": the folder name is empty");
   const std::string named = option + ": " + in_quotes(text);
+  if (text.find_first_not_of(" \t\n\v\f\r") == std::string::npos) {
+    throw Error(named + " is blank; name a folder");
+  }
   if (const std::string problem = text_problem(text); !problem.empty()) {
     throw Error(named + " " + problem);
   }
@@ -171,16 +172,13 @@ FolderPath locate_folder(const std::string& text, const std::string& option) {
   return where;
 }
 
-RunFolder::RunFolder(FolderPath where, int lock_fd, bool resuming)
-    : path_(std::move(where.path)),
-      shown_(std::move(where.shown)),
-      lock_fd_(lock_fd),
-      resuming_(resuming) {}
+RunFolder::RunFolder(const FolderPath& where, FolderHandle folder, bool resuming)
+    : path_(where.path), folder_(std::move(folder)), resuming_(resuming) {}
 
 RunFolder::RunFolder(RunFolder&& other) noexcept
     : path_(std::move(other.path_)),
-      shown_(std::move(other.shown_)),
-      lock_fd_(std::exchange(other.lock_fd_, -1)),
+      folder_(std::move(other.folder_)),
+      staging_(std::move(other.staging_)),
       resuming_(other.resuming_),
       created_(other.created_),
       created_parents_(std::move(other.created_parents_)),
@@ -190,7 +188,6 @@ RunFolder::RunFolder(RunFolder&& other) noexcept
 
 RunFolder::~RunFolder() {
   if (!ended_) abandon();
-  if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
 RunFolder RunFolder::create(const FolderPath& out) {
@@ -204,18 +201,18 @@ RunFolder RunFolder::create(const FolderPath& out) {
       remove_empty(parents);
       throw Error(what + ": cannot create the folder: " + system_reason(err));
     }
-    int fd = -1;
+    FolderHandle handle;
     try {
-      fd = open_locked(out.path, what);
+      handle = open_locked(out.path, out.shown, what);
     } catch (const Error&) {
       remove_empty(parents);
       throw;
     }
-    if (fd < 0) continue;  // removed again before it could be opened
-    RunFolder folder(out, fd, false);
+    if (!handle.is_open()) continue;  // removed again before it could be opened
+    RunFolder folder(out, std::move(handle), false);
     folder.created_ = made;
     folder.created_parents_ = std::move(parents);
-    const Contents contents = read_contents(folder.path_, out.shown);
+    const Contents contents = read_contents(folder.folder_);
     if (!contents.empty()) {
       folder.ended_ = true;  // not ours: leave it exactly as it is
       remove_empty(folder.created_parents_);
@@ -228,7 +225,7 @@ RunFolder RunFolder::create(const FolderPath& out) {
       }
       throw Error(what + " already exists and is not empty");
     }
-    remove_scratch(folder.path_, contents);
+    remove_scratch(folder.folder_, contents);
     return folder;
   }
   remove_empty(parents);
@@ -242,16 +239,16 @@ RunFolder RunFolder::create_unique(const fs::path& parent, const std::string& st
   for (int n = 1; n <= 1000; ++n) {
     std::string suffix;
     if (n > 1) suffix.append("-").append(std::to_string(n));
-    FolderPath where{first.shown + suffix, fs::path(first.path.string() + suffix)};
+    const FolderPath where{first.shown + suffix, fs::path(first.path.string() + suffix)};
     if (::mkdir(where.path.c_str(), 0777) != 0) {
       if (errno == EEXIST) continue;
       const int err = errno;
       remove_empty(parents);
       throw Error("--out: cannot create " + in_quotes(where.shown) + ": " + system_reason(err));
     }
-    const int fd = open_locked(where.path, "--out: " + in_quotes(where.shown));
-    if (fd < 0) continue;
-    RunFolder folder(std::move(where), fd, false);
+    FolderHandle handle = open_locked(where.path, where.shown, "--out: " + in_quotes(where.shown));
+    if (!handle.is_open()) continue;
+    RunFolder folder(where, std::move(handle), false);
     folder.created_ = true;
     folder.created_parents_ = std::move(parents);
     return folder;
@@ -262,70 +259,82 @@ RunFolder RunFolder::create_unique(const fs::path& parent, const std::string& st
 
 RunFolder RunFolder::reopen(const FolderPath& where) {
   const std::string what = "resume: " + in_quotes(where.shown);
-  const int fd = open_locked(where.path, what);
-  if (fd < 0) throw Error(what + " does not exist");
-  RunFolder folder(where, fd, true);
-  const Contents contents = read_contents(folder.path_, where.shown);
+  FolderHandle handle = open_locked(where.path, where.shown, what);
+  if (!handle.is_open()) throw Error(what + " does not exist");
+  RunFolder folder(where, std::move(handle), true);
+  const Contents contents = read_contents(folder.folder_);
+  folder.ended_ = true;  // until it is accepted: a refused folder is left exactly as it is
   if (contents.finished()) {
-    folder.ended_ = true;
     throw Error(what + " holds a finished run (" + kSummaryFile + "); there is nothing to resume");
   }
   if (!contents.unfinished()) {
-    folder.ended_ = true;
     throw Error(what + " holds no run to resume (no " + kConfigFile + ")");
   }
-  remove_scratch(folder.path_, contents);
+  if (!contents.other.empty()) {
+    throw Error(what + " holds " + in_quotes(contents.other.front()) +
+                ", which is no file of a run; move it out of the folder to resume the run");
+  }
+  folder.ended_ = false;
+  remove_scratch(folder.folder_, contents);
   return folder;
 }
 
-fs::path RunFolder::staging() const {
-  const fs::path staging = path_ / kStaging;
-  std::error_code error;
-  fs::remove_all(staging, error);
-  if (!fs::create_directory(staging, error) || error) {
-    throw Error(in_quotes(shown_) + ": cannot create the staging folder: " +
-                (error ? error.message() : "it exists"));
-  }
-  return staging;
+std::string RunFolder::shown_now() const {
+  if (folder_.is_at(path_)) return shown();
+  // Moved since: Linux names an open folder's present path in /proc/self/fd.
+  const std::string link = "/proc/self/fd/" + std::to_string(folder_.fd());
+  std::string now(PATH_MAX, '\0');
+  const ssize_t length = ::readlink(link.c_str(), now.data(), now.size());
+  if (length <= 0 || static_cast<std::size_t>(length) >= now.size()) return shown();
+  now.resize(static_cast<std::size_t>(length));
+  return now.ends_with(" (deleted)") ? shown() : now;
+}
+
+void RunFolder::fail(const std::string& step, int err) const {
+  throw Error(in_quotes(shown()) + ": cannot " + step + ": " + system_reason(err));
+}
+
+const FolderHandle& RunFolder::staging() {
+  staging_ = FolderHandle();
+  folder_.remove_all(kStaging);
+  if (::mkdirat(folder_.fd(), kStaging, 0777) != 0) fail("create the staging folder", errno);
+  staging_ = folder_.open_folder(kStaging);
+  return staging_;
 }
 
 void RunFolder::commit() {
-  const fs::path staging = path_ / kStaging;
-  std::vector<std::string> names;
-  std::error_code error;
-  for (fs::directory_iterator it(staging, error), end; !error && it != end; it.increment(error)) {
-    names.push_back(it->path().filename().string());
-  }
-  if (error) throw Error(in_quotes(shown_) + ": cannot list the staged results: " + error.message());
-  const auto move = [&](const fs::path& from, const std::string& to) {
-    if (::rename(from.c_str(), (path_ / to).c_str()) != 0) {
-      throw Error(in_quotes(shown_) + ": cannot move " + from.filename().string() +
-                  " into place: " + system_reason(errno));
+  if (!staging_.is_open()) throw Error(in_quotes(shown()) + ": there are no staged results");
+  std::vector<std::string> names = staging_.names();
+  const auto move = [&](const FolderHandle& from, const std::string& name, const std::string& to) {
+    if (::renameat(from.fd(), name.c_str(), folder_.fd(), to.c_str()) != 0) {
+      const int err = errno;
+      fail("move " + name + " into place", err);
     }
   };
   std::sort(names.begin(), names.end());
   for (const std::string& name : names) {
     if (name == kSummaryFile) continue;
-    move(staging / name, name);
+    move(staging_, name, name);
     moved_.push_back(name);
     fault_point("commit");
   }
   // summary.json marks the folder finished: it is parked under a scratch name so that the
   // staging folder is gone before it appears.
-  move(staging / kSummaryFile, kPendingSummary);
-  if (::rmdir(staging.c_str()) != 0) {
-    throw Error(in_quotes(shown_) + ": cannot remove the staging folder: " + system_reason(errno));
+  move(staging_, kSummaryFile, kPendingSummary);
+  staging_ = FolderHandle();
+  if (::unlinkat(folder_.fd(), kStaging, AT_REMOVEDIR) != 0) {
+    fail("remove the staging folder", errno);
   }
-  sync_directory(path_);
-  move(path_ / kPendingSummary, kSummaryFile);
+  folder_.sync();
+  move(folder_, kPendingSummary, kSummaryFile);
   moved_.push_back(kSummaryFile);
-  sync_directory(path_);
+  folder_.sync();
   fault_point("commit");
   // The last step: without its checkpoint the folder is finished.
-  if (::unlink((path_ / kCheckpointFile).c_str()) != 0 && errno != ENOENT) {
-    throw Error(in_quotes(shown_) + ": cannot remove the checkpoint: " + system_reason(errno));
+  if (::unlinkat(folder_.fd(), kCheckpointFile, 0) != 0 && errno != ENOENT) {
+    fail("remove the checkpoint", errno);
   }
-  sync_directory(path_);
+  folder_.sync();
   ended_ = true;
   ended_text_ = "finished";
 }
@@ -333,20 +342,23 @@ void RunFolder::commit() {
 std::string RunFolder::abandon() noexcept {
   if (ended_) return ended_text_;
   ended_ = true;
-  std::error_code error;
-  fs::remove_all(path_ / kStaging, error);
+  staging_ = FolderHandle();
+  folder_.remove_all(kStaging);
   try {
-    const Contents contents = read_contents(path_, shown_);
-    remove_scratch(path_, contents);
+    const Contents contents = read_contents(folder_);
+    remove_scratch(folder_, contents);
     if (contents.checkpoint) {
-      ended_text_ = "checkpoint kept, continue with: physgrad resume " + shown_;
+      ended_text_ = "checkpoint kept, continue with: physgrad resume " + shown_now();
     } else if (resuming_) {
-      ended_text_ = "the folder is kept; physgrad resume " + shown_ + " runs it again";
+      ended_text_ = "the folder is kept; physgrad resume " + shown_now() + " runs it again";
     } else {
       // A new run without a checkpoint: take back what this process wrote.
-      fs::remove(path_ / kConfigFile, error);
-      for (const std::string& name : moved_) fs::remove(path_ / name, error);
-      if (created_ && ::rmdir(path_.c_str()) == 0) remove_empty(created_parents_);
+      ::unlinkat(folder_.fd(), kConfigFile, 0);
+      for (const std::string& name : moved_) ::unlinkat(folder_.fd(), name.c_str(), 0);
+      // The folder itself only while its path still leads to it: one renamed away stays, empty.
+      if (created_ && folder_.is_at(path_) && ::rmdir(path_.c_str()) == 0) {
+        remove_empty(created_parents_);
+      }
       ended_text_ = "nothing was kept";
     }
   } catch (const std::exception& e) {
@@ -369,6 +381,7 @@ void fault_point(const char* name) {
   const long k = colon == std::string::npos ? 1 : std::atol(wanted.c_str() + colon + 1);
   if (++passes[name] != k) return;
   if (wanted.compare(0, at, "kill") == 0) ::kill(::getpid(), SIGKILL);
+  if (wanted.compare(0, at, "stop") == 0) ::raise(SIGSTOP);
   if (wanted.compare(0, at, "fail") == 0) {
     throw Error(std::string("injected failure at ") + name + " " + std::to_string(k));
   }

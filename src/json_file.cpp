@@ -126,9 +126,13 @@ class DocumentBuilder {
 
 }  // namespace
 
-std::string read_regular_file(const std::filesystem::path& path, std::size_t max_bytes) {
+namespace {
+
+// The file `name` relative to the folder `folder_fd` (AT_FDCWD: the working folder).
+std::string read_regular_file_at(int folder_fd, const char* name, std::size_t max_bytes) {
   // O_NONBLOCK: opening a FIFO does not wait for a writer; it is refused below.
-  const FileDescriptor file{::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC)};
+  const FileDescriptor file{
+      ::openat(folder_fd, name, O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC)};
   if (file.fd < 0) throw Error(std::string("cannot open: ") + std::strerror(errno));
   struct stat info {};
   if (::fstat(file.fd, &info) != 0) {
@@ -159,6 +163,17 @@ std::string read_regular_file(const std::filesystem::path& path, std::size_t max
   } while (more < 0 && errno == EINTR);
   if (more > 0) throw Error("grew while being read");
   return bytes;
+}
+
+}  // namespace
+
+std::string read_regular_file(const std::filesystem::path& path, std::size_t max_bytes) {
+  return read_regular_file_at(AT_FDCWD, path.c_str(), max_bytes);
+}
+
+std::string read_regular_file(const FolderHandle& folder, const std::string& name,
+                              std::size_t max_bytes) {
+  return read_regular_file_at(folder.fd(), name.c_str(), max_bytes);
 }
 
 json parse_json_text(std::string_view text, std::size_t max_depth) {

@@ -221,7 +221,7 @@ TEST_F(CheckpointFile, DamagedExperimentCheckpointsAreErrorsOnly) {
       {"current", {{"key", key.json()}, {"state", trainer_state_to_json(run.state)}}}};
   const Index count = run.network.num_parameters();
   {
-    const experiments::ExperimentCheckpoint checkpoint(dir_, config, good);
+    const experiments::ExperimentCheckpoint checkpoint(nullptr, config, good);
     ASSERT_TRUE(checkpoint.in_progress(key, count).has_value());
     EXPECT_FALSE(checkpoint.finished(key, count).has_value());
     const experiments::RunKey other{0, "hig", "λ=1", 0};
@@ -233,7 +233,7 @@ TEST_F(CheckpointFile, DamagedExperimentCheckpointsAreErrorsOnly) {
     nlohmann::json damaged = good;
     mutate(damaged, rng);
     try {
-      const experiments::ExperimentCheckpoint checkpoint(dir_, config, damaged);
+      const experiments::ExperimentCheckpoint checkpoint(nullptr, config, damaged);
       checkpoint.finished(key, count);
       checkpoint.in_progress(key, count);
     } catch (const Error&) {

@@ -1,7 +1,8 @@
 // A seeded random sequence of what users and accidents do to run folders — runs and resumes
 // spelled with trailing slashes, "." and symbolic links; SIGKILL at the steps that matter and at
 // random moments; SIGTERM; concurrent runs and resumes on one folder; a run of another
-// experiment; a folder deleted by hand — checked after every operation: a finished result never
+// experiment; a folder deleted by hand; a folder renamed away while its run is stopped at a step
+// and a finished folder put at its path — checked after every operation: a finished result never
 // changes, every folder is absent, empty, unfinished or finished, a process that finds no other
 // one alive never says "in use", and nothing appears outside the folders. At the end every
 // unfinished folder resumes, and every finished one holds exactly the results of an
@@ -137,7 +138,7 @@ TEST_F(RunFolderFuzz, SeededOperationsNeverLoseAFinishedResultNorLeaveAnUnresuma
     const bool finished_now = state_of(dir_ / folder) == State::kFinished;
     // The first round is a run killed at one of its first checkpoints, so that every sequence
     // has an unfinished folder with a checkpoint to continue.
-    switch (first ? 0 : finished_now && pick(2) == 0 ? 6 : pick(7)) {
+    switch (first ? 0 : finished_now && pick(2) == 0 ? 6 : pick(8)) {
       case 0: case 1: {  // a run or resume, perhaps killed at a step
         const bool resume_it = !first && resuming();
         const std::string fault = faults[first ? 2 : pick(faults.size())];
@@ -168,6 +169,45 @@ TEST_F(RunFolderFuzz, SeededOperationsNeverLoseAFinishedResultNorLeaveAnUnresuma
           pids.push_back(spawn(args, "", tags[i]));
         }
         for (std::size_t i = 0; i < n; ++i) exits.push_back(wait_for(pids[i], tags[i]));
+        break;
+      }
+      case 7: {  // stopped at a step, its folder renamed away and a finished one put at its path
+        const bool resume_it = resuming();
+        const std::string point = pick(3) == 0   ? "claimed:1"
+                                  : pick(2) == 0 ? "checkpoint:" + std::to_string(1 + pick(20))
+                                                 : "commit:" + std::to_string(1 + pick(14));
+        const std::string reference = pick(2) == 0 ? "ref-learning" : "ref-direct";
+        op = (resume_it ? resume : start) + " [stop@" + point + ", mv " + folder + " " + folder +
+             ".moved, cp -r " + reference + " " + folder + "]";
+        const pid_t pid = spawn(resume_it ? resume : start, "PHYSGRAD_FAULT=stop@" + point, "one");
+        int status = 0;
+        ::waitpid(pid, &status, WUNTRACED);
+        if (!WIFSTOPPED(status)) {  // refused, or it ended before the point
+          exits.push_back({WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status),
+                           read_file(configs_ / "one.err")});
+          break;
+        }
+        const fs::path moved = dir_ / (folder + ".moved");
+        fs::rename(dir_ / folder, moved);
+        fs::copy(dir_ / reference, dir_ / "copy", fs::copy_options::recursive);
+        fs::rename(dir_ / "copy", dir_ / folder);
+        finished[folder] = snapshot(dir_ / reference);  // checked below like any finished folder
+        ::kill(pid, SIGCONT);
+        exits.push_back(wait_for(pid, "one"));
+        // The run went on in the folder it claimed: finished with the reference results, or
+        // (failed) unfinished or empty; then the user removes it.
+        const State moved_state = state_of(moved);
+        EXPECT_NE(moved_state, State::kForeign);
+        if (exits.back().code == 0) {
+          EXPECT_EQ(moved_state, State::kFinished);
+          const nlohmann::json config = nlohmann::json::parse(read_file(moved / "config.json"));
+          EXPECT_EQ(metrics_without_time(moved),
+                    metrics_without_time(dir_ / (config["experiment"] == "hig-toy"
+                                                     ? "ref-learning"
+                                                     : "ref-direct")));
+        }
+        seen["renamed and replaced mid-run"]++;
+        fs::remove_all(moved);
         break;
       }
       default: {  // the user removes a folder by hand

@@ -48,6 +48,8 @@ class RunFolderCli : public Cli {
         << folder;
     EXPECT_TRUE(physgrad::testing::is_finished(dir_ / folder)) << folder;
   }
+  Outcome swap_during(const std::string& args, const std::string& point, const std::string& folder,
+                      const std::string& moved, const std::string& finished, int signal = 0);
   Outcome expect_refused(const std::string& args, const std::string& needle,
                          const std::string& subdir = "") {
     const Outcome outcome = run(args, "", subdir);
@@ -103,6 +105,42 @@ TEST_F(RunFolderCli, AControlCharacterInAFolderNameIsRefused) {
   EXPECT_EQ(one_line_count(outcome.err), 1) << outcome.err;
   EXPECT_EQ(read_file(dir_ / ".victim" / "keep.txt"), "keep");
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1);
+}
+
+TEST_F(RunFolderCli, ABlankFolderNameIsRefusedNotTakenForTheDefault) {
+  // The shell words after --out, and the value they give.
+  const std::vector<std::pair<std::string, std::string>> blanks = {
+      {" ' '", " "}, {" '   '", "   "}, {" ''", ""}, {"=' '", " "}};
+  for (const auto& [words, value] : blanks) {
+    expect_refused("run comparison --iters 2 --out" + words,
+                   "--out: '" + value + "' is blank; name a folder");
+  }
+  expect_refused("run comparison --config " + write_config("blank.json", "{\"out\": \"  \"}"),
+                 "--out: '  ' is blank");
+  expect_refused("resume ' '", "resume: ' ' is blank");
+  EXPECT_TRUE(fs::is_empty(dir_));  // no runs/comparison-<timestamp> either
+}
+
+TEST_F(RunFolderCli, AnUnfinishedFolderWithAFileOfSomeoneElseIsNotResumed) {
+  make_reference();
+  ASSERT_EQ(run(kLearning + "u", "PHYSGRAD_FAULT=kill@checkpoint:3").exit_code, 128 + SIGKILL);
+  for (const std::string foreign : {"notes.txt", "metrics.csv.bak", "sub"}) {
+    if (foreign == "sub") {
+      fs::create_directory(dir_ / "u" / foreign);
+    } else {
+      std::ofstream(dir_ / "u" / foreign) << "mine";
+    }
+    const auto before = snapshot(dir_ / "u");
+    expect_refused("resume u", "resume: 'u' holds '" + foreign + "', which is no file of a run");
+    EXPECT_EQ(snapshot(dir_ / "u"), before);
+    EXPECT_TRUE(fs::exists(dir_ / "u" / foreign));
+    fs::remove(dir_ / "u" / foreign);
+  }
+  // What a commit cut short moved in is the run's own: such a folder resumes (see
+  // KilledAtAnyStepTheFolderResumesToTheSameResults); so does this one, once the file is gone.
+  const Outcome resumed = run("resume u");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  expect_same_results("u");
 }
 
 TEST_F(RunFolderCli, ConcurrentRunsOnOneFolderLeaveOneResultAndNeverPointToResume) {
@@ -213,6 +251,82 @@ TEST_F(RunFolderCli, AFailedRunSaysWhatItKept) {
   EXPECT_NE(again.err.find("the folder is kept"), std::string::npos) << again.err;
   ASSERT_EQ(run("resume c").exit_code, 0);
   EXPECT_TRUE(physgrad::testing::is_finished(dir_ / "c"));
+}
+
+// Stops the run `args` at the fault point `point` (PHYSGRAD_FAULT=stop@POINT), renames its folder
+// `folder` to `moved` and puts a copy of the finished folder `finished` at its path, lets the
+// run go on (sending it `signal` first, unless 0) and returns its outcome.
+Outcome RunFolderCli::swap_during(const std::string& args, const std::string& point,
+                                  const std::string& folder, const std::string& moved,
+                                  const std::string& finished, int signal) {
+  const pid_t pid = spawn(args, "PHYSGRAD_FAULT=stop@" + point, "swapped");
+  int status = 0;
+  ::waitpid(pid, &status, WUNTRACED);
+  EXPECT_TRUE(WIFSTOPPED(status)) << args << " did not stop at " << point;
+  if (WIFSTOPPED(status)) {
+    fs::rename(dir_ / folder, dir_ / moved);
+    fs::copy(dir_ / finished, dir_ / "copy", fs::copy_options::recursive);
+    fs::rename(dir_ / "copy", dir_ / folder);
+    if (signal != 0) ::kill(pid, signal);  // delivered when it goes on
+    ::kill(pid, SIGCONT);
+    ::waitpid(pid, &status, 0);
+  }
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status),
+          read_file(configs_ / "swapped.out"), read_file(configs_ / "swapped.err")};
+}
+
+TEST_F(RunFolderCli, ARunRenamedAwayMidRunWritesIntoItsOwnFolderNeverIntoTheOneNowAtItsPath) {
+  make_reference();
+  ASSERT_EQ(run("run comparison --out victim").exit_code, 0);
+  const auto victim = snapshot(dir_ / "victim");
+  const int results = static_cast<int>(
+      std::distance(fs::directory_iterator(dir_ / "whole"), fs::directory_iterator()));
+  // Stopped after the claim (config.json only), between checkpoints, after the first result
+  // was moved in, and after summary.json (the checkpoint still there).
+  const std::vector<std::string> points = {"claimed:1", "checkpoint:5", "commit:1",
+                                           "commit:" + std::to_string(results)};
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::string folder = "run" + std::to_string(i);
+    const Outcome outcome =
+        swap_during(kLearning + folder, points[i], folder, folder + "-moved", "victim");
+    EXPECT_EQ(outcome.exit_code, 0) << points[i] << ": " << outcome.err;
+    EXPECT_EQ(snapshot(dir_ / folder), victim) << points[i] << ": the folder now at the path changed";
+    expect_same_results(folder + "-moved");
+    EXPECT_NE(outcome.out.find("report: " + (dir_ / (folder + "-moved") / "report.html").string()),
+              std::string::npos)
+        << outcome.out;
+  }
+  // A resumed run: stopped after it claimed the folder (before it read config.json and the
+  // checkpoint), between checkpoints, and during its commit.
+  const std::vector<std::string> resume_points = {"claimed:1", "checkpoint:3", "commit:2"};
+  for (std::size_t i = 0; i < resume_points.size(); ++i) {
+    const std::string folder = "resumed" + std::to_string(i);
+    ASSERT_EQ(run(kLearning + folder, "PHYSGRAD_FAULT=kill@checkpoint:8").exit_code, 128 + SIGKILL);
+    const Outcome outcome =
+        swap_during("resume " + folder, resume_points[i], folder, folder + "-moved", "victim");
+    EXPECT_EQ(outcome.exit_code, 0) << resume_points[i] << ": " << outcome.err;
+    EXPECT_EQ(snapshot(dir_ / folder), victim) << resume_points[i];
+    expect_same_results(folder + "-moved");
+  }
+  // A run stopped by SIGTERM after the swap: a direct run takes back its config.json from its
+  // own folder (which stays, empty: the folder at its path is not the one it made); a learning
+  // run leaves its checkpoint there, and that folder resumes.
+  const Outcome direct =
+      swap_during("run comparison --out d", "claimed:1", "d", "d-moved", "victim", SIGTERM);
+  EXPECT_EQ(direct.exit_code, 128 + SIGTERM) << direct.err;
+  EXPECT_NE(direct.err.find("nothing was kept"), std::string::npos) << direct.err;
+  EXPECT_EQ(snapshot(dir_ / "d"), victim);
+  EXPECT_TRUE(fs::is_directory(dir_ / "d-moved") && fs::is_empty(dir_ / "d-moved"));
+  const Outcome learning =
+      swap_during(kLearning + "l", "checkpoint:5", "l", "l-moved", "victim", SIGTERM);
+  EXPECT_EQ(learning.exit_code, 128 + SIGTERM) << learning.err;
+  EXPECT_NE(learning.err.find("continue with: physgrad resume " + (dir_ / "l-moved").string()),
+            std::string::npos)
+      << learning.err;
+  EXPECT_EQ(snapshot(dir_ / "l"), victim);
+  ASSERT_TRUE(fs::exists(dir_ / "l-moved" / "checkpoint.pgc"));
+  ASSERT_EQ(run("resume l-moved").exit_code, 0);
+  expect_same_results("l-moved");
 }
 
 TEST_F(RunFolderCli, SymbolicLinksAreFollowedOrRefusedBeforeAnythingIsWritten) {

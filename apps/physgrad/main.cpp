@@ -6,6 +6,9 @@
 // signal), other runs write nothing.
 #include <CLI/CLI.hpp>
 #include <cblas.h>
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
@@ -24,6 +27,7 @@
 #include "interrupt.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
+#include "physgrad/folder_handle.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/report/atomic_file.hpp"
 #include "physgrad/train/checkpoint_file.hpp"
@@ -191,21 +195,31 @@ void print_rules(bool markdown) {
 
 // Claims the run folder: --out, or a new runs/NAME-<timestamp>[-N]. Only the writing rank
 // claims one (under mpirun every rank trains its share; rank 0 alone prints and writes).
+// A blank --out is refused (locate_folder) as it was typed, from `given`: the settings hold it
+// without surrounding blanks.
 std::optional<ex::RunFolder> claim_new_folder(const ex::Experiment& experiment,
-                                              const ex::Settings& settings) {
+                                              const ex::Settings& settings,
+                                              const ex::OptionTexts& given) {
   if (!physgrad::cli::is_writer()) return std::nullopt;
-  if (settings.has("out") && !settings.text("out").empty()) {
-    return ex::RunFolder::create(ex::locate_folder(settings.text("out"), "--out"));
+  if (settings.has("out")) {
+    std::string out = settings.text("out");
+    if (out.empty()) {
+      for (const auto& [name, text] : given) {
+        if (name == "out") out = text;  // the last one counts, as in the settings
+      }
+    }
+    return ex::RunFolder::create(ex::locate_folder(out, "--out"));
   }
   return ex::RunFolder::create_unique("runs", experiment.name() + "-" + timestamp());
 }
 
 // Runs `experiment` into `folder` (absent on the ranks that do not write): writes config.json
-// into a new one, or continues the checkpoint `resumed` when it is not null. Whatever ends the run, the folder is committed or
+// into a new one, or continues the checkpoint `resumed` when it is not null. Everything the run
+// writes goes through the folder's handle. Whatever ends the run, the folder is committed or
 // left as RunFolder::abandon() says.
 int run_experiment(const ex::Experiment& experiment, const ex::Settings& settings,
                    const std::string& command_line, std::optional<ex::RunFolder>& folder,
-                   const fs::path& folder_path, const nlohmann::json& resumed = nullptr) {
+                   const nlohmann::json& resumed = nullptr) {
   // One BLAS thread unless asked: the matrices of most runs are small, and a multithreaded
   // BLAS on busy cores costs more than it saves.
   if (settings.has("threads")) {
@@ -218,12 +232,13 @@ int run_experiment(const ex::Experiment& experiment, const ex::Settings& setting
   try {
     if (writer && !folder->resuming()) {
       physgrad::write_file_atomic(
-          folder->path() / ex::kConfigFile,
+          folder->handle(), ex::kConfigFile,
           ex::config_document(experiment, settings, command_line).dump(2) + "\n");
       ex::fault_point("claimed");
     }
-    ex::ExperimentCheckpoint checkpoint(
-        folder_path, ex::config_document(experiment, settings, command_line), resumed, writer);
+    ex::ExperimentCheckpoint checkpoint(writer ? &folder->handle() : nullptr,
+                                        ex::config_document(experiment, settings, command_line),
+                                        resumed);
     const std::string changed =
         checkpoint.set_environment({{"blas_threads", physgrad::blas_threads()},
                                     {"ranks", physgrad::cli::communicator()->size()}});
@@ -242,7 +257,7 @@ int run_experiment(const ex::Experiment& experiment, const ex::Settings& setting
     ex::write_run_folder(folder->staging(), experiment, settings, context, command_line);
     folder->commit();
     for (const auto& table : context.tables()) print_table(table);
-    std::cout << "report: " << (fs::path(folder->shown()) / "report.html").string() << '\n';
+    std::cout << "report: " << (fs::path(folder->shown_now()) / "report.html").string() << '\n';
   } catch (const ex::Interrupted& e) {
     if (writer) std::cerr << "physgrad: " << e.what() << "; " << folder->abandon() << '\n';
     return 128 + ex::received_signal();
@@ -257,18 +272,25 @@ int run_experiment(const ex::Experiment& experiment, const ex::Settings& setting
 int start_run(const ex::Experiment& experiment, const ex::OptionTexts& given,
               const std::string& command_line) {
   const ex::Settings settings = ex::resolve_settings(experiment, given);
-  std::optional<ex::RunFolder> folder = claim_new_folder(experiment, settings);
-  return run_experiment(experiment, settings, command_line, folder,
-                        folder ? folder->path() : fs::path());
+  std::optional<ex::RunFolder> folder = claim_new_folder(experiment, settings, given);
+  return run_experiment(experiment, settings, command_line, folder);
 }
 
 // Continues the unfinished run in `text` with the settings of its config.json: from its
-// checkpoint, or from the start when it has none.
+// checkpoint, or from the start when it has none. Both are read through the handle of the
+// claimed folder (the other ranks open it without a claim).
 int resume_run(const std::string& text) {
   const ex::FolderPath where = ex::locate_folder(text, "resume");
   std::optional<ex::RunFolder> folder;
-  if (physgrad::cli::is_writer()) folder.emplace(ex::RunFolder::reopen(where));
-  const nlohmann::json config = ex::read_config_document(where.path / ex::kConfigFile);
+  physgrad::FolderHandle unclaimed;
+  if (physgrad::cli::is_writer()) {
+    folder.emplace(ex::RunFolder::reopen(where));
+    ex::fault_point("claimed");
+  } else {
+    unclaimed = physgrad::FolderHandle::open(where.path, where.shown);
+  }
+  const physgrad::FolderHandle& handle = folder ? folder->handle() : unclaimed;
+  const nlohmann::json config = ex::read_config_document(handle, ex::kConfigFile);
   // The saved settings are read as a config file would be, errors naming the file.
   const ex::Experiment* experiment = nullptr;
   std::optional<ex::Settings> settings;
@@ -281,18 +303,18 @@ int resume_run(const std::string& text) {
     given.emplace_back("out", where.shown);
     settings.emplace(ex::resolve_settings(*experiment, given));
   } catch (const physgrad::Error& e) {
-    throw physgrad::Error("resume: '" + where.shown + "/" + ex::kConfigFile + "': " + e.what());
+    throw physgrad::Error("resume: '" + handle.shown(ex::kConfigFile) + "': " + e.what());
   }
   nlohmann::json resumed;
-  if (fs::exists(where.path / ex::kCheckpointFile)) {
-    resumed = physgrad::read_checkpoint_file(where.path / ex::kCheckpointFile);
+  if (::faccessat(handle.fd(), ex::kCheckpointFile, F_OK, 0) == 0) {
+    resumed = physgrad::read_checkpoint_file(handle, ex::kCheckpointFile);
   } else if (folder) {
     std::cerr << "physgrad: " << where.shown << " has no checkpoint; the run starts again from "
               << "the beginning with its saved settings\n";
   }
   const std::string command =
       config.contains("command") && config["command"].is_string() ? config["command"].get<std::string>() : "";
-  return run_experiment(*experiment, *settings, command, folder, where.path, resumed);
+  return run_experiment(*experiment, *settings, command, folder, resumed);
 }
 
 }  // namespace

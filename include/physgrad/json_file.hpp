@@ -8,6 +8,8 @@
 #include <string>
 #include <string_view>
 
+#include "physgrad/folder_handle.hpp"
+
 namespace physgrad {
 
 // The bytes of `path`. A FIFO, device, socket or directory is refused without blocking on it,
@@ -16,6 +18,9 @@ namespace physgrad {
 // FIFO)", "is 5000000 bytes, more than the 1048576 allowed", "cannot open: No such file or
 // directory"), for the caller to prefix.
 std::string read_regular_file(const std::filesystem::path& path, std::size_t max_bytes);
+// The same for the entry `name` of `folder`, opened through the folder's handle.
+std::string read_regular_file(const FolderHandle& folder, const std::string& name,
+                              std::size_t max_bytes);
 
 // Parses JSON text into a document, iteratively (no recursion over the input's depth). Throws
 // Error "invalid JSON at line L, column C: DETAIL" on a syntax error or a number too large for a

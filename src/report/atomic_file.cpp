@@ -14,32 +14,55 @@ namespace physgrad {
 
 namespace {
 
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& step, int err) {
-  throw Error("write_file_atomic: cannot " + step + " for '" + path.string() +
-              "': " + std::generic_category().message(err));
-}
-
-// Opens a new file next to `path` whose name no one else uses (O_EXCL); sets `temp` to it.
-int create_temp(const std::filesystem::path& path, std::filesystem::path& temp) {
-  static std::atomic<unsigned> counter{0};
-  const std::string stem =
-      std::string(".") + path.filename().string() + ".tmp" + std::to_string(::getpid());
-  for (int attempt = 0; attempt < 100; ++attempt) {
-    temp = path.parent_path() / (stem + "-" + std::to_string(counter++));
-    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd >= 0 || errno != EEXIST) return fd;
+// A write into one folder: the target's name, the temporary file's, and the way out on failure.
+class AtomicWrite {
+ public:
+  AtomicWrite(const FolderHandle& folder, std::string_view name) : folder_(folder), name_(name) {
+    if (name_.empty() || name_ == "." || name_ == ".." || name_.find('/') != std::string::npos) {
+      throw Error("write_file_atomic: '" + name_ + "' is not a plain file name (in '" +
+                  folder.shown() + "')");
+    }
   }
-  return -1;  // errno is EEXIST
-}
 
-// Closes `fd` unless it is -1, removes the temporary file and throws for `step`.
-[[noreturn]] void abandon(const std::filesystem::path& path, const std::filesystem::path& temp,
-                          int fd, const std::string& step) {
-  const int err = errno;
-  if (fd >= 0) ::close(fd);
-  ::unlink(temp.c_str());
-  fail(path, step + " " + temp.string(), err);
-}
+  // Opens a new file next to the target whose name no one else uses (O_EXCL).
+  int create_temp() {
+    static std::atomic<unsigned> counter{0};
+    const std::string stem = "." + name_ + ".tmp" + std::to_string(::getpid()) + "-";
+    for (int attempt = 0; attempt < 100; ++attempt) {
+      temp_ = stem + std::to_string(counter++);
+      const int fd = ::openat(folder_.fd(), temp_.c_str(),
+                              O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+      if (fd >= 0) return fd;
+      if (errno != EEXIST) break;
+    }
+    temp_.clear();
+    fail("create a temporary file", errno);
+  }
+
+  // Closes `fd` unless it is -1, removes the temporary file and throws for `step`.
+  [[noreturn]] void abandon(int fd, const std::string& step) {
+    const int err = errno;
+    if (fd >= 0) ::close(fd);
+    ::unlinkat(folder_.fd(), temp_.c_str(), 0);
+    fail(step + " " + folder_.shown(temp_), err);
+  }
+
+  void rename_into_place() {
+    if (::renameat(folder_.fd(), temp_.c_str(), folder_.fd(), name_.c_str()) != 0) {
+      abandon(-1, "rename");
+    }
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& step, int err) const {
+    throw Error("write_file_atomic: cannot " + step + " for '" + folder_.shown(name_) +
+                "': " + std::generic_category().message(err));
+  }
+
+  const FolderHandle& folder_;
+  std::string name_;
+  std::string temp_;
+};
 
 }  // namespace
 
@@ -56,30 +79,32 @@ bool is_atomic_write_temp(std::string_view name) {
          digits(numbers.substr(dash + 1));
 }
 
-void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
-  std::filesystem::path temp;
-  const int fd = create_temp(path, temp);
-  if (fd < 0) fail(path, "create a temporary file", errno);
+void write_file_atomic(const FolderHandle& folder, std::string_view name,
+                       std::string_view content) {
+  AtomicWrite write(folder, name);
+  const int fd = write.create_temp();
   for (std::size_t done = 0; done < content.size();) {
     const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
     if (n < 0 && errno == EINTR) continue;
-    if (n < 0) abandon(path, temp, fd, "write");
+    if (n < 0) write.abandon(fd, "write");
     done += static_cast<std::size_t>(n);
   }
-  if (::fsync(fd) != 0) abandon(path, temp, fd, "flush");
-  if (::close(fd) != 0) abandon(path, temp, -1, "close");
-  if (::rename(temp.c_str(), path.c_str()) != 0) abandon(path, temp, -1, "rename");
-
+  if (::fsync(fd) != 0) write.abandon(fd, "flush");
+  if (::close(fd) != 0) write.abandon(-1, "close");
+  write.rename_into_place();
   // Make the rename itself durable; the content is already complete, so this is best effort.
-  sync_directory(path.parent_path().empty() ? "." : path.parent_path());
+  folder.sync();
 }
 
-void sync_directory(const std::filesystem::path& folder) noexcept {
-  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd >= 0) {
-    ::fsync(fd);
-    ::close(fd);
+void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
+  const std::filesystem::path parent = path.parent_path();
+  const int fd = ::open(parent.empty() ? "." : parent.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) {
+    const int err = errno;
+    throw Error("write_file_atomic: cannot open the folder for '" + path.string() +
+                "': " + std::generic_category().message(err));
   }
+  write_file_atomic(FolderHandle(fd, parent.string()), path.filename().string(), content);
 }
 
 }  // namespace physgrad

@@ -25,13 +25,34 @@ std::string hex64(std::uint64_t value) {
   return text;
 }
 
+// The file's bytes: the header line, then the document.
+std::string checkpoint_text(const nlohmann::json& document) {
+  const std::string body = document.dump();
+  return std::string(kMagic) + " " + std::to_string(kVersion) + " " +
+         std::to_string(body.size()) + " " + hex64(fnv1a64(body)) + "\n" + body;
+}
+
+// Reads the bytes with `read` and checks them; errors name the checkpoint `source`.
+template <class Read>
+nlohmann::json read_checkpoint(const std::string& source, const Read& read) {
+  std::string content;
+  try {
+    content = read();
+  } catch (const Error& e) {
+    throw Error("checkpoint '" + source + "': " + e.what());
+  }
+  return parse_checkpoint(content, source);
+}
+
 }  // namespace
 
 void write_checkpoint_file(const std::filesystem::path& path, const nlohmann::json& document) {
-  const std::string body = document.dump();
-  const std::string header = std::string(kMagic) + " " + std::to_string(kVersion) + " " +
-                             std::to_string(body.size()) + " " + hex64(fnv1a64(body)) + "\n";
-  write_file_atomic(path, header + body);
+  write_file_atomic(path, checkpoint_text(document));
+}
+
+void write_checkpoint_file(const FolderHandle& folder, const std::string& name,
+                           const nlohmann::json& document) {
+  write_file_atomic(folder, name, checkpoint_text(document));
 }
 
 nlohmann::json parse_checkpoint(std::string_view text, const std::string& source) {
@@ -70,13 +91,12 @@ nlohmann::json parse_checkpoint(std::string_view text, const std::string& source
 }
 
 nlohmann::json read_checkpoint_file(const std::filesystem::path& path) {
-  std::string content;
-  try {
-    content = read_regular_file(path, kMaxBytes);
-  } catch (const Error& e) {
-    throw Error("checkpoint '" + path.string() + "': " + e.what());
-  }
-  return parse_checkpoint(content, path.string());
+  return read_checkpoint(path.string(), [&] { return read_regular_file(path, kMaxBytes); });
+}
+
+nlohmann::json read_checkpoint_file(const FolderHandle& folder, const std::string& name) {
+  return read_checkpoint(folder.shown(name),
+                         [&] { return read_regular_file(folder, name, kMaxBytes); });
 }
 
 }  // namespace physgrad

@@ -1,18 +1,22 @@
 // write_file_atomic — replaces a file's content all at once: the target either keeps its old
-// content or has the new one, never a partial write (temp file, fsync, rename).
+// content or has the new one, never a partial write (temp file, fsync, rename, fsync folder).
 #pragma once
 
 #include <filesystem>
 #include <string_view>
 
+#include "physgrad/folder_handle.hpp"
+
 namespace physgrad {
 
-// Writes `content` to a fresh file next to `path`, flushes it to disk and renames it over
-// `path`. On failure the temporary file is removed and an Error names the path and the reason.
+// Writes `content` to a fresh file in `folder` (created with O_EXCL), flushes it to disk, renames
+// it over the entry `name` and flushes the folder, all through the folder's handle: the file
+// lands in that folder whatever its path leads to meanwhile. `name` is a plain file name (no
+// '/'). On failure the temporary file is removed and an Error names the file and the reason.
+void write_file_atomic(const FolderHandle& folder, std::string_view name,
+                       std::string_view content);
+// The same for the file at `path`, in the folder its parent path opens.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
-
-// Flushes a folder's entries (a rename or removal inside it) to disk; best effort.
-void sync_directory(const std::filesystem::path& folder) noexcept;
 
 // True for the name of a temporary file that write_file_atomic() makes next to its target
 // (".NAME.tmpPID-N"); one left behind by a killed process can be removed by the folder's owner.
