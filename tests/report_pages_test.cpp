@@ -4,8 +4,9 @@
 // each experiment's message exist; every table has a caption. When Chromium is installed, the
 // pages are also loaded at 420 px wide: no SVG error in the console and nothing wider than the
 // page outside a table's scroll box. Run folders with hostile names and contents (a script or
-// another site as a link, bytes that are not UTF-8, bidirectional controls) give pages whose
-// every link is a local file, that run no script and ask no server, and are valid UTF-8 and XML.
+// another site as a link, bytes that are not UTF-8, bidirectional controls, fields of the wrong
+// type, huge files) give pages whose every link is a local file, that run no script and ask no
+// server, are valid UTF-8 and XML, and an index that says what it left out.
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <iconv.h>
@@ -20,12 +21,14 @@
 #include <atomic>
 #include <cctype>
 #include <cerrno>
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <string>
@@ -405,13 +408,26 @@ TEST_F(ReportPages, ReportOfAFolderWithoutRunFoldersIsAOneLineError) {
   }
   EXPECT_FALSE(fs::exists(dir_ / "empty" / "index.html"));
 
-  // A summary.json that is a FIFO is refused without blocking.
+  // A summary.json that is a FIFO is refused without blocking: no folder is left to show.
   fs::create_directories(dir_ / "fifo" / "a");
   ASSERT_EQ(::mkfifo((dir_ / "fifo" / "a" / "summary.json").c_str(), 0600), 0);
   const physgrad::testing::Outcome fifo = run("report fifo");
   EXPECT_EQ(fifo.exit_code, 2);
-  EXPECT_NE(fifo.err.find("summary.json': is not a regular file (a FIFO)"), std::string::npos)
-      << fifo.err;
+  EXPECT_EQ(
+      fifo.err,
+      "physgrad: error: report: 'fifo' holds no run folder (a folder with summary.json) that "
+      "can be read: 'fifo/a/summary.json': is not a regular file (a FIFO); the folder is left "
+      "out\n");
+  // A metrics.csv that is a FIFO leaves out the folder's curves, named once.
+  fs::create_directories(dir_ / "fifo-metrics" / "a");
+  std::ofstream(dir_ / "fifo-metrics" / "a" / "summary.json")
+      << R"({"experiment": "hig-toy", "runs": []})";
+  ASSERT_EQ(::mkfifo((dir_ / "fifo-metrics" / "a" / "metrics.csv").c_str(), 0600), 0);
+  const physgrad::testing::Outcome metrics = run("report fifo-metrics");
+  EXPECT_EQ(metrics.exit_code, 0);
+  EXPECT_EQ(metrics.err,
+            "physgrad: warning: report: 'fifo-metrics/a/metrics.csv': is not a regular file (a "
+            "FIFO); its loss curves are not drawn\n");
   // Links inside a run folder that lead nowhere count as absent files.
   fs::create_directories(dir_ / "links" / "a");
   std::ofstream(dir_ / "links" / "a" / "summary.json") << R"({"experiment": "comparison", "runs": []})";
@@ -622,6 +638,119 @@ TEST_F(ReportPages, ChromiumRunsNoScriptAndAsksNoServerForHostileFolders) {
   std::sort(expected.begin(), expected.end());
   EXPECT_EQ(after, expected) << "a frame whose link ran a script or left the page (no message):\n"
                              << console;
+}
+
+TEST_F(ReportPages, AFolderWithAFieldOfTheWrongTypeIsLeftOutWithAOneLineWarning) {
+  ASSERT_EQ(run("run comparison --iters 2 --out runs/good").exit_code, 0);
+  const auto broken = [&](const std::string& name, const std::string& file,
+                          const std::function<void(nlohmann::json&)>& edit) {
+    fs::copy(dir_ / "runs" / "good", dir_ / "runs" / name);
+    nlohmann::json document = nlohmann::json::parse(read_file(dir_ / "runs" / name / file));
+    edit(document);
+    std::ofstream(dir_ / "runs" / name / file) << document.dump();
+  };
+  broken("command", "config.json", [](nlohmann::json& j) { j["command"] = 5; });
+  broken("label", "summary.json", [](nlohmann::json& j) { j["runs"][1]["label"] = {1, 2}; });
+  broken("loss", "summary.json", [](nlohmann::json& j) { j["runs"][0]["final"]["loss"] = "low"; });
+  broken("experiment", "summary.json", [](nlohmann::json& j) { j["experiment"] = true; });
+  broken("params", "summary.json", [](nlohmann::json& j) { j["runs"][2]["params"] = 3; });
+  broken("config", "config.json", [](nlohmann::json& j) { j = nlohmann::json::array(); });
+  const physgrad::testing::Outcome outcome = run("report runs");
+  ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+  const std::vector<std::string> warnings = {
+      "'runs/command/config.json': command is a number, not text",
+      "'runs/config/config.json': holds an array, not an object",
+      "'runs/experiment/summary.json': experiment is a boolean, not text",
+      "'runs/label/summary.json': runs[1].label is an array, not text",
+      "'runs/loss/summary.json': runs[0].final.loss is a string, not a number",
+      "'runs/params/summary.json': runs[2].params is a number, not an object"};
+  std::string expected;
+  for (const std::string& w : warnings) {
+    expected += "physgrad: warning: report: " + w + "; the folder is left out\n";
+  }
+  EXPECT_EQ(outcome.err, expected);
+  const std::string index = read_file(dir_ / "runs" / "index.html");
+  EXPECT_NE(index.find("<h2>Left out</h2>"), std::string::npos);
+  for (const std::string& w : warnings) {
+    std::string escaped = w;
+    for (std::size_t at = escaped.find('\''); at != std::string::npos;
+         at = escaped.find('\'', at)) {
+      escaped.replace(at, 1, "&#39;");
+    }
+    EXPECT_NE(index.find("<p>" + escaped + "; the folder is left out</p>"), std::string::npos) << w;
+  }
+  EXPECT_NE(index.find("href=\"./good/report.html\""), std::string::npos);
+  EXPECT_EQ(index.find("href=\"./label/report.html\""), std::string::npos);
+  EXPECT_EQ(outcome.out, "index of 1 run folders: runs/index.html\n");
+}
+
+// Files far larger than any run writes are read only in part, in time linear in what is read and
+// memory bounded whatever the content; the page and stderr say what is left out. Comparing every
+// run of a label with every other would take minutes here, and keeping every cell of the line of
+// commas 32 bytes per comma, beyond the address space given.
+TEST_F(ReportPages, LargeFilesAreReadInBoundedTimeAndMemoryAndWhatIsLeftOutIsSaid) {
+  const auto folder = [&](const std::string& name, const std::string& summary) {
+    fs::create_directories(dir_ / "runs" / name);
+    std::ofstream(dir_ / "runs" / name / "summary.json") << summary;
+    return dir_ / "runs" / name;
+  };
+  const std::string one_run = R"({"experiment": "hig-toy", "runs": [{"label": "L"}]})";
+  // 12,000 runs of one label, 40 values of alpha with 300 seeds each.
+  nlohmann::json runs = nlohmann::json::array();
+  for (int k = 0; k < 12000; ++k) {
+    runs.push_back({{"label", "L"},
+                    {"params", {{"alpha", k % 40}, {"seed", k / 40}}},
+                    {"final", {{"loss", 1.0 / (1 + k)}}},
+                    {"iterations", 10},
+                    {"wall_seconds", 0.5},
+                    {"termination", "max_iterations"}});
+  }
+  folder("many", nlohmann::json{{"experiment", "scaled-toy"}, {"runs", runs}}.dump());
+  // A metrics.csv of 20 MiB of commas, one of more than 32 MiB (sparse), one of 200,100 rows and
+  // one of 300 seeds.
+  std::ofstream(folder("wide", one_run) / "metrics.csv") << std::string(20 << 20, ',');
+  {
+    std::ofstream(folder("huge", one_run) / "metrics.csv") << "label,seed,wall_seconds,test_loss\n";
+  }
+  fs::resize_file(dir_ / "runs" / "huge" / "metrics.csv", (std::size_t{32} << 20) + 1);
+  std::string rows = "label,seed,wall_seconds,test_loss\n";
+  for (int k = 0; k < 200100; ++k) rows += "L,0," + std::to_string(k) + ",1\n";
+  std::ofstream(folder("long", one_run) / "metrics.csv") << rows;
+  rows = "label,seed,wall_seconds,test_loss\n";
+  for (int k = 0; k < 300; ++k) rows += "L," + std::to_string(k) + ",1,1\n";
+  std::ofstream(folder("seeds", one_run) / "metrics.csv") << rows;
+
+  const auto start = std::chrono::steady_clock::now();
+  // Within an address space of 1 GiB (prlimit, run by `env`), which the line of commas alone once
+  // exceeded; AddressSanitizer reserves terabytes of address space at start, so not in its build.
+#if defined(__SANITIZE_ADDRESS__)
+  const physgrad::testing::Outcome outcome = run("report runs");
+#else
+  const physgrad::testing::Outcome outcome = run("report runs", "prlimit --as=1073741824");
+#endif
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+  EXPECT_LT(seconds, 30) << "quadratic somewhere?";
+  const std::vector<std::string> warnings = {
+      "'runs/huge/metrics.csv': is 33554433 bytes, more than the 33554432 allowed; its loss "
+      "curves are not drawn",
+      "'runs/long/metrics.csv': 200100 rows, only the first 200000 are drawn",
+      "'runs/many/summary.json': 12000 runs, only the first 10000 are listed",
+      "'runs/seeds/metrics.csv': more than 256 curves (label and seed), the 44 rows of the "
+      "others are not drawn",
+      "'runs/wide/metrics.csv': csv: the header has 20971521 cells, more than the 4096 read; "
+      "its loss curves are not drawn"};
+  std::string expected;
+  for (const std::string& w : warnings) expected += "physgrad: warning: report: " + w + "\n";
+  EXPECT_EQ(outcome.err, expected);
+  const std::string index = read_file(dir_ / "runs" / "index.html");
+  EXPECT_NE(index.find("<p>&#39;runs/many/summary.json&#39;: 12000 runs, only the first 10000 are "
+                       "listed</p>"),
+            std::string::npos);
+  // 10,000 runs of "many" in 40 rows of 250 seeds, the setting named by alpha alone.
+  EXPECT_NE(index.find("<td>L</td><td>alpha = 0</td><td>250</td>"), std::string::npos);
+  EXPECT_NE(index.find("<td>L</td><td>alpha = 39</td><td>250</td>"), std::string::npos);
 }
 
 }  // namespace

@@ -159,6 +159,25 @@ TEST(Csv, ParsesWhatItWritesAndRefusesRaggedRows) {
   EXPECT_THROW(parse_csv("a,b\n\"1,2\n"), Error);
 }
 
+TEST(Csv, KeepsTheSelectedColumnsOfTheFirstRowsAndBoundsTheHeader) {
+  const std::string text = "a,b,c\n1,2,3\n4,5,6\n7,8,9\n";
+  const CsvData data = parse_csv(text, {{"c", "a", "missing"}, 2});
+  EXPECT_EQ(data.columns, (std::vector<std::string>{"a", "c"}));
+  EXPECT_EQ(data.rows, (std::vector<std::vector<std::string>>{{"1", "3"}, {"4", "6"}}));
+  EXPECT_EQ(data.rows_left_out, 1u);
+  EXPECT_EQ(parse_csv(text).rows_left_out, 0u);
+  // The rows not kept are still checked.
+  EXPECT_THROW(parse_csv(text + "1,2\n", {{}, 1}), Error);
+  // A header of many cells is counted, not kept: a line of 10^6 commas is refused at once.
+  try {
+    parse_csv(std::string(1000000, ','), {{"a"}, 10, 4096});
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "csv: the header has 1000001 cells, more than the 4096 read");
+  }
+  EXPECT_EQ(parse_csv(std::string(4095, ','), {{}, 10, 4096}).columns.size(), 4096u);
+}
+
 TEST(Csv, IntegersAndNonFiniteDoubles) {
   CsvTable table({"i", "a", "b", "c"});
   table.add_row({-42LL, kNaN, kInf, -kInf});
