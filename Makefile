@@ -6,6 +6,8 @@ JOBS        ?= $(shell nproc)
 DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapacke-dev \
                libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev \
                libopenmpi-dev openmpi-bin
+# Only the tests need these: Chromium loads the HTML reports (layout, no script, no request).
+TEST_PACKAGES = chromium
 
 SANITIZE_DIR ?= build-sanitize
 
@@ -13,19 +15,24 @@ RESULTS_DIR ?= docs/results
 EXPERIMENTS  = scaled-toy sensitivity comparison hig-toy sin-rotation heat-inverse oscillators \
                quantum-dipole poisson time-reversal
 
-.PHONY: all deps build demo test test-sanitize bench bench-mpi results clean
+.PHONY: all deps deps-test build demo test test-sanitize bench bench-mpi results clean
 
 all: build
 
-# Installs only what is missing, so repeated runs cost one dpkg query.
-deps:
-	@missing=$$(for p in $(DEB_PACKAGES); do \
+# Installs the Debian packages of $(1) that are missing, so repeated runs cost one dpkg query.
+install_missing = @missing=$$(for p in $(1); do \
 	    dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q 'install ok installed' || echo $$p; \
 	  done); \
 	if [ -n "$$missing" ]; then \
 	  echo "installing Debian packages:" $$missing; \
 	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing; \
 	fi
+
+deps:
+	$(call install_missing,$(DEB_PACKAGES))
+
+deps-test:
+	$(call install_missing,$(TEST_PACKAGES))
 
 build: deps
 	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
@@ -35,7 +42,7 @@ build: deps
 demo: build
 	$(BUILD_DIR)/physgrad run hig-toy --lambda 0.01
 
-test: build
+test: build deps-test
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
 # Micro-benchmarks of the learning step (about 3 minutes): bench/results.json, then the tables
@@ -59,7 +66,7 @@ results: build
 	rm -f $(RESULTS_DIR)/*/metrics.csv $(RESULTS_DIR)/*/report.html $(RESULTS_DIR)/*/networks.json
 
 # The whole suite under AddressSanitizer + UndefinedBehaviorSanitizer (any report fails it).
-test-sanitize: deps
+test-sanitize: deps deps-test
 	cmake -S . -B $(SANITIZE_DIR) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPHYSGRAD_SANITIZE=ON
 	cmake --build $(SANITIZE_DIR) -j $(JOBS)
 	cd $(SANITIZE_DIR) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \

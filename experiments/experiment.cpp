@@ -14,6 +14,7 @@
 #include "interrupt.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
+#include "physgrad/report/shown_text.hpp"
 
 namespace physgrad::experiments {
 
@@ -157,44 +158,23 @@ OptionSpec text_list_option(std::string name, std::string default_text, std::str
 }
 
 std::string text_problem(std::string_view text) {
-  const auto hex = [](unsigned value) {
-    static const char* const digits = "0123456789abcdef";
-    return std::string("0x") + digits[(value >> 4) & 0xF] + digits[value & 0xF];
+  const auto named = [](const char* format, unsigned value) {
+    char buffer[16];
+    std::snprintf(buffer, sizeof buffer, format, value);
+    return std::string(buffer);
   };
-  const auto bytes = reinterpret_cast<const unsigned char*>(text.data());
-  for (std::size_t i = 0; i < text.size();) {
-    const unsigned lead = bytes[i];
-    if (lead < 0x20 || lead == 0x7F) {
-      return "contains the control character " + hex(lead) + " at byte " + std::to_string(i);
+  for (std::size_t at = 0; at < text.size();) {
+    const Utf8Char c = utf8_char_at(text, at);
+    if (c.code_point == kNotUtf8) {
+      return "is not valid UTF-8 (byte " + named("0x%02x", static_cast<unsigned char>(text[at])) +
+             " at " + std::to_string(at) + ")";
     }
-    // The length of the UTF-8 sequence and the range of its second byte (no overlong forms, no
-    // surrogates, nothing above U+10FFFF).
-    std::size_t length = 1;
-    unsigned low = 0x80, high = 0xBF;
-    if (lead >= 0xC2 && lead <= 0xDF) {
-      length = 2;
-    } else if (lead >= 0xE0 && lead <= 0xEF) {
-      length = 3;
-      if (lead == 0xE0) low = 0xA0;
-      if (lead == 0xED) high = 0x9F;
-    } else if (lead >= 0xF0 && lead <= 0xF4) {
-      length = 4;
-      if (lead == 0xF0) low = 0x90;
-      if (lead == 0xF4) high = 0x8F;
-    } else if (lead >= 0x80) {
-      return "is not valid UTF-8 (byte " + hex(lead) + " at " + std::to_string(i) + ")";
+    if (const std::string_view kind = unshowable_kind(c.code_point); !kind.empty()) {
+      return "contains the " + std::string(kind) + " " +
+             named(c.code_point < 0x80 ? "0x%02x" : "U+%04X", c.code_point) + " at byte " +
+             std::to_string(at);
     }
-    for (std::size_t k = 1; k < length; ++k) {
-      const unsigned next = i + k < text.size() ? bytes[i + k] : 0;
-      if (next < (k == 1 ? low : 0x80) || next > (k == 1 ? high : 0xBF)) {
-        return "is not valid UTF-8 (byte " + hex(lead) + " at " + std::to_string(i) + ")";
-      }
-    }
-    if (lead == 0xC2 && bytes[i + 1] <= 0x9F) {  // U+0080 … U+009F
-      return "contains the control character U+00" + hex(bytes[i + 1]).substr(2) + " at byte " +
-             std::to_string(i);
-    }
-    i += length;
+    at += c.length;
   }
   return {};
 }

@@ -69,9 +69,12 @@ OptionSpec text_list_option(std::string name, std::string default_text, std::str
 // numbers. Throws Error such as "--lr: 'abc' is not a number (…)" or "--iters: must be ≥ 1,
 // got 0".
 nlohmann::json parse_option(const OptionSpec& spec, const std::string& text);
-// Empty when `text` is valid UTF-8 free of control characters (C0, DEL, C1: a NUL would cut a
-// path short, a newline split a message or a CSV line); else what is wrong with it, e.g.
-// "contains the control character 0x00 at byte 6" or "is not valid UTF-8 (byte 0xff at 2)".
+// Empty when `text` is valid UTF-8 that shows what it holds (physgrad/report/shown_text.hpp):
+// free of control characters (C0, DEL, C1: a NUL would cut a path short, a newline split a
+// message or a CSV line), of U+FFFE and U+FFFF (invalid in a page's XML) and of bidirectional
+// controls (they reorder what a page or a terminal shows); else what is wrong with it, e.g.
+// "contains the control character 0x00 at byte 6", "contains the bidirectional control U+202E
+// at byte 4" or "is not valid UTF-8 (byte 0xff at 2)".
 std::string text_problem(std::string_view text);
 // "a range like ≥ 1" for help texts; empty when unbounded.
 std::string describe_range(const OptionSpec& spec);

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,42 +16,200 @@
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
+#include "physgrad/report/shown_text.hpp"
 #include "report_page.hpp"
 #include "run_folder.hpp"
 
 namespace physgrad::experiments {
 
 namespace fs = std::filesystem;
+using nlohmann::json;
 
 namespace {
 
+// What is read of each run folder at most; the index says what it leaves out.
+constexpr std::size_t kMaxJsonBytes = std::size_t{8} << 20;      // summary.json, config.json
+constexpr std::size_t kMaxRuns = 10000;                          // runs of one summary.json
+constexpr std::size_t kMaxMetricsBytes = std::size_t{32} << 20;  // metrics.csv
+constexpr std::size_t kMaxMetricsRows = 200000;
+constexpr std::size_t kMaxCurves = 256;  // (label, seed) curves of one metrics.csv
+
+// A run of a summary.json: the fields the index shows.
+struct IndexedRun {
+  std::string label;
+  json params;                                  // an object
+  double loss, test_loss, iterations, seconds;  // NaN when absent or null
+  std::string termination;
+};
+
+// One label's test loss vs training time, a curve per seed.
+struct LabelCurves {
+  std::string label;
+  std::vector<Curve> seeds;
+};
+
 struct IndexedFolder {
-  std::string name;
-  nlohmann::json summary;
+  std::string name;  // as listed: any bytes but '/' and NUL
+  std::string experiment;
+  std::vector<IndexedRun> runs;
   std::string command;
-  std::optional<CsvData> metrics;
+  std::vector<LabelCurves> curves;  // from metrics.csv, labels in the file's order
   bool has_report = false;
 };
 
-// All of a regular file of a run folder (never blocking on a FIFO), errors naming it.
-std::string read_text(const fs::path& path) {
-  try {
-    return read_regular_file(path, std::size_t{1} << 32);
-  } catch (const Error& e) {
-    throw Error("report: '" + path.string() + "': " + e.what());
+std::string quoted(const fs::path& path) { return "'" + path.string() + "'"; }
+
+json read_json(const fs::path& path) {
+  return parse_json_text(read_regular_file(path, kMaxJsonBytes), 64);
+}
+
+// "a number", "an array", … for messages.
+std::string a_type(const json& value) {
+  return (value.is_array() || value.is_object() ? "an " : "a ") + std::string(value.type_name());
+}
+
+// A field of a JSON object (null when absent or null) of one type; Error "WHERE.KEY is a number,
+// not text" when it has another.
+const json* field(const json& object, const char* key, const std::string& where,
+                  bool (json::*is_type)() const noexcept, const char* type) {
+  const auto it = object.find(key);
+  if (it == object.end() || it->is_null()) return nullptr;
+  if (!((*it).*is_type)()) throw Error(where + key + " is " + a_type(*it) + ", not " + type);
+  return &*it;
+}
+
+std::string text_field(const json& object, const char* key, const std::string& where,
+                       const std::string& absent) {
+  const json* value = field(object, key, where, &json::is_string, "text");
+  return value ? value->get<std::string>() : absent;
+}
+
+double number_field(const json& object, const char* key, const std::string& where) {
+  const json* value = field(object, key, where, &json::is_number, "a number");
+  return value ? value->get<double>() : NAN;
+}
+
+const json& object_field(const json& object, const char* key, const std::string& where) {
+  static const json empty = json::object();
+  const json* value = field(object, key, where, &json::is_object, "an object");
+  return value ? *value : empty;
+}
+
+// The experiment and the runs of a summary.json; Error naming the field that is not of its type.
+void read_summary(const json& summary, IndexedFolder& folder, std::vector<std::string>& notes,
+                  const fs::path& file) {
+  if (!summary.is_object() || !summary.contains("runs") || !summary.at("runs").is_array()) {
+    throw Error("has no list of runs");
+  }
+  folder.experiment = text_field(summary, "experiment", "", "?");
+  const json& runs = summary.at("runs");
+  if (runs.size() > kMaxRuns) {
+    notes.push_back(quoted(file) + ": " + std::to_string(runs.size()) + " runs, only the first " +
+                    std::to_string(kMaxRuns) + " are listed");
+  }
+  for (std::size_t k = 0; k < std::min(runs.size(), kMaxRuns); ++k) {
+    const std::string where = "runs[" + std::to_string(k) + "]";
+    const json& run = runs[k];
+    if (!run.is_object()) {
+      throw Error(where + " is " + a_type(run) + ", not an object");
+    }
+    const json& final = object_field(run, "final", where + ".");
+    folder.runs.push_back({text_field(run, "label", where + ".", "?"),
+                           object_field(run, "params", where + "."),
+                           number_field(final, "loss", where + ".final."),
+                           number_field(final, "test_loss", where + ".final."),
+                           number_field(run, "iterations", where + "."),
+                           number_field(run, "wall_seconds", where + "."),
+                           text_field(run, "termination", where + ".", "–")});
   }
 }
 
-nlohmann::json read_json(const fs::path& path) {
-  const std::string text = read_text(path);
-  try {
-    return parse_json_text(text, 64);
-  } catch (const Error& e) {
-    throw Error("report: '" + path.string() + "': " + e.what());
+// The test-loss curves of a metrics.csv, per label and seed (of its first kMaxMetricsRows rows,
+// at most kMaxCurves curves); none when it lacks the label, wall_seconds or test_loss column.
+std::vector<LabelCurves> read_curves(const fs::path& file, std::vector<std::string>& notes) {
+  const CsvData metrics =
+      parse_csv(read_regular_file(file, kMaxMetricsBytes),
+                {{"label", "seed", "wall_seconds", "test_loss"}, kMaxMetricsRows});
+  if (metrics.rows_left_out > 0) {
+    notes.push_back(quoted(file) + ": " +
+                    std::to_string(metrics.rows.size() + metrics.rows_left_out) +
+                    " rows, only the first " + std::to_string(metrics.rows.size()) + " are drawn");
   }
+  const std::size_t n = metrics.columns.size(), label = metrics.column("label"),
+                    seed = metrics.column("seed"), seconds = metrics.column("wall_seconds"),
+                    loss = metrics.column("test_loss");
+  std::vector<LabelCurves> curves;
+  if (label == n || seconds == n || loss == n) return curves;
+  std::map<std::string, std::size_t> labels;  // label → its place in curves
+  // (label, seed) → the places of its curve: its label's in curves, its own in that label's seeds
+  std::map<std::pair<std::string, std::string>, std::pair<std::size_t, std::size_t>> places;
+  std::size_t rows_left_out = 0;
+  for (const std::vector<std::string>& row : metrics.rows) {
+    const auto key = std::make_pair(row[label], seed == n ? std::string() : row[seed]);
+    auto place = places.find(key);
+    if (place == places.end()) {
+      if (places.size() == kMaxCurves) {
+        ++rows_left_out;
+        continue;
+      }
+      const auto at = labels.try_emplace(row[label], curves.size()).first;
+      if (at->second == curves.size()) curves.push_back({row[label], {}});
+      std::vector<Curve>& seeds = curves[at->second].seeds;
+      place = places.emplace(key, std::make_pair(at->second, seeds.size())).first;
+      seeds.emplace_back();
+    }
+    Curve& curve = curves[place->second.first].seeds[place->second.second];
+    curve.x.push_back(std::strtod(row[seconds].c_str(), nullptr));
+    curve.y.push_back(std::strtod(row[loss].c_str(), nullptr));
+  }
+  if (rows_left_out > 0) {
+    notes.push_back(quoted(file) + ": more than " + std::to_string(kMaxCurves) +
+                    " curves (label and seed), the " + std::to_string(rows_left_out) +
+                    " rows of the others are not drawn");
+  }
+  return curves;
 }
 
-std::vector<IndexedFolder> find_run_folders(const fs::path& dir) {
+// A run folder as the index shows it, adding what it cuts short to `notes`. Throws Error naming
+// the file (and field) when its summary.json or config.json cannot be shown; a metrics.csv that
+// cannot be read leaves out the folder's curves only.
+IndexedFolder read_folder(const fs::path& path, std::vector<std::string>& notes) {
+  IndexedFolder folder;
+  folder.name = path.filename().string();
+  std::vector<std::string> cut;  // noted only when the folder is shown
+  const auto reading = [](const fs::path& file, const auto& read) {
+    try {
+      read();
+    } catch (const Error& e) {
+      throw Error(quoted(file) + ": " + e.what());
+    }
+  };
+  const fs::path summary = path / kSummaryFile, config = path / kConfigFile,
+                 metrics = path / "metrics.csv";
+  reading(summary, [&] { read_summary(read_json(summary), folder, cut, summary); });
+  std::error_code error;  // a link inside the folder that leads nowhere counts as absent
+  if (fs::exists(config, error)) {
+    reading(config, [&] {
+      const json settings = read_json(config);
+      if (!settings.is_object()) throw Error("holds " + a_type(settings) + ", not an object");
+      folder.command = text_field(settings, "command", "", "");
+    });
+  }
+  if (fs::exists(metrics, error)) {
+    try {
+      folder.curves = read_curves(metrics, cut);
+    } catch (const Error& e) {
+      cut.push_back(quoted(metrics) + ": " + e.what() + "; its loss curves are not drawn");
+    }
+  }
+  folder.has_report = fs::exists(path / "report.html", error);
+  notes.insert(notes.end(), cut.begin(), cut.end());
+  return folder;
+}
+
+// The run folders directly in `dir` (folders with a summary.json), by name; those that cannot be
+// shown are noted instead.
+std::vector<IndexedFolder> find_run_folders(const fs::path& dir, std::vector<std::string>& notes) {
   std::vector<fs::path> paths;
   // Entries that cannot be followed (a looping or dangling link) are not run folders.
   for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
@@ -63,40 +221,48 @@ std::vector<IndexedFolder> find_run_folders(const fs::path& dir) {
   std::sort(paths.begin(), paths.end());
   std::vector<IndexedFolder> folders;
   for (const fs::path& path : paths) {
-    IndexedFolder folder;
-    folder.name = path.filename().string();
-    folder.summary = read_json(path / kSummaryFile);
-    if (!folder.summary.is_object() || !folder.summary.value("runs", nlohmann::json()).is_array()) {
-      throw Error("report: '" + (path / kSummaryFile).string() + "' has no list of runs");
+    try {
+      folders.push_back(read_folder(path, notes));
+    } catch (const Error& e) {
+      notes.push_back(std::string(e.what()) + "; the folder is left out");
     }
-    std::error_code error;  // a link inside the folder that leads nowhere counts as absent
-    if (fs::exists(path / kConfigFile, error)) {
-      folder.command = read_json(path / kConfigFile).value("command", std::string());
-    }
-    if (fs::exists(path / "metrics.csv", error)) {
-      try {
-        folder.metrics = parse_csv(read_text(path / "metrics.csv"));
-      } catch (const Error& e) {
-        throw Error("report: '" + (path / "metrics.csv").string() + "': " + e.what());
-      }
-    }
-    folder.has_report = fs::exists(path / "report.html", error);
-    folders.push_back(std::move(folder));
   }
   return folders;
 }
 
-std::string text_of(const nlohmann::json& value) {
+std::string text_of(const json& value) {
   return value.is_string() ? value.get<std::string>() : format_number(value);
 }
 
-double number_in(const nlohmann::json& object, const char* key) {
-  const nlohmann::json value = object.is_object() ? object.value(key, nlohmann::json()) : nullptr;
-  return value.is_number() ? value.get<double>() : NAN;
+// The keys of the runs' params (seed aside) whose values are not the same in every run — a key
+// some runs lack counts — in the order they first appear.
+std::vector<std::string> varying_keys(const std::vector<const IndexedRun*>& runs) {
+  struct Seen {
+    const json* first;
+    std::size_t count;
+    bool differs;
+  };
+  std::map<std::string, Seen> seen;
+  std::vector<std::string> keys;
+  for (const IndexedRun* run : runs) {
+    for (auto it = run->params.begin(); it != run->params.end(); ++it) {
+      if (it.key() == "seed") continue;
+      const auto [at, added] = seen.try_emplace(it.key(), Seen{&it.value(), 0, false});
+      if (added) keys.push_back(it.key());
+      ++at->second.count;
+      at->second.differs = at->second.differs || *at->second.first != it.value();
+    }
+  }
+  std::erase_if(keys, [&](const std::string& key) {
+    const Seen& s = seen.at(key);
+    return !s.differs && s.count == runs.size();
+  });
+  return keys;
 }
 
 // One row per run folder and run label with its setting (the parameters that vary among that
-// label's runs, seeds aside); the figures are medians over the seeds.
+// label's runs, seeds aside); the figures are medians over the seeds. Linear in the runs (up to
+// the logarithms of the maps).
 HtmlTable runs_table(const std::vector<IndexedFolder>& folders) {
   HtmlTable table{{"run folder", "experiment", "run", "setting", "runs", "final loss",
                    "final test loss", "iterations", "ended by", "seconds"},
@@ -110,52 +276,36 @@ HtmlTable runs_table(const std::vector<IndexedFolder>& folders) {
                   "its report.",
                   {}};
   for (const IndexedFolder& folder : folders) {
-    const std::string experiment = folder.summary.value("experiment", std::string("?"));
-    const nlohmann::json& runs = folder.summary.at("runs");
-    // The parameters that vary among the runs of each label (seed aside).
+    std::map<std::string, std::vector<const IndexedRun*>> by_label;
+    for (const IndexedRun& run : folder.runs) by_label[run.label].push_back(&run);
     std::map<std::string, std::vector<std::string>> varying;
-    const auto params = [](const nlohmann::json& run) {
-      const nlohmann::json p = run.value("params", nlohmann::json::object());
-      return p.is_object() ? p : nlohmann::json::object();
-    };
-    for (const nlohmann::json& run : runs) {
-      const std::string label = run.value("label", std::string("?"));
-      const nlohmann::json own = params(run);
-      for (const nlohmann::json& other : runs) {
-        if (other.value("label", std::string("?")) != label) continue;
-        const nlohmann::json others = params(other);
-        for (const auto& [key, value] : own.items()) {
-          auto& keys = varying[label];
-          if (key != "seed" && others.value(key, nlohmann::json()) != value &&
-              std::find(keys.begin(), keys.end(), key) == keys.end()) {
-            keys.push_back(key);
-          }
-        }
-      }
-    }
+    for (const auto& [label, runs] : by_label) varying[label] = varying_keys(runs);
+
     std::vector<std::pair<std::string, std::string>> groups;  // (label, setting), first seen
-    std::map<std::pair<std::string, std::string>, std::vector<const nlohmann::json*>> members;
-    for (const nlohmann::json& run : runs) {
-      const std::string label = run.value("label", std::string("?"));
+    std::map<std::pair<std::string, std::string>, std::vector<const IndexedRun*>> members;
+    for (const IndexedRun& run : folder.runs) {
       std::string setting;
-      for (const std::string& key : varying[label]) {
-        setting += (setting.empty() ? "" : ", ") + key + " = " +
-                   text_of(params(run).value(key, nlohmann::json()));
+      for (const std::string& key : varying[run.label]) {
+        setting +=
+            (setting.empty() ? "" : ", ") + key + " = " + text_of(run.params.value(key, json()));
       }
-      const auto key = std::make_pair(label, setting);
-      if (members.find(key) == members.end()) groups.push_back(key);
-      members[key].push_back(&run);
+      auto key = std::make_pair(run.label, setting);
+      std::vector<const IndexedRun*>& group = members[key];
+      if (group.empty()) groups.push_back(std::move(key));
+      group.push_back(&run);
     }
     for (const auto& key : groups) {
+      const std::vector<const IndexedRun*>& runs = members[key];
       std::vector<double> loss, test, iterations, seconds;
       std::vector<std::string> ends;
-      for (const nlohmann::json* run : members[key]) {
-        loss.push_back(number_in(run->value("final", nlohmann::json()), "loss"));
-        test.push_back(number_in(run->value("final", nlohmann::json()), "test_loss"));
-        iterations.push_back(number_in(*run, "iterations"));
-        seconds.push_back(number_in(*run, "wall_seconds"));
-        const std::string end = run->value("termination", std::string("–"));
-        if (std::find(ends.begin(), ends.end(), end) == ends.end()) ends.push_back(end);
+      for (const IndexedRun* run : runs) {
+        loss.push_back(run->loss);
+        test.push_back(run->test_loss);
+        iterations.push_back(run->iterations);
+        seconds.push_back(run->seconds);
+        if (std::find(ends.begin(), ends.end(), run->termination) == ends.end()) {
+          ends.push_back(run->termination);
+        }
       }
       std::string ended;
       for (const std::string& e : ends) ended += (ended.empty() ? "" : ", ") + e;
@@ -163,10 +313,9 @@ HtmlTable runs_table(const std::vector<IndexedFolder>& folders) {
       const auto whole = [&cell](double v) {
         return v == std::round(v) && std::abs(v) < 1e15 ? std::to_string(std::llround(v)) : cell(v);
       };
-      table.rows.push_back({folder.name, experiment, key.first, key.second,
-                            std::to_string(members[key].size()), cell(median(loss)),
-                            cell(median(test)), whole(median(iterations)), ended,
-                            cell(median(seconds))});
+      table.rows.push_back({folder.name, folder.experiment, key.first, key.second,
+                            std::to_string(runs.size()), cell(median(loss)), cell(median(test)),
+                            whole(median(iterations)), ended, cell(median(seconds))});
       table.links.push_back(std::vector<std::string>(table.header.size()));
       if (folder.has_report) table.links.back()[0] = folder.name + "/report.html";
     }
@@ -174,34 +323,12 @@ HtmlTable runs_table(const std::vector<IndexedFolder>& folders) {
   return table;
 }
 
-// Per run label of a folder, one curve (test loss vs training time) per seed.
-std::map<std::string, std::vector<Curve>> curves_by_label(const CsvData& metrics,
-                                                          std::vector<std::string>& order) {
-  const std::size_t label = metrics.column("label"), seconds = metrics.column("wall_seconds"),
-                    loss = metrics.column("test_loss"), seed = metrics.column("seed");
-  const std::size_t n = metrics.columns.size();
-  std::map<std::string, std::map<std::string, Curve>> by_label;
-  if (label == n || seconds == n || loss == n) return {};
-  for (const auto& row : metrics.rows) {
-    if (by_label.find(row[label]) == by_label.end()) order.push_back(row[label]);
-    Curve& c = by_label[row[label]][seed == n ? std::string() : row[seed]];
-    c.x.push_back(std::strtod(row[seconds].c_str(), nullptr));
-    c.y.push_back(std::strtod(row[loss].c_str(), nullptr));
-  }
-  std::map<std::string, std::vector<Curve>> out;
-  for (auto& [name, seeds] : by_label) {
-    for (auto& entry : seeds) out[name].push_back(std::move(entry.second));
-  }
-  return out;
-}
-
 // Per experiment with learning runs: the test loss of every run of every folder vs time.
 std::vector<HtmlFigure> overlays(const std::vector<IndexedFolder>& folders) {
   std::vector<std::string> experiments;
   for (const IndexedFolder& f : folders) {
-    const std::string e = f.summary.value("experiment", std::string("?"));
-    if (std::find(experiments.begin(), experiments.end(), e) == experiments.end()) {
-      experiments.push_back(e);
+    if (std::find(experiments.begin(), experiments.end(), f.experiment) == experiments.end()) {
+      experiments.push_back(f.experiment);
     }
   }
   std::vector<HtmlFigure> figures;
@@ -209,17 +336,13 @@ std::vector<HtmlFigure> overlays(const std::vector<IndexedFolder>& folders) {
     std::vector<Series> series;
     std::size_t count = 0;
     for (const IndexedFolder& f : folders) {
-      if (f.summary.value("experiment", std::string("?")) != experiment || !f.metrics) continue;
-      std::vector<std::string> order;
-      const auto curves = curves_by_label(*f.metrics, order);
-      count += curves.empty() ? 0 : 1;
-      for (const std::string& label : order) {
-        const std::vector<Curve>& seeds = curves.at(label);
-        Series s = median_band(f.name + ": " + label +
-                                   (seeds.size() > 1
-                                        ? ", median of " + std::to_string(seeds.size())
-                                        : ""),
-                               seeds, palette_color(series.size()), true);
+      if (f.experiment != experiment || f.curves.empty()) continue;
+      ++count;
+      for (const LabelCurves& label : f.curves) {
+        Series s = median_band(
+            f.name + ": " + label.label +
+                (label.seeds.size() > 1 ? ", median of " + std::to_string(label.seeds.size()) : ""),
+            label.seeds, palette_color(series.size()), true);
         s.markers = true;
         s.dashed = count % 2 == 0;
         series.push_back(std::move(s));
@@ -242,26 +365,38 @@ std::vector<HtmlFigure> overlays(const std::vector<IndexedFolder>& folders) {
 
 }  // namespace
 
-std::size_t write_run_index(const fs::path& dir) {
+std::size_t write_run_index(const fs::path& dir, std::ostream& warnings) {
   std::error_code error;
   if (!fs::is_directory(dir, error)) {
     throw Error("report: '" + dir.string() + "' is not a directory");
   }
-  const std::vector<IndexedFolder> folders = find_run_folders(dir);
+  std::vector<std::string> notes;
+  const std::vector<IndexedFolder> folders = find_run_folders(dir, notes);
   if (folders.empty()) {
-    throw Error("report: '" + dir.string() + "' holds no run folder (a folder with summary.json)");
+    throw Error("report: '" + dir.string() + "' holds no run folder (a folder with summary.json)" +
+                (notes.empty() ? "" : " that can be read: " + notes.front()));
   }
+  for (const std::string& note : notes) {
+    warnings << "physgrad: warning: report: " << shown_text(note) << '\n';
+  }
+  std::string left_out;
+  for (const std::string& note : notes) left_out += note + "\n\n";
   std::string commands;
   for (const IndexedFolder& f : folders) {
     if (!f.command.empty()) commands += f.name + ": " + f.command + "\n\n";
   }
-  const std::vector<HtmlSection> sections = {
-      {"Runs", "", {runs_table(folders)}, {}},
-      {"Loss curves of all runs", "", {}, overlays(folders)},
-      {"Commands", commands, {}, {}}};
+  std::vector<HtmlSection> sections;
+  if (!notes.empty()) sections.push_back({"Left out", left_out, {}, {}});
+  sections.push_back({"Runs", "", {runs_table(folders)}, {}});
+  sections.push_back({"Loss curves of all runs", "", {}, overlays(folders)});
+  sections.push_back({"Commands", commands, {}, {}});
   write_file_atomic(dir / "index.html",
                     html_report("Runs in " + dir.string() + " — physgrad",
-                                std::to_string(folders.size()) + " run folders.", sections));
+                                std::to_string(folders.size()) + " run folders" +
+                                    (notes.empty() ? "."
+                                                   : "; some of what they hold is left out, "
+                                                     "as listed below."),
+                                sections));
   return folders.size();
 }
 

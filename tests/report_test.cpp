@@ -24,6 +24,7 @@
 #include "physgrad/report/landscape.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
+#include "physgrad/report/shown_text.hpp"
 #include "svg_check.hpp"
 
 namespace physgrad {
@@ -156,6 +157,25 @@ TEST(Csv, ParsesWhatItWritesAndRefusesRaggedRows) {
   EXPECT_EQ(parse_csv("a,b\r\n1,2").rows.size(), 1u);
   EXPECT_THROW(parse_csv("a,b\n1,2,3\n"), Error);
   EXPECT_THROW(parse_csv("a,b\n\"1,2\n"), Error);
+}
+
+TEST(Csv, KeepsTheSelectedColumnsOfTheFirstRowsAndBoundsTheHeader) {
+  const std::string text = "a,b,c\n1,2,3\n4,5,6\n7,8,9\n";
+  const CsvData data = parse_csv(text, {{"c", "a", "missing"}, 2});
+  EXPECT_EQ(data.columns, (std::vector<std::string>{"a", "c"}));
+  EXPECT_EQ(data.rows, (std::vector<std::vector<std::string>>{{"1", "3"}, {"4", "6"}}));
+  EXPECT_EQ(data.rows_left_out, 1u);
+  EXPECT_EQ(parse_csv(text).rows_left_out, 0u);
+  // The rows not kept are still checked.
+  EXPECT_THROW(parse_csv(text + "1,2\n", {{}, 1}), Error);
+  // A header of many cells is counted, not kept: a line of 10^6 commas is refused at once.
+  try {
+    parse_csv(std::string(1000000, ','), {{"a"}, 10, 4096});
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "csv: the header has 1000001 cells, more than the 4096 read");
+  }
+  EXPECT_EQ(parse_csv(std::string(4095, ','), {{}, 10, 4096}).columns.size(), 4096u);
 }
 
 TEST(Csv, IntegersAndNonFiniteDoubles) {
@@ -678,7 +698,7 @@ TEST(HtmlReport, CaptionsAboveScrollBoxesLinksAndFigureAnchors) {
   const std::size_t caption = html.find("<p class=\"caption\">Losses &lt;test set&gt;</p>");
   ASSERT_NE(caption, std::string::npos) << html;
   EXPECT_LT(caption, html.find("<div class=\"table\"><table>"));
-  EXPECT_NE(html.find("<td><a href=\"a/report.html\">a</a></td>"), std::string::npos);
+  EXPECT_NE(html.find("<td><a href=\"./a/report.html\">a</a></td>"), std::string::npos);
   EXPECT_NE(html.find("<td>b</td>"), std::string::npos);
   EXPECT_NE(html.find("<figure id=\"loss.svg\">"), std::string::npos);
   EXPECT_NE(html.find("overflow-x:auto"), std::string::npos);
@@ -686,6 +706,23 @@ TEST(HtmlReport, CaptionsAboveScrollBoxesLinksAndFigureAnchors) {
   EXPECT_THROW(html_report("T", "", {{"S", "", {table}, {}}}), Error);
   table.links = {{"x"}, {"", ""}};  // a row of links of the wrong length
   EXPECT_THROW(html_report("T", "", {{"S", "", {table}, {}}}), Error);
+  table.links = {{"../up", ""}, {"", ""}};  // a link out of the page's folder
+  EXPECT_THROW(html_report("T", "", {{"S", "", {table}, {}}}), Error);
+}
+
+TEST(HtmlReport, LinksArePercentEncodedPathsInsideThePagesFolder) {
+  EXPECT_EQ(local_href("a/report.html"), "./a/report.html");
+  EXPECT_EQ(local_href("javascript:void(alert(1))/report.html"),
+            "./javascript%3Avoid%28alert%281%29%29/report.html");
+  EXPECT_EQ(local_href("http:127.0.0.1:9"), "./http%3A127.0.0.1%3A9");
+  EXPECT_EQ(local_href("a#b?c%41 d/x"), "./a%23b%3Fc%2541%20d/x");
+  EXPECT_EQ(local_href("Az09-._~"), "./Az09-._~");
+  EXPECT_EQ(local_href("\xff\\\"'<&/\xce\xbb"), "./%FF%5C%22%27%3C%26/%CE%BB");
+  EXPECT_EQ(local_href("..a/.b"), "./..a/.b");
+  for (const char* outside :
+       {"", "/etc/passwd", "a//b", "a/", "..", "../x", "a/../../x", ".", "./a"}) {
+    EXPECT_THROW(local_href(outside), Error) << outside;
+  }
 }
 
 TEST(HtmlReport, RaggedTableRowThrows) {
@@ -693,8 +730,46 @@ TEST(HtmlReport, RaggedTableRowThrows) {
   EXPECT_THROW(html_report("T", "", {section}), Error);
 }
 
-TEST(HtmlEscape, EscapesAllSpecialCharacters) {
-  EXPECT_EQ(html_escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&#39;");
+TEST(ShownText, EscapesForXmlAndReplacesWhatCannotBeShown) {
+  EXPECT_EQ(xml_escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&#39;");
+  const std::string replaced = "\xef\xbf\xbd";  // U+FFFD
+  // Multi-byte characters (λ, €, 𝑥) and U+FFFD itself are kept; tab and newline in XML text.
+  EXPECT_EQ(xml_escape("λ € \xf0\x9d\x91\xa5 \xef\xbf\xbd\tx\ny"),
+            "λ € \xf0\x9d\x91\xa5 \xef\xbf\xbd\tx\ny");
+  EXPECT_EQ(shown_text("a\tb\nc"), "a" + replaced + "b" + replaced + "c");
+  EXPECT_EQ(shown_text("a\tb\nc", true), "a\tb\nc");
+  // Each byte that does not start a valid UTF-8 sequence, and each unshowable character, becomes
+  // one U+FFFD: (text, how many).
+  const std::vector<std::pair<std::string, std::size_t>> cases = {
+      {"\xff", 1},
+      {"\x80", 1},
+      {"\xc0\xaf", 2},          // stray bytes, an overlong form
+      {"\xed\xa0\x80", 3},      // a surrogate
+      {"\xf4\x90\x80\x80", 4},  // beyond U+10FFFF
+      {"\xe2\x82", 2},          // cut short
+      {"\x01", 1},
+      {"\r", 1},
+      {"\x7f", 1},
+      {"\xc2\x85", 1},  // C0, DEL, C1
+      {"\xef\xbf\xbe", 1},
+      {"\xef\xbf\xbf", 1},  // U+FFFE, U+FFFF
+      {"\xe2\x80\xaa", 1},
+      {"\xe2\x80\xae", 1},  // U+202A, U+202E
+      {"\xe2\x81\xa6", 1},
+      {"\xe2\x81\xa9", 1}};  // U+2066, U+2069
+  for (const auto& [bad, count] : cases) {
+    std::string replacements;
+    for (std::size_t k = 0; k < count; ++k) replacements += replaced;
+    EXPECT_EQ(xml_escape("<" + bad + ">"), "&lt;" + replacements + "&gt;") << bad;
+    EXPECT_EQ(shown_text(bad, true), replacements) << bad;
+  }
+  // U+202F and U+2065, next to the bidirectional controls, are kept.
+  EXPECT_EQ(shown_text("\xe2\x80\xae"
+                       "ab\xe2\x80\xaf"
+                       "c\xe2\x81\xa5"),
+            replaced +
+                "ab\xe2\x80\xaf"
+                "c\xe2\x81\xa5");
 }
 
 }  // namespace

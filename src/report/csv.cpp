@@ -1,5 +1,6 @@
 #include "physgrad/report/csv.hpp"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -78,11 +79,53 @@ std::size_t CsvData::column(std::string_view name) const {
   return columns.size();
 }
 
-CsvData parse_csv(std::string_view text) {
-  std::vector<std::vector<std::string>> lines;
-  std::vector<std::string> cells;
+CsvData parse_csv(std::string_view text, const CsvSelection& selection) {
+  constexpr std::size_t kNotKept = std::size_t(-1);
+  CsvData data;
+  std::vector<std::string> header, row;
+  std::vector<std::size_t> slot;  // per column of the header: its place in a kept row
   std::string cell;
+  std::size_t cells = 0;   // cells of the current record so far
+  std::size_t record = 1;  // the header is record 1
   std::size_t line = 1;
+  bool in_header = true;
+  const auto end_cell = [&] {
+    if (in_header) {
+      if (cells < selection.max_columns) header.push_back(std::move(cell));
+    } else if (cells < slot.size() && slot[cells] != kNotKept &&
+               data.rows.size() < selection.max_rows) {
+      row[slot[cells]] = std::move(cell);
+    }
+    cell.clear();
+    ++cells;
+  };
+  const auto end_record = [&] {
+    end_cell();
+    if (in_header) {
+      if (cells > selection.max_columns) {
+        throw Error("csv: the header has " + std::to_string(cells) + " cells, more than the " +
+                    std::to_string(selection.max_columns) + " read");
+      }
+      for (std::string& name : header) {
+        const bool kept = selection.columns.empty() ||
+                          std::find(selection.columns.begin(), selection.columns.end(), name) !=
+                              selection.columns.end();
+        slot.push_back(kept ? data.columns.size() : kNotKept);
+        if (kept) data.columns.push_back(std::move(name));
+      }
+      in_header = false;
+    } else if (cells != slot.size()) {
+      throw Error("csv: row " + std::to_string(record) + " has " + std::to_string(cells) +
+                  " cells but the header has " + std::to_string(slot.size()));
+    } else if (data.rows.size() < selection.max_rows) {
+      data.rows.push_back(std::move(row));
+    } else {
+      ++data.rows_left_out;
+    }
+    row.assign(data.columns.size(), std::string());
+    cells = 0;
+    ++record;
+  };
   bool quoted = false, any = false;
   for (std::size_t k = 0; k < text.size(); ++k) {
     const char c = text[k];
@@ -100,35 +143,21 @@ CsvData parse_csv(std::string_view text) {
     } else if (c == '"') {
       quoted = true;
     } else if (c == ',') {
-      cells.push_back(std::move(cell));
-      cell.clear();
+      end_cell();
     } else if (c == '\n' || c == '\r') {
       if (c == '\r' && k + 1 < text.size() && text[k + 1] == '\n') ++k;
-      cells.push_back(std::move(cell));
-      cell.clear();
-      lines.push_back(std::move(cells));
-      cells.clear();
+      end_record();
       any = false;
       ++line;
     } else {
       cell += c;
     }
   }
-  if (quoted) throw Error("csv: a quote opened on or before line " + std::to_string(line) + " is never closed");
-  if (any) {
-    cells.push_back(std::move(cell));
-    lines.push_back(std::move(cells));
+  if (quoted) {
+    throw Error("csv: a quote opened on or before line " + std::to_string(line) +
+                " is never closed");
   }
-  CsvData data;
-  if (lines.empty()) return data;
-  data.columns = std::move(lines.front());
-  for (std::size_t r = 1; r < lines.size(); ++r) {
-    if (lines[r].size() != data.columns.size()) {
-      throw Error("csv: row " + std::to_string(r + 1) + " has " + std::to_string(lines[r].size()) +
-                  " cells but the header has " + std::to_string(data.columns.size()));
-    }
-    data.rows.push_back(std::move(lines[r]));
-  }
+  if (any) end_record();
   return data;
 }
 

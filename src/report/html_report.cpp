@@ -1,8 +1,7 @@
 #include "physgrad/report/html_report.hpp"
 
-#include "physgrad/report/svg_document.hpp"
-
 #include "physgrad/error.hpp"
+#include "physgrad/report/shown_text.hpp"
 
 namespace physgrad {
 
@@ -33,7 +32,7 @@ bool blank(std::string_view line) {
 std::string paragraphs(std::string_view text) {
   std::string out, paragraph;
   const auto flush = [&] {
-    if (!paragraph.empty()) out += "<p>" + html_escape(paragraph) + "</p>\n";
+    if (!paragraph.empty()) out += "<p>" + xml_escape(paragraph) + "</p>\n";
     paragraph.clear();
   };
   while (!text.empty()) {
@@ -66,10 +65,10 @@ std::string table_html(const HtmlTable& table, const std::string& where) {
   // The caption sits above the scroll box, as wide as the text, however narrow the table.
   std::string out;
   if (!table.caption.empty()) {
-    out += "<p class=\"caption\">" + html_escape(table.caption) + "</p>\n";
+    out += "<p class=\"caption\">" + xml_escape(table.caption) + "</p>\n";
   }
   out += "<div class=\"table\"><table>\n<thead><tr>";
-  for (const std::string& h : table.header) out += "<th>" + html_escape(h) + "</th>";
+  for (const std::string& h : table.header) out += "<th>" + xml_escape(h) + "</th>";
   out += "</tr></thead>\n<tbody>\n";
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
     const auto& row = table.rows[r];
@@ -78,10 +77,11 @@ std::string table_html(const HtmlTable& table, const std::string& where) {
     out += "<tr>";
     for (std::size_t c = 0; c < row.size(); ++c) {
       const std::string link = table.links.empty() ? std::string() : table.links[r][c];
-      out += "<td>" +
-             (link.empty() ? html_escape(row[c])
-                           : "<a href=\"" + html_escape(link) + "\">" + html_escape(row[c]) + "</a>") +
-             "</td>";
+      out +=
+          "<td>" +
+          (link.empty() ? xml_escape(row[c])
+                        : "<a href=\"" + local_href(link) + "\">" + xml_escape(row[c]) + "</a>") +
+          "</td>";
     }
     out += "</tr>\n";
   }
@@ -90,18 +90,44 @@ std::string table_html(const HtmlTable& table, const std::string& where) {
 
 }  // namespace
 
-std::string html_escape(std::string_view text) { return xml_escape(text); }
+std::string local_href(std::string_view relative_path) {
+  static const char* const digits = "0123456789ABCDEF";
+  std::string out = ".";
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t end = relative_path.find('/', start);
+    const std::string_view segment = relative_path.substr(start, end - start);
+    if (segment.empty() || segment == "." || segment == "..") {
+      throw Error("html_report: cannot link to '" + shown_text(relative_path) +
+                  "': a segment is empty, '.' or '..'");
+    }
+    out += '/';
+    for (const char c : segment) {
+      const auto byte = static_cast<unsigned char>(c);
+      if ((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' ||
+          c == '.' || c == '_' || c == '~') {
+        out += c;
+      } else {
+        out += '%';
+        out += digits[byte >> 4];
+        out += digits[byte & 0xF];
+      }
+    }
+    if (end == std::string_view::npos) return out;
+    start = end + 1;
+  }
+}
 
 std::string html_report(const std::string& title, const std::string& intro,
                         const std::vector<HtmlSection>& sections) {
   std::string out =
       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
-  out += "<title>" + html_escape(title) + "</title>\n<style>\n" + kStyle + "</style>\n";
-  out += "</head>\n<body>\n<h1>" + html_escape(title) + "</h1>\n" + paragraphs(intro);
+  out += "<title>" + xml_escape(title) + "</title>\n<style>\n" + kStyle + "</style>\n";
+  out += "</head>\n<body>\n<h1>" + xml_escape(title) + "</h1>\n" + paragraphs(intro);
   for (const HtmlSection& section : sections) {
     out += "<section>\n";
-    if (!section.heading.empty()) out += "<h2>" + html_escape(section.heading) + "</h2>\n";
+    if (!section.heading.empty()) out += "<h2>" + xml_escape(section.heading) + "</h2>\n";
     out += paragraphs(section.text);
     for (const HtmlTable& table : section.tables) {
       out += table_html(table, "section '" + section.heading + "'");
@@ -110,10 +136,10 @@ std::string html_report(const std::string& title, const std::string& intro,
       out += "<div class=\"figures\">\n";
       for (const HtmlFigure& figure : section.figures) {
         out += (figure.id.empty() ? std::string("<figure>\n")
-                                  : "<figure id=\"" + html_escape(figure.id) + "\">\n") +
+                                  : "<figure id=\"" + xml_escape(figure.id) + "\">\n") +
                figure.svg;
         if (!figure.caption.empty()) {
-          out += "<figcaption>" + html_escape(figure.caption) + "</figcaption>\n";
+          out += "<figcaption>" + xml_escape(figure.caption) + "</figcaption>\n";
         }
         out += "</figure>\n";
       }

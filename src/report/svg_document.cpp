@@ -8,25 +8,7 @@
 
 #include "physgrad/hash.hpp"
 
-namespace physgrad {
-
-std::string xml_escape(std::string_view text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default:
-        if (static_cast<unsigned char>(c) >= 0x20 || c == '\t' || c == '\n') out += c;
-    }
-  }
-  return out;
-}
-
-namespace svg {
+namespace physgrad::svg {
 
 Box grow(const Box& b, double dx, double dy) {
   return {b.left - dx, b.top - dy, b.right + dx, b.bottom + dy};
@@ -92,5 +74,4 @@ std::string clipped(const Box& b, const std::string& content) {
          "/></clipPath></defs>\n<g clip-path=\"url(#" + id.data() + ")\">\n" + content + "</g>\n";
 }
 
-}  // namespace svg
-}  // namespace physgrad
+}  // namespace physgrad::svg

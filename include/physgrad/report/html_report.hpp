@@ -1,6 +1,7 @@
 // html_report — one self-contained HTML5 page of sections with text, captioned tables and inline
-// SVG figures; no external resources. Readable down to phone widths: wide tables scroll in their
-// own box and figures scale to the page.
+// SVG figures; no external resources and no script. Readable down to phone widths: wide tables
+// scroll in their own box and figures scale to the page. Every text goes through xml_escape and
+// every link through local_href.
 #pragma once
 
 #include <string>
@@ -14,7 +15,7 @@ struct HtmlTable {
   std::vector<std::vector<std::string>> rows;  // each with header.size() cells
   std::string caption{};                       // above the table: what it shows, its units
   // Optional links: empty, or one row per row of `rows` whose non-empty cells make the cell a
-  // link to that address.
+  // link to that file: a path relative to the page's folder, segments separated by '/'.
   std::vector<std::vector<std::string>> links{};
 };
 
@@ -31,10 +32,15 @@ struct HtmlSection {
   std::vector<HtmlFigure> figures;
 };
 
-// Escapes & < > " ' for use in HTML (and XML) text and attribute values.
-std::string html_escape(std::string_view text);
+// The address of a file inside the page's folder, for href and src: "./" and the path's
+// '/'-separated segments, each percent-encoded but for RFC 3986's unreserved characters
+// (A–Z a–z 0–9 - . _ ~), so that no name reads as a scheme ("javascript:"), a host, a query, a
+// fragment or an escape. "a#b/report.html" → "./a%23b/report.html". Throws Error on an empty,
+// "." or ".." segment (an absolute path, or one that leaves the folder).
+std::string local_href(std::string_view relative_path);
 
-// Throws Error when a table row's cell count (or a row of its links) differs from its header's.
+// Throws Error when a table row's cell count (or a row of its links) differs from its header's,
+// or a link is not a path local_href takes.
 std::string html_report(const std::string& title, const std::string& intro,
                         const std::vector<HtmlSection>& sections);
 

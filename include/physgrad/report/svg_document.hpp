@@ -6,12 +6,9 @@
 #include <string_view>
 #include <vector>
 
-namespace physgrad {
+#include "physgrad/report/shown_text.hpp"  // xml_escape
 
-// Text for XML (SVG and HTML): & < > " ' escaped, control characters (invalid in XML) dropped.
-std::string xml_escape(std::string_view text);
-
-namespace svg {
+namespace physgrad::svg {
 
 struct Point {
   double x, y;
@@ -50,5 +47,4 @@ std::string open(int width, int height);
 // embedded side by side in one HTML page do not pick up each other's clip paths.
 std::string clipped(const Box& b, const std::string& content);
 
-}  // namespace svg
-}  // namespace physgrad
+}  // namespace physgrad::svg

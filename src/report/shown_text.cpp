@@ -1,0 +1,89 @@
+#include "physgrad/report/shown_text.hpp"
+
+namespace physgrad {
+
+Utf8Char utf8_char_at(std::string_view text, std::size_t at) {
+  const auto byte = [&](std::size_t k) {
+    return at + k < text.size() ? static_cast<unsigned char>(text[at + k]) : 0u;
+  };
+  const unsigned lead = byte(0);
+  if (lead < 0x80) return {lead, 1};
+  // The length of the sequence, the bits its lead byte carries and the range of its second byte
+  // (no overlong forms, no surrogates, nothing above U+10FFFF).
+  std::size_t length = 0;
+  unsigned low = 0x80, high = 0xBF;
+  char32_t code_point = 0;
+  if (lead >= 0xC2 && lead <= 0xDF) {
+    length = 2;
+    code_point = lead & 0x1F;
+  } else if (lead >= 0xE0 && lead <= 0xEF) {
+    length = 3;
+    code_point = lead & 0x0F;
+    if (lead == 0xE0) low = 0xA0;
+    if (lead == 0xED) high = 0x9F;
+  } else if (lead >= 0xF0 && lead <= 0xF4) {
+    length = 4;
+    code_point = lead & 0x07;
+    if (lead == 0xF0) low = 0x90;
+    if (lead == 0xF4) high = 0x8F;
+  } else {
+    return {kNotUtf8, 1};
+  }
+  for (std::size_t k = 1; k < length; ++k) {
+    const unsigned next = byte(k);
+    if (next < (k == 1 ? low : 0x80) || next > (k == 1 ? high : 0xBF)) return {kNotUtf8, 1};
+    code_point = (code_point << 6) | (next & 0x3F);
+  }
+  return {code_point, length};
+}
+
+std::string_view unshowable_kind(char32_t c) {
+  if (c < 0x20 || (c >= 0x7F && c <= 0x9F)) return "control character";
+  if (c == 0xFFFE || c == 0xFFFF) return "noncharacter";
+  if ((c >= 0x202A && c <= 0x202E) || (c >= 0x2066 && c <= 0x2069)) return "bidirectional control";
+  return {};
+}
+
+std::string shown_text(std::string_view text, bool lines) {
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t at = 0; at < text.size();) {
+    const Utf8Char c = utf8_char_at(text, at);
+    const bool kept = lines && (c.code_point == '\t' || c.code_point == '\n');
+    if (c.code_point == kNotUtf8 || (!kept && !unshowable_kind(c.code_point).empty())) {
+      out += "\xEF\xBF\xBD";  // U+FFFD
+    } else {
+      out.append(text, at, c.length);
+    }
+    at += c.length;
+  }
+  return out;
+}
+
+std::string xml_escape(std::string_view text) {
+  std::string out;
+  for (const char c : shown_text(text, true)) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+}  // namespace physgrad
