@@ -14,7 +14,7 @@
 #include "interrupt.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
-#include "physgrad/report/shown_text.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad::experiments {
 

@@ -69,7 +69,7 @@ OptionSpec text_list_option(std::string name, std::string default_text, std::str
 // numbers. Throws Error such as "--lr: 'abc' is not a number (…)" or "--iters: must be ≥ 1,
 // got 0".
 nlohmann::json parse_option(const OptionSpec& spec, const std::string& text);
-// Empty when `text` is valid UTF-8 that shows what it holds (physgrad/report/shown_text.hpp):
+// Empty when `text` is valid UTF-8 that shows what it holds (physgrad/text.hpp):
 // free of control characters (C0, DEL, C1: a NUL would cut a path short, a newline split a
 // message or a CSV line), of U+FFFE and U+FFFF (invalid in a page's XML) and of bidirectional
 // controls (they reorder what a page or a terminal shows); else what is wrong with it, e.g.

@@ -16,7 +16,7 @@
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
-#include "physgrad/report/shown_text.hpp"
+#include "physgrad/text.hpp"
 #include "report_page.hpp"
 #include "run_folder.hpp"
 

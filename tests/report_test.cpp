@@ -24,7 +24,7 @@
 #include "physgrad/report/landscape.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
-#include "physgrad/report/shown_text.hpp"
+#include "physgrad/text.hpp"
 #include "svg_check.hpp"
 
 namespace physgrad {

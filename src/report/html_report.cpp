@@ -1,7 +1,7 @@
 #include "physgrad/report/html_report.hpp"
 
 #include "physgrad/error.hpp"
-#include "physgrad/report/shown_text.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad {
 

@@ -6,7 +6,7 @@
 #include <string_view>
 #include <vector>
 
-#include "physgrad/report/shown_text.hpp"  // xml_escape
+#include "physgrad/text.hpp"  // xml_escape
 
 namespace physgrad::svg {
 

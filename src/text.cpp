@@ -1,4 +1,4 @@
-#include "physgrad/report/shown_text.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad {
 
