@@ -139,17 +139,10 @@ OptionTexts config_options(const Experiment& experiment, const json& document) {
   const std::vector<OptionSpec> specs = all_options(experiment);
   OptionTexts texts;
   for (const auto& [key, value] : settings.items()) {
-    const auto spec = std::find_if(specs.begin(), specs.end(),
-                                   [&](const OptionSpec& s) { return s.name == key; });
-    if (spec == specs.end()) {
-      std::string allowed;
-      for (const OptionSpec& s : specs) allowed += (allowed.empty() ? "" : ", ") + s.name;
-      throw Error("experiment '" + experiment.name() + "' has no option '" + key +
-                  "' (allowed: " + allowed + ")");
-    }
+    const OptionSpec& spec = find_option(experiment, specs, key);
     if (value.is_null()) continue;
-    std::string text = option_text(*spec, value);
-    parse_option(*spec, text);
+    std::string text = option_text(spec, value);
+    parse_option(spec, text);
     texts.emplace_back(key, std::move(text));
   }
   return texts;

@@ -6,7 +6,6 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <sstream>
@@ -40,12 +39,6 @@ std::vector<std::string> split_list(const std::string& text) {
     if (comma == std::string::npos) return items;
     start = comma + 1;
   }
-}
-
-std::string join(const std::vector<std::string>& items) {
-  std::string out;
-  for (const auto& item : items) out += (out.empty() ? "" : ", ") + item;
-  return out;
 }
 
 std::string format_number(double value) {
@@ -83,20 +76,22 @@ bool is_decimal(const std::string& item, bool whole) {
 double parse_real(const OptionSpec& spec, const std::string& text) {
   const std::string item = trim(text);
   if (!is_decimal(item, false)) {
-    throw Error(flag(spec) + ": '" + text + "' is not a number (decimal, like 16, -2.5 or 1e-3)");
+    throw Error(flag(spec) + ": " + in_quotes(text) +
+                " is not a number (decimal, like 16, -2.5 or 1e-3)");
   }
   // strtod, not stod: a value below the normal range (1e-310) is kept as the subnormal it is.
   errno = 0;
   const double value = std::strtod(item.c_str(), nullptr);
   if (errno == ERANGE && std::isinf(value)) {
-    throw Error(flag(spec) + ": '" + text + "' is out of the range of a double");
+    throw Error(flag(spec) + ": " + in_quotes(text) + " is out of the range of a double");
   }
   if (errno == ERANGE && value == 0) {
-    throw Error(flag(spec) + ": '" + text + "' is too close to 0 for a double (it would read 0)");
+    throw Error(flag(spec) + ": " + in_quotes(text) +
+                " is too close to 0 for a double (it would read 0)");
   }
   const bool below = spec.min_exclusive ? !(value > spec.min) : !(value >= spec.min);
   if (below || value > spec.max || (spec.nonzero && value == 0)) {
-    throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got '" + text + "'");
+    throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got " + in_quotes(text));
   }
   return value;
 }
@@ -104,26 +99,27 @@ double parse_real(const OptionSpec& spec, const std::string& text) {
 long long parse_integer(const OptionSpec& spec, const std::string& text) {
   const std::string item = trim(text);
   if (!is_decimal(item, true)) {
-    throw Error(flag(spec) + ": '" + text + "' is not a whole number (decimal digits, like 16)");
+    throw Error(flag(spec) + ": " + in_quotes(text) +
+                " is not a whole number (decimal digits, like 16)");
   }
   errno = 0;
   const long long value = std::strtoll(item.c_str(), nullptr, 10);
   const bool beyond = errno == ERANGE;  // a whole number beyond ±9.2e18
   const auto as_double = static_cast<double>(value);
   if (beyond || as_double < spec.min || as_double > spec.max || (spec.nonzero && value == 0)) {
-    throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got '" + text + "'");
+    throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got " + in_quotes(text));
   }
   return value;
 }
 
 std::string parse_text(const OptionSpec& spec, const std::string& text) {
   if (const std::string problem = text_problem(text); !problem.empty()) {
-    throw Error(flag(spec) + ": '" + text + "' " + problem);
+    throw Error(flag(spec) + ": " + in_quotes(text) + " " + problem);
   }
   const std::string item = trim(text);
   if (!spec.choices.empty() &&
       std::find(spec.choices.begin(), spec.choices.end(), item) == spec.choices.end()) {
-    throw Error(flag(spec) + ": unknown value '" + item + "' (known: " + join(spec.choices) + ")");
+    throw Error(flag(spec) + ": " + unknown_name_text("value", item, spec.choices));
   }
   return item;
 }
@@ -157,31 +153,9 @@ OptionSpec text_list_option(std::string name, std::string default_text, std::str
   return make_option(std::move(name), Kind::kTextList, std::move(default_text), std::move(help));
 }
 
-std::string text_problem(std::string_view text) {
-  const auto named = [](const char* format, unsigned value) {
-    char buffer[16];
-    std::snprintf(buffer, sizeof buffer, format, value);
-    return std::string(buffer);
-  };
-  for (std::size_t at = 0; at < text.size();) {
-    const Utf8Char c = utf8_char_at(text, at);
-    if (c.code_point == kNotUtf8) {
-      return "is not valid UTF-8 (byte " + named("0x%02x", static_cast<unsigned char>(text[at])) +
-             " at " + std::to_string(at) + ")";
-    }
-    if (const std::string_view kind = unshowable_kind(c.code_point); !kind.empty()) {
-      return "contains the " + std::string(kind) + " " +
-             named(c.code_point < 0x80 ? "0x%02x" : "U+%04X", c.code_point) + " at byte " +
-             std::to_string(at);
-    }
-    at += c.length;
-  }
-  return {};
-}
-
 std::string describe_range(const OptionSpec& spec) {
   if (spec.kind == Kind::kText || spec.kind == Kind::kTextList) {
-    return spec.choices.empty() ? "" : "one of: " + join(spec.choices);
+    return spec.choices.empty() ? "" : "one of: " + comma_list(spec.choices);
   }
   std::vector<std::string> parts;
   const bool has_min = std::isfinite(spec.min);
@@ -195,7 +169,7 @@ std::string describe_range(const OptionSpec& spec) {
     parts.push_back("≤ " + format_number(spec.max));
   }
   if (spec.nonzero) parts.push_back("nonzero");
-  std::string out = join(parts);
+  std::string out = comma_list(parts);
   if (out.empty()) out = spec.kind == Kind::kInteger ? "a whole number" : "a finite number";
   return out;
 }
@@ -211,7 +185,7 @@ nlohmann::json parse_option(const OptionSpec& spec, const std::string& text) {
       nlohmann::json items = nlohmann::json::array();
       std::vector<std::string> entries, names;  // as given, and as labels show them
       for (const std::string& item : split_list(text)) {
-        if (item.empty()) throw Error(flag(spec) + ": empty entry in list '" + text + "'");
+        if (item.empty()) throw Error(flag(spec) + ": empty entry in list " + in_quotes(text));
         const bool number = spec.kind == Kind::kRealList;
         const double value = number ? parse_real(spec, item) : 0.0;
         const std::string name = number ? format_value(value) : parse_text(spec, item);
@@ -219,9 +193,10 @@ nlohmann::json parse_option(const OptionSpec& spec, const std::string& text) {
         if (spec.distinct && same != names.end()) {
           const std::string& first = entries[static_cast<std::size_t>(same - names.begin())];
           throw Error(flag(spec) + ": " +
-                      (first == item ? "'" + item + "' is listed twice"
-                                     : "'" + first + "' and '" + item + "' both read '" + name +
-                                           "' in labels and file names"));
+                      (first == item ? in_quotes(item) + " is listed twice"
+                                     : in_quotes(first) + " and " + in_quotes(item) +
+                                           " both read " + in_quotes(name) +
+                                           " in labels and file names"));
         }
         entries.push_back(item);
         names.push_back(name);
@@ -235,7 +210,7 @@ nlohmann::json parse_option(const OptionSpec& spec, const std::string& text) {
 
 const nlohmann::json& Settings::at(const std::string& name) const {
   if (!values_.contains(name) || values_.at(name).is_null()) {
-    throw Error("setting '" + name + "' is not set");
+    throw Error("setting " + in_quotes(name) + " is not set");
   }
   return values_.at(name);
 }
@@ -284,7 +259,7 @@ void RunContext::check_interrupt() const {
 }
 
 std::vector<OptionSpec> common_options(const Experiment& experiment) {
-  std::string defaults = join(experiment.default_optimizers());
+  std::string defaults = comma_list(experiment.default_optimizers());
   defaults.erase(std::remove(defaults.begin(), defaults.end(), ' '), defaults.end());
   return {
       text_list_option("optimizers", defaults, "comma-separated update rules to run")
@@ -317,17 +292,23 @@ std::vector<OptionSpec> all_options(const Experiment& experiment) {
   return options;
 }
 
+const OptionSpec& find_option(const Experiment& experiment, const std::vector<OptionSpec>& specs,
+                              const std::string& name) {
+  std::vector<std::string> known;
+  for (const OptionSpec& spec : specs) {
+    if (spec.name == name) return spec;
+    known.push_back(spec.name);
+  }
+  throw Error("experiment " + in_quotes(experiment.name()) + ": " +
+              unknown_name_text("option", name, known));
+}
+
 Settings resolve_settings(const Experiment& experiment,
                           const std::vector<std::pair<std::string, std::string>>& given) {
   const std::vector<OptionSpec> specs = all_options(experiment);
   nlohmann::json values = nlohmann::json::object();
   for (const auto& [name, text] : given) {
-    const auto spec = std::find_if(specs.begin(), specs.end(),
-                                   [&](const OptionSpec& s) { return s.name == name; });
-    if (spec == specs.end()) {
-      throw Error("experiment '" + experiment.name() + "' has no option --" + name);
-    }
-    values[name] = parse_option(*spec, text);
+    values[name] = parse_option(find_option(experiment, specs, name), text);
   }
   for (const OptionSpec& spec : specs) {
     if (values.contains(spec.name)) continue;
@@ -368,7 +349,7 @@ const Experiment& find_experiment(const std::string& name) {
     if (experiment->name() == name) return *experiment;
     known.push_back(experiment->name());
   }
-  throw Error("unknown experiment '" + name + "' (known: " + join(known) + ")");
+  throw unknown_name_error("experiment", name, known);
 }
 
 }  // namespace physgrad::experiments

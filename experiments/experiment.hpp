@@ -69,13 +69,6 @@ OptionSpec text_list_option(std::string name, std::string default_text, std::str
 // numbers. Throws Error such as "--lr: 'abc' is not a number (…)" or "--iters: must be ≥ 1,
 // got 0".
 nlohmann::json parse_option(const OptionSpec& spec, const std::string& text);
-// Empty when `text` is valid UTF-8 that shows what it holds (physgrad/text.hpp):
-// free of control characters (C0, DEL, C1: a NUL would cut a path short, a newline split a
-// message or a CSV line), of U+FFFE and U+FFFF (invalid in a page's XML) and of bidirectional
-// controls (they reorder what a page or a terminal shows); else what is wrong with it, e.g.
-// "contains the control character 0x00 at byte 6", "contains the bidirectional control U+202E
-// at byte 4" or "is not valid UTF-8 (byte 0xff at 2)".
-std::string text_problem(std::string_view text);
 // "a range like ≥ 1" for help texts; empty when unbounded.
 std::string describe_range(const OptionSpec& spec);
 
@@ -190,6 +183,10 @@ class Experiment {
 std::vector<OptionSpec> common_options(const Experiment& experiment);
 // common_options() followed by experiment.options().
 std::vector<OptionSpec> all_options(const Experiment& experiment);
+// The option `name` of `specs` (all_options(experiment)); throws Error "experiment 'E': unknown
+// option 'NAME' (known: …)".
+const OptionSpec& find_option(const Experiment& experiment, const std::vector<OptionSpec>& specs,
+                              const std::string& name);
 // Parses option name → text (missing names take their defaults). Throws Error on bad values
 // and on names the experiment does not have.
 Settings resolve_settings(const Experiment& experiment,

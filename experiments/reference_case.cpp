@@ -1,6 +1,7 @@
 #include "reference_case.hpp"
 
 #include "physgrad/error.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad::experiments {
 
@@ -16,11 +17,7 @@ ReferenceCase reference_case(const std::string& name, Index batch, std::uint64_t
   if (name == "oscillators") return oscillators_reference(batch, seed);
   if (name == "quantum-dipole") return quantum_dipole_reference(batch, seed);
   if (name == "poisson") return poisson_reference(batch, seed);
-  std::string known;
-  for (const std::string& candidate : reference_case_names()) {
-    known += (known.empty() ? "" : ", ") + candidate;
-  }
-  throw Error("unknown reference configuration '" + name + "' (known: " + known + ")");
+  throw unknown_name_error("reference configuration", name, reference_case_names());
 }
 
 namespace {

@@ -16,6 +16,7 @@
 #include "config_file.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/report/atomic_file.hpp"
+#include "physgrad/text.hpp"
 #include "run_folder.hpp"
 
 namespace physgrad::experiments {
@@ -27,7 +28,6 @@ namespace {
 constexpr const char* kStaging = ".staging";
 constexpr const char* kPendingSummary = ".summary.json.pending";
 
-std::string in_quotes(const std::string& text) { return "'" + text + "'"; }
 std::string system_reason(int err) { return std::strerror(err); }
 
 // What a folder holds, by the names the run folder uses.

@@ -57,7 +57,6 @@ struct IndexedFolder {
   bool has_report = false;
 };
 
-std::string quoted(const fs::path& path) { return "'" + path.string() + "'"; }
 
 json read_json(const fs::path& path) {
   return parse_json_text(read_regular_file(path, kMaxJsonBytes), 64);
@@ -104,8 +103,8 @@ void read_summary(const json& summary, IndexedFolder& folder, std::vector<std::s
   folder.experiment = text_field(summary, "experiment", "", "?");
   const json& runs = summary.at("runs");
   if (runs.size() > kMaxRuns) {
-    notes.push_back(quoted(file) + ": " + std::to_string(runs.size()) + " runs, only the first " +
-                    std::to_string(kMaxRuns) + " are listed");
+    notes.push_back(in_quotes(file.string()) + ": " + std::to_string(runs.size()) +
+                    " runs, only the first " + std::to_string(kMaxRuns) + " are listed");
   }
   for (std::size_t k = 0; k < std::min(runs.size(), kMaxRuns); ++k) {
     const std::string where = "runs[" + std::to_string(k) + "]";
@@ -131,7 +130,7 @@ std::vector<LabelCurves> read_curves(const fs::path& file, std::vector<std::stri
       parse_csv(read_regular_file(file, kMaxMetricsBytes),
                 {{"label", "seed", "wall_seconds", "test_loss"}, kMaxMetricsRows});
   if (metrics.rows_left_out > 0) {
-    notes.push_back(quoted(file) + ": " +
+    notes.push_back(in_quotes(file.string()) + ": " +
                     std::to_string(metrics.rows.size() + metrics.rows_left_out) +
                     " rows, only the first " + std::to_string(metrics.rows.size()) + " are drawn");
   }
@@ -163,7 +162,7 @@ std::vector<LabelCurves> read_curves(const fs::path& file, std::vector<std::stri
     curve.y.push_back(std::strtod(row[loss].c_str(), nullptr));
   }
   if (rows_left_out > 0) {
-    notes.push_back(quoted(file) + ": more than " + std::to_string(kMaxCurves) +
+    notes.push_back(in_quotes(file.string()) + ": more than " + std::to_string(kMaxCurves) +
                     " curves (label and seed), the " + std::to_string(rows_left_out) +
                     " rows of the others are not drawn");
   }
@@ -181,7 +180,7 @@ IndexedFolder read_folder(const fs::path& path, std::vector<std::string>& notes)
     try {
       read();
     } catch (const Error& e) {
-      throw Error(quoted(file) + ": " + e.what());
+      throw Error(in_quotes(file.string()) + ": " + e.what());
     }
   };
   const fs::path summary = path / kSummaryFile, config = path / kConfigFile,
@@ -199,7 +198,8 @@ IndexedFolder read_folder(const fs::path& path, std::vector<std::string>& notes)
     try {
       folder.curves = read_curves(metrics, cut);
     } catch (const Error& e) {
-      cut.push_back(quoted(metrics) + ": " + e.what() + "; its loss curves are not drawn");
+      cut.push_back(in_quotes(metrics.string()) + ": " + e.what() +
+                    "; its loss curves are not drawn");
     }
   }
   folder.has_report = fs::exists(path / "report.html", error);
@@ -377,7 +377,7 @@ std::size_t write_run_index(const fs::path& dir, std::ostream& warnings) {
                 (notes.empty() ? "" : " that can be read: " + notes.front()));
   }
   for (const std::string& note : notes) {
-    warnings << "physgrad: warning: report: " << shown_text(note) << '\n';
+    warnings << "physgrad: warning: report: " << one_line(note) << '\n';
   }
   std::string left_out;
   for (const std::string& note : notes) left_out += note + "\n\n";

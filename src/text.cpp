@@ -1,5 +1,8 @@
 #include "physgrad/text.hpp"
 
+#include <algorithm>
+#include <cstdio>
+
 namespace physgrad {
 
 Utf8Char utf8_char_at(std::string_view text, std::size_t at) {
@@ -44,6 +47,34 @@ std::string_view unshowable_kind(char32_t c) {
   return {};
 }
 
+std::size_t code_points(std::string_view text) {
+  return static_cast<std::size_t>(std::count_if(text.begin(), text.end(), [](char c) {
+    return (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+  }));
+}
+
+std::string text_problem(std::string_view text) {
+  const auto named = [](const char* format, unsigned value) {
+    char buffer[16];
+    std::snprintf(buffer, sizeof buffer, format, value);
+    return std::string(buffer);
+  };
+  for (std::size_t at = 0; at < text.size();) {
+    const Utf8Char c = utf8_char_at(text, at);
+    if (c.code_point == kNotUtf8) {
+      return "is not valid UTF-8 (byte " + named("0x%02x", static_cast<unsigned char>(text[at])) +
+             " at " + std::to_string(at) + ")";
+    }
+    if (const std::string_view kind = unshowable_kind(c.code_point); !kind.empty()) {
+      return "contains the " + std::string(kind) + " " +
+             named(c.code_point < 0x80 ? "0x%02x" : "U+%04X", c.code_point) + " at byte " +
+             std::to_string(at);
+    }
+    at += c.length;
+  }
+  return {};
+}
+
 std::string shown_text(std::string_view text, bool lines) {
   std::string out;
   out.reserve(text.size());
@@ -84,6 +115,52 @@ std::string xml_escape(std::string_view text) {
     }
   }
   return out;
+}
+
+std::string one_line(std::string_view text) {
+  static const char* const digits = "0123456789abcdef";
+  std::string line;
+  line.reserve(text.size());
+  for (std::size_t at = 0; at < text.size();) {
+    const Utf8Char c = utf8_char_at(text, at);
+    const bool shown = c.code_point != kNotUtf8 && unshowable_kind(c.code_point).empty();
+    for (std::size_t k = 0; k < c.length; ++k) {
+      const auto byte = static_cast<unsigned char>(text[at + k]);
+      if (shown) {
+        line += static_cast<char>(byte);
+      } else {
+        line += "\\x";
+        line += digits[byte >> 4];
+        line += digits[byte & 0xF];
+      }
+    }
+    at += c.length;
+  }
+  return line;
+}
+
+std::string in_quotes(std::string_view value) {
+  std::string text(1, '\'');
+  text += one_line(value);
+  text += '\'';
+  return text;
+}
+
+std::string comma_list(const std::vector<std::string>& items) {
+  std::string list;
+  for (const std::string& item : items) list += (list.empty() ? "" : ", ") + item;
+  return list;
+}
+
+std::string unknown_name_text(std::string_view what, std::string_view name,
+                              const std::vector<std::string>& known) {
+  return "unknown " + std::string(what) + " " + in_quotes(name) + " (known: " +
+         comma_list(known) + ")";
+}
+
+Error unknown_name_error(std::string_view what, std::string_view name,
+                         const std::vector<std::string>& known) {
+  return Error(unknown_name_text(what, name, known));
 }
 
 }  // namespace physgrad

@@ -104,7 +104,7 @@ TEST_F(Cli, RunWritesTheWholeRunFolder) {
 TEST_F(Cli, BadConfigFileIsOneLineExitTwoAndWritesNothing) {
   // {file content, text the error line must contain}
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {R"({"learning-rate": 0.1})", "has no option 'learning-rate' (allowed: optimizers, "},
+      {R"({"learning-rate": 0.1})", "unknown option 'learning-rate' (known: optimizers, "},
       {R"({"lr": true})", "--lr: expected a number, got true"},
       {R"({"iters": 0})", "--iters: must be in [1, 1000000000], got '0'"},
       {R"({"iters": 2.5})", "--iters: '2.5' is not a whole number"},

@@ -24,7 +24,6 @@
 #include "physgrad/report/landscape.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
-#include "physgrad/text.hpp"
 #include "svg_check.hpp"
 
 namespace physgrad {
@@ -728,48 +727,6 @@ TEST(HtmlReport, LinksArePercentEncodedPathsInsideThePagesFolder) {
 TEST(HtmlReport, RaggedTableRowThrows) {
   const HtmlSection section{"S", "", {{{"a", "b"}, {{"1"}}}}, {}};
   EXPECT_THROW(html_report("T", "", {section}), Error);
-}
-
-TEST(ShownText, EscapesForXmlAndReplacesWhatCannotBeShown) {
-  EXPECT_EQ(xml_escape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&#39;");
-  const std::string replaced = "\xef\xbf\xbd";  // U+FFFD
-  // Multi-byte characters (λ, €, 𝑥) and U+FFFD itself are kept; tab and newline in XML text.
-  EXPECT_EQ(xml_escape("λ € \xf0\x9d\x91\xa5 \xef\xbf\xbd\tx\ny"),
-            "λ € \xf0\x9d\x91\xa5 \xef\xbf\xbd\tx\ny");
-  EXPECT_EQ(shown_text("a\tb\nc"), "a" + replaced + "b" + replaced + "c");
-  EXPECT_EQ(shown_text("a\tb\nc", true), "a\tb\nc");
-  // Each byte that does not start a valid UTF-8 sequence, and each unshowable character, becomes
-  // one U+FFFD: (text, how many).
-  const std::vector<std::pair<std::string, std::size_t>> cases = {
-      {"\xff", 1},
-      {"\x80", 1},
-      {"\xc0\xaf", 2},          // stray bytes, an overlong form
-      {"\xed\xa0\x80", 3},      // a surrogate
-      {"\xf4\x90\x80\x80", 4},  // beyond U+10FFFF
-      {"\xe2\x82", 2},          // cut short
-      {"\x01", 1},
-      {"\r", 1},
-      {"\x7f", 1},
-      {"\xc2\x85", 1},  // C0, DEL, C1
-      {"\xef\xbf\xbe", 1},
-      {"\xef\xbf\xbf", 1},  // U+FFFE, U+FFFF
-      {"\xe2\x80\xaa", 1},
-      {"\xe2\x80\xae", 1},  // U+202A, U+202E
-      {"\xe2\x81\xa6", 1},
-      {"\xe2\x81\xa9", 1}};  // U+2066, U+2069
-  for (const auto& [bad, count] : cases) {
-    std::string replacements;
-    for (std::size_t k = 0; k < count; ++k) replacements += replaced;
-    EXPECT_EQ(xml_escape("<" + bad + ">"), "&lt;" + replacements + "&gt;") << bad;
-    EXPECT_EQ(shown_text(bad, true), replacements) << bad;
-  }
-  // U+202F and U+2065, next to the bidirectional controls, are kept.
-  EXPECT_EQ(shown_text("\xe2\x80\xae"
-                       "ab\xe2\x80\xaf"
-                       "c\xe2\x81\xa5"),
-            replaced +
-                "ab\xe2\x80\xaf"
-                "c\xe2\x81\xa5");
 }
 
 }  // namespace

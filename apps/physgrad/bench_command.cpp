@@ -13,6 +13,7 @@
 #include "experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
+#include "physgrad/text.hpp"
 #include "physgrad/threads.hpp"
 #include "reference_case.hpp"
 
@@ -65,16 +66,11 @@ BenchCommand::BenchCommand(CLI::App& app)
     : command_(app.add_subcommand(
           "bench", "time steps of an update on a reference experiment, one JSON line: physgrad bench "
                    "NAME [--optimizer U] [--batch B] [--steps N] [--warmup W] [--threads T]")) {
-  std::string names;
-  for (const std::string& name : ex::reference_case_names()) {
-    names += (names.empty() ? "" : ", ") + name;
-  }
-  command_->add_option("NAME", name_, "reference experiment: " + names)->required();
-  std::string rules;
-  for (const std::string& id : rule_ids(RuleKind::kLearning)) {
-    rules += (rules.empty() ? "" : ", ") + id;
-  }
-  command_->add_option("--optimizer", optimizer_, "update rule: " + rules)
+  command_->add_option("NAME", name_,
+                       "reference experiment: " + comma_list(ex::reference_case_names()))
+      ->required();
+  command_->add_option("--optimizer", optimizer_,
+                       "update rule: " + comma_list(rule_ids(RuleKind::kLearning)))
       ->default_str(optimizer_);
   command_->add_option("--batch", batch_, "batch size (default: the rule's own in NAME)")
       ->type_name("INT");

@@ -31,6 +31,7 @@
 #include "physgrad/memory.hpp"
 #include "physgrad/report/atomic_file.hpp"
 #include "physgrad/train/checkpoint_file.hpp"
+#include "physgrad/text.hpp"
 #include "physgrad/threads.hpp"
 #include "ranks.hpp"
 #include "run_folder.hpp"
@@ -70,59 +71,46 @@ std::string option_help(const ex::OptionSpec& spec) {
   return help;
 }
 
-// An error message on one line: control characters (a newline inside a bad value) as \xNN.
-std::string one_line(const std::string& message) {
-  std::string line;
-  for (const char c : message) {
-    if (static_cast<unsigned char>(c) >= 0x20 && c != 0x7F) {
-      line += c;
-      continue;
-    }
-    static const char* const digits = "0123456789abcdef";
-    line += "\\x";
-    line += digits[(c >> 4) & 0xF];
-    line += digits[c & 0xF];
-  }
-  return line;
-}
-
 // Every argument is a text value: refuse control characters (a NUL cuts a path short) and bytes
 // that are not UTF-8 (config.json could not hold them), naming the option they belong to.
 void check_arguments(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string argument = argv[i];
-    const std::string problem = ex::text_problem(argument);
+    const std::string problem = physgrad::text_problem(argument);
     if (problem.empty()) continue;
     const std::size_t equals = argument.find('=');
     const std::string previous = i > 1 ? argv[i - 1] : "";
     if (argument.starts_with("--") && equals != std::string::npos) {  // --name=value
       const std::string value = argument.substr(equals + 1);
-      const std::string value_problem = ex::text_problem(value);
+      const std::string value_problem = physgrad::text_problem(value);
       if (!value_problem.empty()) {
-        throw physgrad::Error(argument.substr(0, equals) + ": '" + value + "' " + value_problem);
+        throw physgrad::Error(argument.substr(0, equals) + ": " + physgrad::in_quotes(value) + " " +
+                              value_problem);
       }
     }
     const std::string owner =
         previous.starts_with("--") ? previous : "argument " + std::to_string(i);
-    throw physgrad::Error(owner + ": '" + argument + "' " + problem);
+    throw physgrad::Error(owner + ": " + physgrad::in_quotes(argument) + " " + problem);
   }
 }
 
 // Throws Error "unknown subcommand 'NAME' (known: list, describe, …)" unless `name` is one
 // (an empty name: "a subcommand is required (known: …)").
 void check_subcommand(CLI::App& app, const std::string& name) {
-  std::string known;
+  std::vector<std::string> known;
   for (const CLI::App* sub : app.get_subcommands({})) {
     if (sub->get_name() == name) return;
-    known += (known.empty() ? "" : ", ") + sub->get_name();
+    known.push_back(sub->get_name());
   }
-  throw physgrad::Error((name.empty() ? std::string("a subcommand is required")
-                                      : "unknown subcommand '" + name + "'") +
-                        " (known: " + known + ")");
+  if (name.empty()) {
+    throw physgrad::Error("a subcommand is required (known: " + physgrad::comma_list(known) + ")");
+  }
+  throw physgrad::unknown_name_error("subcommand", name, known);
 }
 
 int usage_error(const std::string& message) {
-  std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << one_line(message) << '\n';
+  std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << physgrad::one_line(message)
+            << '\n';
   return physgrad::cli::end_run(kUsageError);  // under mpirun: ends the other ranks too
 }
 
@@ -137,7 +125,7 @@ void reserve_blas_buffer() {
     physgrad::require_memory(160 * kMiB,
                              "the BLAS library's 128 MiB work buffer with 32 MiB to spare");
   } catch (const physgrad::Error& e) {
-    std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << one_line(e.what())
+    std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << physgrad::one_line(e.what())
               << std::endl;
     std::_Exit(kUsageError);
   }
@@ -148,11 +136,8 @@ void reserve_blas_buffer() {
 
 void print_table(const ex::RunContext::Table& table) {
   std::vector<std::size_t> widths(table.header.size(), 0);
-  const auto width = [](const std::string& text) {
-    // Count code points, not bytes, so α and ≤ line up.
-    return static_cast<std::size_t>(std::count_if(
-        text.begin(), text.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; }));
-  };
+  // Code points, not bytes, so α and ≤ line up.
+  const auto width = [](const std::string& text) { return physgrad::code_points(text); };
   for (std::size_t c = 0; c < table.header.size(); ++c) widths[c] = width(table.header[c]);
   for (const auto& row : table.rows) {
     for (std::size_t c = 0; c < row.size() && c < widths.size(); ++c) {

@@ -1,17 +1,16 @@
 #include "physgrad/nn/activation.hpp"
 
-#include <array>
 #include <cmath>
 #include <sstream>
-#include <utility>
 
 #include "physgrad/error.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad {
 
 namespace {
 
-constexpr std::array<std::pair<Activation, const char*>, 5> kNames{{
+constexpr NameTable<Activation, 5> kNames{{
     {Activation::kTanh, "tanh"},
     {Activation::kRelu, "relu"},
     {Activation::kSigmoid, "sigmoid"},
@@ -44,23 +43,15 @@ void check_shape(const char* what, const Eigen::Ref<const Eigen::ArrayXXd>& z,
 }  // namespace
 
 std::string to_string(Activation activation) {
-  for (const auto& [value, name] : kNames) {
-    if (value == activation) return name;
+  if (const std::string_view name = name_of(kNames, activation); !name.empty()) {
+    return std::string(name);
   }
   throw Error(std::string("to_string: unknown Activation value ") +
               std::to_string(static_cast<int>(activation)));
 }
 
 Activation parse_activation(const std::string& text) {
-  for (const auto& [value, name] : kNames) {
-    if (text == name) return value;
-  }
-  std::string msg = std::string("unknown activation '") + text + "'; known:";
-  for (const auto& entry : kNames) {
-    msg += ' ';
-    msg += entry.second;
-  }
-  throw Error(msg);
+  return value_named(kNames, text, "activation");
 }
 
 void apply(Activation activation, const Eigen::Ref<const Eigen::ArrayXXd>& z,

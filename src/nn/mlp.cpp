@@ -8,12 +8,13 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/nn/dense_layer_gram.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad {
 
 namespace {
 
-constexpr std::array<std::pair<Init, const char*>, 2> kInitNames{{
+constexpr NameTable<Init, 2> kInitNames{{
     {Init::kGlorotUniform, "glorot"},
     {Init::kHeUniform, "he"},
 }};
@@ -96,19 +97,14 @@ void backpropagate(const Mlp& mlp, const MlpCache& cache, const Matrix& gy, Visi
 }  // namespace
 
 std::string to_string(Init init) {
-  for (const auto& [value, name] : kInitNames) {
-    if (value == init) return name;
+  if (const std::string_view name = name_of(kInitNames, init); !name.empty()) {
+    return std::string(name);
   }
   throw Error(std::string("to_string: unknown Init value ") +
               std::to_string(static_cast<int>(init)));
 }
 
-Init parse_init(const std::string& text) {
-  for (const auto& [value, name] : kInitNames) {
-    if (text == name) return value;
-  }
-  throw Error(std::string("unknown init '") + text + "'; known: glorot he");
-}
+Init parse_init(const std::string& text) { return value_named(kInitNames, text, "init"); }
 
 Mlp::Mlp(std::vector<Index> widths, Activation hidden, Activation output)
     : widths_(std::move(widths)), hidden_(hidden), output_(output) {

@@ -29,10 +29,7 @@ std::string num(double v) {
 }
 
 double text_width(std::string_view text, double font_size) {
-  const auto points = std::count_if(text.begin(), text.end(), [](char c) {
-    return (static_cast<unsigned char>(c) & 0xC0) != 0x80;
-  });
-  return 0.6 * font_size * static_cast<double>(points);
+  return 0.6 * font_size * static_cast<double>(code_points(text));
 }
 
 std::string text(double x, double y, std::string_view content, std::string_view attributes) {

@@ -1,6 +1,5 @@
 #include "physgrad/train/trainer.hpp"
 
-#include <array>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -10,6 +9,7 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/stop.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad {
 
@@ -21,7 +21,7 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-constexpr std::array<std::pair<TrainingTermination, const char*>, 5> kTerminationNames{{
+constexpr NameTable<TrainingTermination, 5> kTerminationNames{{
     {TrainingTermination::kMaxIterations, "max_iterations"},
     {TrainingTermination::kMaxEpochs, "max_epochs"},
     {TrainingTermination::kTimeBudget, "time_budget"},
@@ -320,19 +320,12 @@ void TrainingRun::checkpoint() {
 }  // namespace
 
 std::string to_string(TrainingTermination termination) {
-  for (const auto& [value, name] : kTerminationNames) {
-    if (value == termination) return name;
-  }
-  return "unknown";
+  const std::string_view name = name_of(kTerminationNames, termination);
+  return name.empty() ? "unknown" : std::string(name);
 }
 
 TrainingTermination parse_training_termination(const std::string& text) {
-  std::string known;
-  for (const auto& [value, name] : kTerminationNames) {
-    if (text == name) return value;
-    known += (known.empty() ? "" : ", ") + std::string(name);
-  }
-  throw Error("unknown training termination '" + text + "' (known: " + known + ")");
+  return value_named(kTerminationNames, text, "training termination");
 }
 
 TrainingSummary train(Network& network, LearningUpdate& update, const LearningProblem& problem,
