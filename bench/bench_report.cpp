@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "physgrad/error.hpp"
-#include "physgrad/report/atomic_file.hpp"
+#include "physgrad/io/atomic_file.hpp"
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 

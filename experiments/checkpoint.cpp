@@ -1,8 +1,8 @@
 #include "checkpoint.hpp"
 
 #include "physgrad/error.hpp"
-#include "physgrad/serialize.hpp"
-#include "physgrad/train/checkpoint_file.hpp"
+#include "physgrad/io/serialize.hpp"
+#include "physgrad/io/checkpoint_file.hpp"
 #include "run_folder.hpp"
 
 namespace physgrad::experiments {

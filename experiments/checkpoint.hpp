@@ -9,7 +9,7 @@
 #include <optional>
 #include <string>
 
-#include "physgrad/folder_handle.hpp"
+#include "physgrad/io/folder_handle.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad::experiments {

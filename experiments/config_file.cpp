@@ -7,7 +7,7 @@
 #include <cmath>
 
 #include "physgrad/error.hpp"
-#include "physgrad/json_file.hpp"
+#include "physgrad/io/json_file.hpp"
 
 namespace physgrad::experiments {
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "experiment.hpp"
-#include "physgrad/folder_handle.hpp"
+#include "physgrad/io/folder_handle.hpp"
 
 namespace physgrad::experiments {
 

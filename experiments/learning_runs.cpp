@@ -9,7 +9,7 @@
 #include "interrupt.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
-#include "physgrad/serialize.hpp"
+#include "physgrad/io/serialize.hpp"
 
 namespace physgrad::experiments {
 

@@ -3,8 +3,8 @@
 #include <set>
 
 #include "physgrad/error.hpp"
-#include "physgrad/report/atomic_file.hpp"
-#include "physgrad/report/csv.hpp"
+#include "physgrad/io/atomic_file.hpp"
+#include "physgrad/io/csv.hpp"
 #include "report_page.hpp"
 
 namespace physgrad::experiments {

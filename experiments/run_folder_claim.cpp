@@ -15,7 +15,7 @@
 #include "checkpoint.hpp"
 #include "config_file.hpp"
 #include "physgrad/error.hpp"
-#include "physgrad/report/atomic_file.hpp"
+#include "physgrad/io/atomic_file.hpp"
 #include "physgrad/text.hpp"
 #include "run_folder.hpp"
 

@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "physgrad/error.hpp"
-#include "physgrad/json_file.hpp"
-#include "physgrad/report/atomic_file.hpp"
+#include "physgrad/io/json_file.hpp"
+#include "physgrad/io/atomic_file.hpp"
 #include "physgrad/report/colors.hpp"
-#include "physgrad/report/csv.hpp"
+#include "physgrad/io/csv.hpp"
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"

@@ -16,7 +16,7 @@
 
 #include "cli_fixture.hpp"
 #include "interrupt.hpp"
-#include "physgrad/train/checkpoint_file.hpp"
+#include "physgrad/io/checkpoint_file.hpp"
 
 namespace {
 

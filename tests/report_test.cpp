@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "physgrad/error.hpp"
-#include "physgrad/report/atomic_file.hpp"
-#include "physgrad/report/csv.hpp"
+#include "physgrad/io/atomic_file.hpp"
+#include "physgrad/io/csv.hpp"
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/field_plot.hpp"

@@ -5,7 +5,7 @@
 #include <utility>
 
 #include "physgrad/error.hpp"
-#include "physgrad/serialize.hpp"
+#include "physgrad/io/serialize.hpp"
 
 namespace physgrad {
 

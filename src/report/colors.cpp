@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <utility>
 
-#include "physgrad/hash.hpp"
+#include "physgrad/io/hash.hpp"
 
 namespace physgrad {
 

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 
-#include "physgrad/hash.hpp"
+#include "physgrad/io/hash.hpp"
 
 namespace physgrad::svg {
 

@@ -3,7 +3,7 @@
 #include <utility>
 
 #include "physgrad/error.hpp"
-#include "physgrad/serialize.hpp"
+#include "physgrad/io/serialize.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad {

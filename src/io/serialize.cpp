@@ -1,4 +1,4 @@
-#include "physgrad/serialize.hpp"
+#include "physgrad/io/serialize.hpp"
 
 #include <climits>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "physgrad/report/csv.hpp"
+#include "physgrad/io/csv.hpp"
 
 #include <algorithm>
 #include <array>

@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <string_view>
 
-#include "physgrad/folder_handle.hpp"
+#include "physgrad/io/folder_handle.hpp"
 
 namespace physgrad {
 

@@ -1,4 +1,4 @@
-#include "physgrad/report/atomic_file.hpp"
+#include "physgrad/io/atomic_file.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>

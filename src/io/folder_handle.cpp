@@ -1,4 +1,4 @@
-#include "physgrad/folder_handle.hpp"
+#include "physgrad/io/folder_handle.hpp"
 
 #include <dirent.h>
 #include <fcntl.h>

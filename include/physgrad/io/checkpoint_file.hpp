@@ -10,8 +10,8 @@
 #include <string>
 #include <string_view>
 
-#include "physgrad/folder_handle.hpp"
-#include "physgrad/hash.hpp"
+#include "physgrad/io/folder_handle.hpp"
+#include "physgrad/io/hash.hpp"
 
 namespace physgrad {
 

@@ -1,4 +1,4 @@
-#include "physgrad/json_file.hpp"
+#include "physgrad/io/json_file.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>

@@ -8,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-#include "physgrad/folder_handle.hpp"
+#include "physgrad/io/folder_handle.hpp"
 
 namespace physgrad {
 

@@ -1,12 +1,12 @@
-#include "physgrad/train/checkpoint_file.hpp"
+#include "physgrad/io/checkpoint_file.hpp"
 
 #include <cstdio>
 #include <sstream>
 #include <string>
 
 #include "physgrad/error.hpp"
-#include "physgrad/json_file.hpp"
-#include "physgrad/report/atomic_file.hpp"
+#include "physgrad/io/json_file.hpp"
+#include "physgrad/io/atomic_file.hpp"
 
 namespace physgrad {
 
