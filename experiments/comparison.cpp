@@ -4,7 +4,7 @@
 #include <cmath>
 #include <functional>
 
-#include "direct_runs.hpp"
+#include "physgrad/run/direct_runs.hpp"
 #include "experiment_list.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"

@@ -3,9 +3,15 @@
 
 #include <memory>
 
-#include "experiment.hpp"
+#include "physgrad/run/experiment.hpp"
 
 namespace physgrad::experiments {
+
+// Every registered experiment, in display order.
+const std::vector<std::unique_ptr<Experiment>>& registry();
+// Throws Error "unknown experiment 'x' (known: ...)".
+const Experiment& find_experiment(const std::string& name);
+
 
 std::unique_ptr<Experiment> make_scaled_toy();
 std::unique_ptr<Experiment> make_sensitivity();

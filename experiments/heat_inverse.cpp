@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "experiment_list.hpp"
-#include "learning_runs.hpp"
+#include "physgrad/run/learning_runs.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/memory.hpp"
@@ -14,7 +14,7 @@
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/field_plot.hpp"
 #include "physgrad/report/line_plot.hpp"
-#include "sampling.hpp"
+#include "physgrad/run/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

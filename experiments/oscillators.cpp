@@ -4,14 +4,14 @@
 #include <cmath>
 
 #include "experiment_list.hpp"
-#include "learning_runs.hpp"
+#include "physgrad/run/learning_runs.hpp"
 #include "reference_case.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/line_plot.hpp"
-#include "sampling.hpp"
+#include "physgrad/run/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

@@ -4,13 +4,13 @@
 #include <cmath>
 
 #include "experiment_list.hpp"
-#include "learning_runs.hpp"
+#include "physgrad/run/learning_runs.hpp"
 #include "reference_case.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/poisson.hpp"
 #include "physgrad/report/field_plot.hpp"
-#include "sampling.hpp"
+#include "physgrad/run/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

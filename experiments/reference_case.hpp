@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "learning_runs.hpp"
+#include "physgrad/run/learning_runs.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad::experiments {

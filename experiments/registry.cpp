@@ -1,5 +1,7 @@
 #include "experiment_list.hpp"
 
+#include "physgrad/text.hpp"
+
 namespace physgrad::experiments {
 
 const std::vector<std::unique_ptr<Experiment>>& registry() {
@@ -18,6 +20,15 @@ const std::vector<std::unique_ptr<Experiment>>& registry() {
     return list;
   }();
   return experiments;
+}
+
+const Experiment& find_experiment(const std::string& name) {
+  std::vector<std::string> known;
+  for (const auto& experiment : registry()) {
+    if (experiment->name() == name) return *experiment;
+    known.push_back(experiment->name());
+  }
+  throw unknown_name_error("experiment", name, known);
 }
 
 }  // namespace physgrad::experiments

@@ -3,7 +3,7 @@
 // loss by the tolerance show which rules are scale-invariant (independent of α).
 #include <cmath>
 
-#include "direct_runs.hpp"
+#include "physgrad/run/direct_runs.hpp"
 #include "experiment_list.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"

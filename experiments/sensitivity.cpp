@@ -3,7 +3,7 @@
 // inverse gradient's step does not depend on α at all.
 #include <cmath>
 
-#include "direct_runs.hpp"
+#include "physgrad/run/direct_runs.hpp"
 #include "experiment_list.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"

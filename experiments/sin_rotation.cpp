@@ -6,12 +6,12 @@
 #include <cmath>
 
 #include "experiment_list.hpp"
-#include "learning_runs.hpp"
+#include "physgrad/run/learning_runs.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/sin_rotation.hpp"
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/landscape.hpp"
-#include "sampling.hpp"
+#include "physgrad/run/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

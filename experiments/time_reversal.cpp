@@ -8,13 +8,13 @@
 #include <cmath>
 #include <map>
 
-#include "direct_runs.hpp"
+#include "physgrad/run/direct_runs.hpp"
 #include "experiment_list.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"
 #include "physgrad/physics/fpu_chain.hpp"
-#include "sampling.hpp"
+#include "physgrad/run/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

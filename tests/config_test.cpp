@@ -17,8 +17,9 @@
 #include <tuple>
 #include <typeinfo>
 
-#include "config_file.hpp"
-#include "experiment.hpp"
+#include "physgrad/run/config_file.hpp"
+#include "experiment_list.hpp"
+#include "physgrad/run/experiment.hpp"
 #include "physgrad/error.hpp"
 
 namespace physgrad::experiments {

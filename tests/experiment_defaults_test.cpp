@@ -10,7 +10,8 @@
 #include <string>
 
 #include "cli_fixture.hpp"
-#include "experiment.hpp"
+#include "experiment_list.hpp"
+#include "physgrad/run/experiment.hpp"
 
 namespace {
 

@@ -6,7 +6,8 @@
 #include <utility>
 #include <vector>
 
-#include "experiment.hpp"
+#include "experiment_list.hpp"
+#include "physgrad/run/experiment.hpp"
 
 namespace physgrad::experiments::testing {
 

@@ -4,7 +4,8 @@
 
 #include <algorithm>
 
-#include "experiment.hpp"
+#include "experiment_list.hpp"
+#include "physgrad/run/experiment.hpp"
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
 

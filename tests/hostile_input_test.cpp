@@ -15,7 +15,7 @@
 #include <thread>
 
 #include "cli_fixture.hpp"
-#include "interrupt.hpp"
+#include "physgrad/run/interrupt.hpp"
 #include "physgrad/io/checkpoint_file.hpp"
 
 namespace {

@@ -3,7 +3,8 @@
 // each experiment exists for.
 #include <gtest/gtest.h>
 
-#include "experiment.hpp"
+#include "experiment_list.hpp"
+#include "physgrad/run/experiment.hpp"
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
 

@@ -21,10 +21,11 @@
 #include <sstream>
 
 #include "bench_command.hpp"
-#include "checkpoint.hpp"
-#include "config_file.hpp"
-#include "experiment.hpp"
-#include "interrupt.hpp"
+#include "physgrad/run/checkpoint.hpp"
+#include "physgrad/run/config_file.hpp"
+#include "experiment_list.hpp"
+#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/interrupt.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/io/folder_handle.hpp"
@@ -34,8 +35,8 @@
 #include "physgrad/text.hpp"
 #include "physgrad/threads.hpp"
 #include "ranks.hpp"
-#include "run_folder.hpp"
-#include "run_index.hpp"
+#include "physgrad/run/run_folder.hpp"
+#include "physgrad/run/run_index.hpp"
 
 namespace {
 

@@ -1,4 +1,4 @@
-#include "direct_runs.hpp"
+#include "physgrad/run/direct_runs.hpp"
 
 #include <cmath>
 #include <sstream>

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "experiment.hpp"
+#include "physgrad/run/experiment.hpp"
 
 namespace physgrad::experiments {
 

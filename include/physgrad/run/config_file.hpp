@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "experiment.hpp"
+#include "physgrad/run/experiment.hpp"
 #include "physgrad/io/folder_handle.hpp"
 
 namespace physgrad::experiments {

@@ -1,4 +1,4 @@
-#include "experiment.hpp"
+#include "physgrad/run/experiment.hpp"
 
 #include <unistd.h>
 
@@ -10,7 +10,7 @@
 #include <iostream>
 #include <sstream>
 
-#include "interrupt.hpp"
+#include "physgrad/run/interrupt.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/text.hpp"
@@ -341,15 +341,6 @@ double median(std::vector<double> values) {
   std::sort(values.begin(), values.end());
   const std::size_t n = values.size();
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-const Experiment& find_experiment(const std::string& name) {
-  std::vector<std::string> known;
-  for (const auto& experiment : registry()) {
-    if (experiment->name() == name) return *experiment;
-    known.push_back(experiment->name());
-  }
-  throw unknown_name_error("experiment", name, known);
 }
 
 }  // namespace physgrad::experiments

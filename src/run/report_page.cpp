@@ -1,4 +1,4 @@
-#include "report_page.hpp"
+#include "physgrad/run/report_page.hpp"
 
 #include <sstream>
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "experiment.hpp"
+#include "physgrad/run/experiment.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/nn/mlp.hpp"
 #include "physgrad/report/line_plot.hpp"

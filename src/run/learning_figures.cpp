@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "learning_runs.hpp"
+#include "physgrad/run/learning_runs.hpp"
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"

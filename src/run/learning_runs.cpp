@@ -1,12 +1,12 @@
-#include "learning_runs.hpp"
+#include "physgrad/run/learning_runs.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <new>
 
-#include "checkpoint.hpp"
-#include "direct_runs.hpp"
-#include "interrupt.hpp"
+#include "physgrad/run/checkpoint.hpp"
+#include "physgrad/run/direct_runs.hpp"
+#include "physgrad/run/interrupt.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/io/serialize.hpp"

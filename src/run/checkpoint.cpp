@@ -1,9 +1,9 @@
-#include "checkpoint.hpp"
+#include "physgrad/run/checkpoint.hpp"
 
 #include "physgrad/error.hpp"
 #include "physgrad/io/serialize.hpp"
 #include "physgrad/io/checkpoint_file.hpp"
-#include "run_folder.hpp"
+#include "physgrad/run/run_folder.hpp"
 
 namespace physgrad::experiments {
 

@@ -1,11 +1,11 @@
-#include "run_folder.hpp"
+#include "physgrad/run/run_folder.hpp"
 
 #include <set>
 
 #include "physgrad/error.hpp"
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/io/csv.hpp"
-#include "report_page.hpp"
+#include "physgrad/run/report_page.hpp"
 
 namespace physgrad::experiments {
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "experiment.hpp"
+#include "physgrad/run/experiment.hpp"
 #include "physgrad/optim/minimize.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/report/colors.hpp"

@@ -1,4 +1,4 @@
-#include "interrupt.hpp"
+#include "physgrad/run/interrupt.hpp"
 
 #include <semaphore.h>
 #include <unistd.h>

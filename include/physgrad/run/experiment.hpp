@@ -198,9 +198,4 @@ std::string format_value(double value);
 // NaN when there are none.
 double median(std::vector<double> values);
 
-// Every registered experiment, in display order.
-const std::vector<std::unique_ptr<Experiment>>& registry();
-// Throws Error "unknown experiment 'x' (known: ...)".
-const Experiment& find_experiment(const std::string& name);
-
 }  // namespace physgrad::experiments

@@ -12,12 +12,12 @@
 #include <cstring>
 #include <map>
 
-#include "checkpoint.hpp"
-#include "config_file.hpp"
+#include "physgrad/run/checkpoint.hpp"
+#include "physgrad/run/config_file.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/text.hpp"
-#include "run_folder.hpp"
+#include "physgrad/run/run_folder.hpp"
 
 namespace physgrad::experiments {
 

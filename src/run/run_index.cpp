@@ -1,4 +1,4 @@
-#include "run_index.hpp"
+#include "physgrad/run/run_index.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -17,8 +17,8 @@
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
 #include "physgrad/text.hpp"
-#include "report_page.hpp"
-#include "run_folder.hpp"
+#include "physgrad/run/report_page.hpp"
+#include "physgrad/run/run_folder.hpp"
 
 namespace physgrad::experiments {
 
