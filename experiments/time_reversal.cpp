@@ -4,7 +4,6 @@
 // velocity-Verlet FPU chain (reversible: R is exact to rounding) and on RK4 coupled oscillators
 // (R is exact only to RK4's truncation error), by iterations, simulator passes and time.
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <map>
 
@@ -18,40 +17,6 @@
 
 namespace physgrad::experiments {
 namespace {
-
-// Forwards every call to a simulator and counts the per-sample passes: forward, VJP (a
-// Jacobian of m rows counts m) and time reversal.
-class CountingSimulator final : public Simulator {
- public:
-  explicit CountingSimulator(const Simulator& inner) : inner_(inner) {}
-  std::string name() const override { return inner_.name(); }
-  Index input_dim() const override { return inner_.input_dim(); }
-  Index output_dim() const override { return inner_.output_dim(); }
-  Index context_dim() const override { return inner_.context_dim(); }
-  Matrix forward_batch(const Matrix& x, const Matrix& context) const override {
-    forward_ += x.cols();
-    return inner_.forward_batch(x, context);
-  }
-  Matrix vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const override {
-    vjp_ += x.cols();
-    return inner_.vjp_batch(x, context, gy);
-  }
-  bool has_time_reversal() const override { return inner_.has_time_reversal(); }
-  Vector time_reversal(const Vector& y, const Vector& context) const override {
-    ++reversal_;
-    return inner_.time_reversal(y, context);
-  }
-
-  void reset() { forward_ = vjp_ = reversal_ = 0; }
-  long long forward() const { return forward_; }
-  long long vjp() const { return vjp_; }
-  long long reversal() const { return reversal_; }
-  long long passes() const { return forward_ + vjp_ + reversal_; }
-
- private:
-  const Simulator& inner_;
-  mutable std::atomic<long long> forward_{0}, vjp_{0}, reversal_{0};
-};
 
 // One inverse problem: the simulator, its context (the controls), the true and the start state.
 struct Problem {
@@ -222,39 +187,41 @@ class TimeReversal final : public Experiment {
     std::uint64_t problem_seed = 2 * seed;
     for (const std::string& key : settings.texts("problems")) {
       const Problem problem = make_problem(key, settings, problem_seed++);
-      CountingSimulator counted(*problem.physics);
       const L2Loss loss;
       const Vector target = problem.physics->forward(problem.x_true, problem.context);
-      const Objective objective(counted, loss, target, problem.context);
+      const Objective objective(*problem.physics, loss, target, problem.context);
       const Vector reversed = problem.physics->time_reversal(target, problem.context);
       context.add_note(problem.title + ": the time reversal of y* reproduces it to ‖P(R(y*)) − y*‖/‖y*‖ = " +
                        format_value((problem.physics->forward(reversed, problem.context) - target).norm() /
                                     target.norm()) +
                        " (start x₀ = 0).");
 
+      // minimize() counts the simulator's work (MinimizeSummary::counts, per iterate in the
+      // history). The VJP column holds the VJPs of the default Jacobian (m) and weighted
+      // Hessian (2n), which these simulators use.
+      const long long outputs = problem.physics->output_dim();
+      const long long hessian_vjps = 2 * problem.physics->input_dim();
+      const auto passes = [](const IterationRecord& record) {
+        return nlohmann::json{{"simulator_passes", record.counts.passes}};
+      };
       std::vector<DirectResult> results;
-      std::vector<std::vector<double>> passes;
       for (const RuleSetup& rule : rules) {
         context.progress("time-reversal: " + key + ", " + rule.label);
-        counted.reset();
-        passes.emplace_back();
-        std::vector<double>& trace = passes.back();
-        const auto sample = [&counted, &trace] {
-          trace.push_back(static_cast<double>(counted.passes()));
-          return nlohmann::json{{"simulator_passes", counted.passes()}};
-        };
         results.push_back(run_direct(context, rule, objective, problem.x0, iterations, tol,
-                                     {{"problem", key}}, sample));
+                                     {{"problem", key}}, passes));
         const DirectResult& r = results.back();
+        const SimulatorCounts& counts = r.summary.counts;
         table.rows.push_back({key, r.rule.label, step_size_text(r.rule), iterations_cell(r),
-                              std::to_string(counted.passes()),
-                              std::to_string(counted.forward()) + " / " +
-                                  std::to_string(counted.vjp()) + " / " +
-                                  std::to_string(counted.reversal()),
+                              std::to_string(counts.passes),
+                              std::to_string(counts.forward) + " / " +
+                                  std::to_string(counts.vjp + outputs * counts.jacobians +
+                                                 hessian_vjps * counts.hessians) +
+                                  " / " +
+                                  std::to_string(counts.reversals),
                               format_value(r.summary.wall_seconds),
                               format_value(r.summary.loss)});
       }
-      add_figures(context, problem, results, passes);
+      add_figures(context, problem, results);
     }
     context.finish_progress();
     context.add_table(std::move(table));
@@ -272,8 +239,7 @@ class TimeReversal final : public Experiment {
       {"gd", 0.01}, {"momentum", 0.01}, {"adam", 0.01}, {"gn", 0.3}, {"ig", 0.3}, {"pg", 1.0}};
 
   static void add_figures(RunContext& context, const Problem& problem,
-                          const std::vector<DirectResult>& results,
-                          const std::vector<std::vector<double>>& passes) {
+                          const std::vector<DirectResult>& results) {
     context.add_figure({"loss_vs_iteration_" + problem.key + ".svg",
                         "Loss per iteration, " + problem.title + ".",
                         loss_curves_svg(results, "Loss vs iteration: " + problem.title)});
@@ -282,8 +248,8 @@ class TimeReversal final : public Experiment {
           results, (by_time ? "Loss vs time: " : "Loss vs simulator passes: ") + problem.title,
           by_time ? "wall seconds" : "simulator passes (forward, VJP, reversal)",
           [&](std::size_t r, std::size_t k) -> double {
-            if (k >= passes[r].size()) return NAN;
-            return by_time ? results[r].summary.history[k].seconds : passes[r][k];
+            const IterationRecord& record = results[r].summary.history[k];
+            return by_time ? record.seconds : static_cast<double>(record.counts.passes);
           });
     };
     context.add_figure({"loss_vs_passes_" + problem.key + ".svg",

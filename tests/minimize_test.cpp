@@ -191,6 +191,14 @@ TEST(StoppingRules, OutOfRangeOptionsAreErrorsNamingThem) {
             "minimize: function_tolerance must be in [0, inf), got nan");
   EXPECT_EQ(message({.parameter_tolerance = -0.5}),
             "minimize: parameter_tolerance must be in [0, inf), got -0.5");
+  EXPECT_EQ(message({.loss_tolerance = -1}),
+            "minimize: loss_tolerance must be in [0, inf), got -1");
+  EXPECT_EQ(message({.loss_tolerance = NAN}),
+            "minimize: loss_tolerance must be in [0, inf), got nan");
+  EXPECT_EQ(message({.max_evaluations = -1}),
+            "minimize: max_evaluations must be ≥ 0 (0: no budget), got -1");
+  EXPECT_EQ(message({.max_seconds = INFINITY}),
+            "minimize: max_seconds must be in [0, inf), got inf");
 }
 
 TEST(Reports, FullReportListsTheRunAndWhyItEnded) {
@@ -204,11 +212,17 @@ TEST(Reports, FullReportListsTheRunAndWhyItEnded) {
        {"parameters              1", "bounds                  box (0 at a bound at the end)",
         "optimizer               gd", "lr                      0.25",
         "function_tolerance      1e-06", "initial                 2",
-        "iterations              11 (0 rejected trials)", "evaluations             23",
-        "Termination: function_tolerance (convergence)", "|ΔL| = "}) {
+        "iterations              11 (0 rejected trials)",
+        "evaluations             23 (of the loss)",
+        // x₀, then per iteration the gradient (forward and VJP) and the new point's loss.
+        "simulator passes        34", "  forward samples       23", "  VJP samples           11",
+        "  Jacobians             0", "Termination: function_tolerance (convergence)",
+        "|ΔL| = "}) {
     EXPECT_NE(report.find(expected), std::string::npos) << expected << " in\n" << report;
   }
-  EXPECT_EQ(brief_report(s).rfind("gd: 11 iterations, 23 evaluations, loss 2 → 1", 0), 0u)
+  EXPECT_EQ(brief_report(s).rfind(
+                "gd: 11 iterations, 23 evaluations, 34 simulator passes, loss 2 → 1", 0),
+            0u)
       << brief_report(s);
 }
 

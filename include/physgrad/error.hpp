@@ -29,6 +29,18 @@ class Error : public std::runtime_error {
   }
 };
 
+// Throws Error "WHO: METHOD returned 0×0, expected 2×4" for a value of the wrong shape that a
+// user's model returned (a vector: cols and expected_cols < 0, "returned 3 entries, expected 4").
+[[noreturn]] inline void throw_wrong_result(const std::string& who, const char* method,
+                                            long long rows, long long cols,
+                                            long long expected_rows, long long expected_cols) {
+  const auto shape = [](long long r, long long c) {
+    return c < 0 ? std::to_string(r) : std::to_string(r) + "×" + std::to_string(c);
+  };
+  throw Error(who + ": " + method + " returned " + shape(rows, cols) +
+              (cols < 0 ? " entries" : "") + ", expected " + shape(expected_rows, expected_cols));
+}
+
 // Numerical trouble below an update rule: a non-finite operand, a factorization that did not
 // converge. The drivers (minimize(), train_step()) turn it into a run that ends with
 // "numerical_failure" and this message, instead of letting it escape.

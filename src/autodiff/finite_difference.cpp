@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
+
+#include "physgrad/error.hpp"
+#include "physgrad/physics/checked_simulator.hpp"
 
 namespace physgrad {
 
@@ -18,14 +22,22 @@ Matrix finite_difference_jacobian(const std::function<Vector(const Vector&)>& f,
     const Vector minus = f(shifted);
     shifted(i) = x(i);
     if (i == 0) jacobian.resize(plus.size(), x.size());
+    if (plus.size() != jacobian.rows() || minus.size() != jacobian.rows()) {
+      std::ostringstream msg;
+      msg << "finite differences: f returned " << plus.size() << " and " << minus.size()
+          << " entries at component " << i << ", " << jacobian.rows() << " at component 0";
+      throw Error(msg.str());
+    }
     jacobian.col(i) = (plus - minus) / (2 * step);
   }
   return jacobian;
 }
 
 namespace {
+// Both have the same shape (the simulator's results are checked). Infinite when either has a
+// NaN or Inf entry (a maximum over entries would pass a NaN over).
 double relative_error(const Matrix& actual, const Matrix& expected) {
-  if (actual.rows() != expected.rows() || actual.cols() != expected.cols()) return INFINITY;
+  if (!all_finite(actual) || !all_finite(expected)) return INFINITY;
   if (actual.size() == 0) return 0;
   const double scale = std::max(1.0, expected.cwiseAbs().maxCoeff());
   return (actual - expected).cwiseAbs().maxCoeff() / scale;
@@ -39,8 +51,16 @@ std::string DerivativeCheck::report() const {
   return out.str();
 }
 
-DerivativeCheck check_derivatives(const Simulator& simulator, const Vector& x,
+DerivativeCheck check_derivatives(const Simulator& user_simulator, const Vector& x,
                                   const Vector& context, double tolerance) {
+  std::optional<CheckedSimulator> local;
+  const CheckedSimulator& simulator = CheckedSimulator::around(user_simulator, local);
+  if (x.size() != simulator.input_dim()) {
+    std::ostringstream msg;
+    msg << "check_derivatives: x has " << x.size() << " entries, simulator '"
+        << simulator.name() << "' has input_dim " << simulator.input_dim();
+    throw Error(msg.str());
+  }
   DerivativeCheck check;
   const auto forward = [&](const Vector& at) { return simulator.forward(at, context); };
   const Matrix expected = finite_difference_jacobian(forward, x);
@@ -59,8 +79,10 @@ DerivativeCheck check_derivatives(const Simulator& simulator, const Vector& x,
   return check;
 }
 
-double inverse_residual(const Simulator& simulator, const Vector& y, const Vector& x0,
+double inverse_residual(const Simulator& user_simulator, const Vector& y, const Vector& x0,
                         const Vector& context) {
+  std::optional<CheckedSimulator> local;
+  const CheckedSimulator& simulator = CheckedSimulator::around(user_simulator, local);
   const Vector x = simulator.inverse(y, x0, context);
   return (simulator.forward(x, context) - y).norm() / std::max(1.0, y.norm());
 }

@@ -1,12 +1,24 @@
 #include "physgrad/nn/network.hpp"
 
 #include <cblas.h>
+#include <cxxabi.h>
 
+#include <cstdlib>
+#include <memory>
 #include <string>
+#include <typeinfo>
 
 #include "physgrad/error.hpp"
 
 namespace physgrad {
+
+std::string Network::name() const {
+  const char* mangled = typeid(*this).name();
+  int status = 0;
+  const std::unique_ptr<char, decltype(&std::free)> readable(
+      abi::__cxa_demangle(mangled, nullptr, nullptr, &status), &std::free);
+  return status == 0 && readable ? readable.get() : mangled;
+}
 
 void Network::set_parameters(const Vector& theta) {
   if (theta.size() != num_parameters()) {
@@ -18,6 +30,7 @@ void Network::set_parameters(const Vector& theta) {
 
 Matrix Network::forward(const Matrix& x) const {
   const std::unique_ptr<NetworkCache> cache = new_cache();
+  if (!cache) throw Error("network '" + name() + "': new_cache returned no cache");
   return forward(x, *cache);
 }
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "physgrad/error.hpp"
+
 namespace physgrad {
 
 LevenbergMarquardt::LevenbergMarquardt(Options options) : options_(options) {
@@ -22,8 +24,15 @@ Step LevenbergMarquardt::propose(const Objective& objective, const Vector& x,
   const Vector y = objective.output(x);
   const double loss = objective.loss().value(y, objective.target());
   const Matrix j = objective.jacobian(x);
+  // Damping cannot cure a non-finite model at x: every trial would be rejected until μ
+  // overflows, and the cause would go unnamed.
+  if (!std::isfinite(loss)) throw NumericalError("the loss at x is not finite");
+  if (!all_finite(j)) throw NumericalError("the Jacobian at x has non-finite entries");
   const Matrix a = j.transpose() * objective.loss().hessian(y, objective.target()) * j;
   const Vector g = j.transpose() * objective.loss().gradient(y, objective.target());
+  if (!all_finite(a) || !all_finite(g)) {
+    throw NumericalError("JᵀH_yJ or the gradient Jᵀ∂L/∂y at x is not finite");
+  }
   const FreeSubspace free(domain, x, g);
   const Vector gz = free.covector(g);
   if (gz.isZero(0.0)) return {Vector::Zero(x.size()), Step::Status::kOk, {}, 1};
@@ -59,7 +68,8 @@ Step LevenbergMarquardt::propose(const Objective& objective, const Vector& x,
   if (!std::isfinite(mu_)) {
     return {Vector::Zero(x.size()), Step::Status::kFailed, "lm: damping overflowed; no descent found", 2};
   }
-  return {dx, Step::Status::kRejected, {}, 2};
+  // A trial whose loss is not finite is too long, not short: its length is not tested.
+  return {std::isfinite(trial) ? dx : Vector(), Step::Status::kRejected, {}, 2};
 }
 
 }  // namespace physgrad

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "physgrad/error.hpp"
@@ -9,6 +10,7 @@
 #include "physgrad/optim/inverse_gradient.hpp"
 #include "physgrad/optim/lbfgs.hpp"
 #include "physgrad/optim/minimize.hpp"
+#include "physgrad/physics/checked_simulator.hpp"
 
 namespace physgrad {
 
@@ -57,62 +59,10 @@ LocalInverseResult closed_form(const Simulator& simulator, InverseMethod method,
   return result;
 }
 
-}  // namespace
-
-std::string to_string(InverseMethod method) {
-  switch (method) {
-    case InverseMethod::kAuto: return "auto";
-    case InverseMethod::kAnalytic: return "analytic";
-    case InverseMethod::kTimeReversal: return "time_reversal";
-    case InverseMethod::kLbfgs: return "lbfgs";
-    case InverseMethod::kGaussNewton: return "gn";
-  }
-  return "unknown";
-}
-
-InverseMethod parse_inverse_method(const std::string& text) {
-  std::string known;
-  for (InverseMethod method : kMethods) {
-    if (text == to_string(method)) return method;
-    known += (known.empty() ? "" : ", ") + to_string(method);
-  }
-  throw Error("unknown inverse method '" + text + "' (known: " + known + ")");
-}
-
-nlohmann::json local_inverse_params(const LocalInverseOptions& options) {
-  nlohmann::json params = {{"inverse", to_string(options.method)}};
-  if (options.method != InverseMethod::kAnalytic &&
-      options.method != InverseMethod::kTimeReversal) {
-    params["inverse_tolerance"] = options.tolerance;
-    params["inverse_relative_tolerance"] = options.relative_tolerance;
-    params["inverse_function_tolerance"] = options.function_tolerance;
-    params["inverse_iterations"] = options.max_iterations;
-    params["inverse_rcond"] = options.rcond;
-  }
-  return params;
-}
-
-LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, const Vector& x0,
-                                 const Vector& context, const LocalInverseOptions& options,
-                                 const Domain& domain) {
-  if (y.size() != simulator.output_dim()) {
-    std::ostringstream msg;
-    msg << "local inverse: y has " << y.size() << " entries, simulator '" << simulator.name()
-        << "' has output_dim " << simulator.output_dim();
-    throw Error(msg.str());
-  }
-  domain.check_dim(x0.size(), "local inverse");
-  InverseMethod method = options.method;
-  if (method == InverseMethod::kAuto) {
-    method = simulator.has_inverse()         ? InverseMethod::kAnalytic
-             : simulator.has_time_reversal() ? InverseMethod::kTimeReversal
-                                             : InverseMethod::kLbfgs;
-  }
-  if (method == InverseMethod::kAnalytic || method == InverseMethod::kTimeReversal) {
-    return closed_form(simulator, method, y, x0, context, domain);
-  }
-
-  check_options(options);
+// The minimizer of ½‖P(x) − y‖² from x₀ by L-BFGS or full Gauss-Newton steps.
+LocalInverseResult numerical(const Simulator& simulator, InverseMethod method, const Vector& y,
+                             const Vector& x0, const Vector& context,
+                             const LocalInverseOptions& options, const Domain& domain) {
   const L2Loss half_squares;
   const Objective misfit(simulator, half_squares, y, context);
   LocalInverseResult result;
@@ -152,6 +102,78 @@ LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, co
   result.iterations = summary.iterations;
   result.evaluations = 1 + summary.evaluations;
   result.converged = result.residual <= absolute || result.residual <= relative;
+  return result;
+}
+
+}  // namespace
+
+std::string to_string(InverseMethod method) {
+  switch (method) {
+    case InverseMethod::kAuto: return "auto";
+    case InverseMethod::kAnalytic: return "analytic";
+    case InverseMethod::kTimeReversal: return "time_reversal";
+    case InverseMethod::kLbfgs: return "lbfgs";
+    case InverseMethod::kGaussNewton: return "gn";
+  }
+  return "unknown";
+}
+
+InverseMethod parse_inverse_method(const std::string& text) {
+  std::string known;
+  for (InverseMethod method : kMethods) {
+    if (text == to_string(method)) return method;
+    known += (known.empty() ? "" : ", ") + to_string(method);
+  }
+  throw Error("unknown inverse method '" + text + "' (known: " + known + ")");
+}
+
+nlohmann::json local_inverse_params(const LocalInverseOptions& options) {
+  nlohmann::json params = {{"inverse", to_string(options.method)}};
+  if (options.method != InverseMethod::kAnalytic &&
+      options.method != InverseMethod::kTimeReversal) {
+    params["inverse_tolerance"] = options.tolerance;
+    params["inverse_relative_tolerance"] = options.relative_tolerance;
+    params["inverse_function_tolerance"] = options.function_tolerance;
+    params["inverse_iterations"] = options.max_iterations;
+    params["inverse_rcond"] = options.rcond;
+  }
+  return params;
+}
+
+LocalInverseResult local_inverse(const Simulator& user_simulator, const Vector& y,
+                                 const Vector& x0, const Vector& context,
+                                 const LocalInverseOptions& options, const Domain& domain) {
+  // Every call below goes through a checked, counted simulator: pg's own, or one of this solve.
+  std::optional<CheckedSimulator> local;
+  const CheckedSimulator& simulator = CheckedSimulator::around(user_simulator, local);
+  const SimulatorCounts counts_at_start = simulator.counts();
+  std::ostringstream msg;
+  if (y.size() != simulator.output_dim()) {
+    msg << "local inverse: y has " << y.size() << " entries, simulator '" << simulator.name()
+        << "' has output_dim " << simulator.output_dim();
+  } else if (x0.size() != simulator.input_dim()) {
+    msg << "local inverse: x0 has " << x0.size() << " entries, simulator '" << simulator.name()
+        << "' has input_dim " << simulator.input_dim();
+  } else if (context.size() != 0 && context.size() != simulator.context_dim()) {
+    msg << "local inverse: context has " << context.size() << " entries, simulator '"
+        << simulator.name() << "' expects " << simulator.context_dim();
+  }
+  if (!msg.str().empty()) throw Error(msg.str());
+  domain.check_dim(x0.size(), "local inverse");
+  InverseMethod method = options.method;
+  if (method == InverseMethod::kAuto) {
+    method = simulator.has_inverse()         ? InverseMethod::kAnalytic
+             : simulator.has_time_reversal() ? InverseMethod::kTimeReversal
+                                             : InverseMethod::kLbfgs;
+  }
+  LocalInverseResult result;
+  if (method == InverseMethod::kAnalytic || method == InverseMethod::kTimeReversal) {
+    result = closed_form(simulator, method, y, x0, context, domain);
+  } else {
+    check_options(options);
+    result = numerical(simulator, method, y, x0, context, options, domain);
+  }
+  result.counts = simulator.counts() - counts_at_start;
   return result;
 }
 

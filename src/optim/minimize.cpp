@@ -16,7 +16,10 @@ std::string to_string(Termination termination) {
     case Termination::kGradientTolerance: return "gradient_tolerance";
     case Termination::kFunctionTolerance: return "function_tolerance";
     case Termination::kParameterTolerance: return "parameter_tolerance";
+    case Termination::kDiverged: return "diverged";
     case Termination::kMaxIterations: return "max_iterations";
+    case Termination::kMaxEvaluations: return "max_evaluations";
+    case Termination::kMaxSeconds: return "max_seconds";
     case Termination::kStationary: return "stationary";
     case Termination::kNumericalFailure: return "numerical_failure";
     case Termination::kFailed: return "failed";
@@ -49,8 +52,14 @@ void check_options(const MinimizeOptions& options) {
     throw Error("minimize: max_iterations must be ≥ 1, got " +
                 std::to_string(options.max_iterations));
   }
-  require_in_range("minimize: relative_loss_tolerance", options.relative_loss_tolerance, 0.0, 1.0);
+  if (options.max_evaluations < 0) {
+    throw Error("minimize: max_evaluations must be ≥ 0 (0: no budget), got " +
+                std::to_string(options.max_evaluations));
+  }
   const double inf = INFINITY;
+  require_in_range("minimize: max_seconds", options.max_seconds, 0.0, inf);
+  require_in_range("minimize: loss_tolerance", options.loss_tolerance, 0.0, inf);
+  require_in_range("minimize: relative_loss_tolerance", options.relative_loss_tolerance, 0.0, 1.0);
   require_in_range("minimize: gradient_tolerance", options.gradient_tolerance, 0.0, inf);
   require_in_range("minimize: function_tolerance", options.function_tolerance, 0.0, inf);
   require_in_range("minimize: parameter_tolerance", options.parameter_tolerance, 0.0, inf);
@@ -114,7 +123,9 @@ class StoppingRules {
          {std::pair{"relative_loss_tolerance", options_.relative_loss_tolerance},
           std::pair{"gradient_tolerance", options_.gradient_tolerance},
           std::pair{"function_tolerance", options_.function_tolerance},
-          std::pair{"parameter_tolerance", options_.parameter_tolerance}}) {
+          std::pair{"parameter_tolerance", options_.parameter_tolerance},
+          std::pair{"max_evaluations", static_cast<double>(options_.max_evaluations)},
+          std::pair{"max_seconds", options_.max_seconds}}) {
       if (value > 0) rules.emplace_back(name, value);
     }
     return rules;
@@ -137,14 +148,21 @@ class StoppingRules {
 MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const Vector& x0,
                          const MinimizeOptions& options) {
   check_options(options);
-  const Domain domain(objective.dim(), options.lower, options.upper, options.x_scale);
-  domain.check_dim(x0.size(), "minimize");
-  domain.check_contains(x0, "minimize: x0");
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   const auto since = [](Clock::time_point from) {
     return std::chrono::duration<double>(Clock::now() - from).count();
   };
+  // Everything below reaches the simulator through `problem`, whose simulator is checked and
+  // counted (a nested run, pg's local inverse, shares the outer run's CheckedSimulator).
+  const CheckedObjective checked(objective);
+  const Objective& problem = checked.objective();
+  const CheckedSimulator& simulator = checked.simulator();
+  const SimulatorCounts counts_at_start = simulator.counts();
+
+  const Domain domain(problem.dim(), options.lower, options.upper, options.x_scale);
+  domain.check_dim(x0.size(), "minimize");
+  domain.check_contains(x0, "minimize: x0");
 
   MinimizeSummary summary;
   summary.optimizer = optimizer.id();
@@ -161,10 +179,14 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
   const auto evaluate = [&](const Vector& x) {
     const auto begin = Clock::now();
     const double value =
-        with_gradient ? objective.value_and_gradient(x, gradient) : objective.value(x);
+        with_gradient ? problem.value_and_gradient(x, gradient) : problem.value(x);
     summary.evaluation_seconds += since(begin);
     ++summary.evaluations;
     return value;
+  };
+  // A non-finite ∇L, where the gradient test asks for it, ends a run as a non-finite L does.
+  const auto finite = [&](double value) {
+    return std::isfinite(value) && (!with_gradient || all_finite(gradient));
   };
   summary.loss = evaluate(x0);
   summary.initial_loss = summary.loss;
@@ -173,38 +195,67 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
     msg << "the loss at the starting point is " << summary.loss;
     throw Error(msg.str());
   }
+  // Opened after the start: its evaluation is always made.
+  const SimulatorBudget budget(simulator, options.max_evaluations, options.max_seconds,
+                               counts_at_start.passes, start);
   const StoppingRules rules(options, domain, summary.initial_loss);
   summary.stopping_rules = rules.listed();
   const Vector* tested_gradient = with_gradient ? &gradient : nullptr;
   const auto record = [&](double step_norm) {
     summary.history.push_back({summary.iterations, summary.loss, step_norm, since(start),
-                               summary.evaluations, summary.x});
+                               summary.evaluations, simulator.counts() - counts_at_start,
+                               summary.x});
     return options.callback && options.callback(summary.history.back());
+  };
+  const auto end_on = [&summary](Termination termination, std::string message) {
+    summary.termination = termination;
+    summary.message = std::move(message);
   };
 
   optimizer.reset();
   bool stop = record(0.0);
   bool done = !stop && rules.at_point(summary.loss, summary.x, tested_gradient, summary);
+  if (!stop && !done && !finite(summary.loss)) {
+    end_on(Termination::kNumericalFailure, "the gradient at the starting point is not finite");
+    done = true;
+  }
   while (!stop && !done) {
     if (summary.iterations >= options.max_iterations) break;
-
+    if (budget.out_of_time()) {
+      end_on(Termination::kMaxSeconds, "max_seconds = " + number(options.max_seconds) +
+                                           " reached after iteration " +
+                                           std::to_string(summary.iterations));
+      break;
+    }
     // Numerical failures name the iteration, the rule and the place.
     const std::string where =
         "iteration " + std::to_string(summary.iterations + 1) + " of " + optimizer.id() + ": ";
     Step step;
-    const auto step_start = Clock::now();
+    Vector x_next;
+    double loss_next = NAN;
     try {
-      step = optimizer.step(objective, summary.x, domain);
+      const auto step_start = Clock::now();
+      step = optimizer.step(problem, summary.x, domain);
+      summary.step_seconds += since(step_start);
+      summary.evaluations += step.evaluations;
+      if (step.status == Step::Status::kOk && all_finite(step.dx)) {
+        // The rule keeps x + Δx in the box; the projection only removes rounding in the sum.
+        x_next = domain.project(summary.x + step.dx);
+        if (x_next != summary.x) loss_next = evaluate(x_next);
+      }
     } catch (const NumericalError& e) {
-      summary.termination = Termination::kNumericalFailure;
-      summary.message = where + e.what();
+      end_on(Termination::kNumericalFailure, where + e.what());
+      break;
+    } catch (const BudgetExhausted& e) {
+      if (e.budget() != &budget) throw;  // an outer run's budget: that run ends
+      const bool passes = e.kind() == BudgetExhausted::Kind::kPasses;
+      end_on(passes ? Termination::kMaxEvaluations : Termination::kMaxSeconds,
+             std::string(passes ? "max_evaluations" : "max_seconds") + " reached in iteration " +
+                 std::to_string(summary.iterations + 1) + ": " + e.what());
       break;
     }
-    summary.step_seconds += since(step_start);
-    summary.evaluations += step.evaluations;
     if (step.status == Step::Status::kFailed) {
-      summary.termination = Termination::kFailed;
-      summary.message = step.message;
+      end_on(Termination::kFailed, step.message);
       break;
     }
     if (step.status == Step::Status::kRejected) {
@@ -217,25 +268,21 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
       continue;
     }
     if (!all_finite(step.dx)) {
-      summary.termination = Termination::kNumericalFailure;
-      summary.message = where + "non-finite step";
+      end_on(Termination::kNumericalFailure, where + "non-finite step");
       break;
     }
-    // The rule keeps x + Δx in the box; the projection only removes rounding in the sum.
-    const Vector x_next = domain.project(summary.x + step.dx);
     const Vector dx = x_next - summary.x;
     const double step_norm = dx.norm();
     if (step_norm == 0.0) {
-      summary.termination = Termination::kStationary;
-      summary.message = "zero step at iteration " + std::to_string(summary.iterations + 1);
+      end_on(Termination::kStationary,
+             "zero step at iteration " + std::to_string(summary.iterations + 1));
       break;
     }
-    const double loss_next = evaluate(x_next);
-    if (!std::isfinite(loss_next)) {
-      summary.termination = Termination::kNumericalFailure;
+    if (!finite(loss_next)) {
       std::ostringstream msg;
       msg << where << "the loss at the new point is " << loss_next;
-      summary.message = msg.str();
+      if (std::isfinite(loss_next)) msg << ", its gradient is not finite";
+      end_on(Termination::kNumericalFailure, msg.str());
       break;
     }
     const double loss_before = summary.loss;
@@ -248,12 +295,16 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
                      rules.after_step(loss_before, summary.loss, x_before, dx, summary));
   }
   if (stop) {
-    summary.termination = Termination::kStopped;
-    summary.message = "the callback asked to stop after iteration " +
-                      std::to_string(summary.iterations);
+    end_on(Termination::kStopped,
+           "the callback asked to stop after iteration " + std::to_string(summary.iterations));
   } else if (summary.termination == Termination::kMaxIterations) {
     summary.message = "max_iterations = " + std::to_string(options.max_iterations) + " reached";
+  } else if (converged(summary.termination) && !(summary.loss <= summary.initial_loss)) {
+    end_on(Termination::kDiverged, to_string(summary.termination) + " held (" + summary.message +
+                                       "), but L = " + number(summary.loss) +
+                                       " is above L(x₀) = " + number(summary.initial_loss));
   }
+  summary.counts = simulator.counts() - counts_at_start;
   summary.at_bounds = domain.count_at_bounds(summary.x);
   summary.wall_seconds = since(start);
   return summary;
@@ -261,8 +312,9 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
 
 std::string brief_report(const MinimizeSummary& s) {
   return s.optimizer + ": " + std::to_string(s.iterations) + " iterations, " +
-         std::to_string(s.evaluations) + " evaluations, loss " + number(s.initial_loss) + " → " +
-         number(s.loss) + ", " + to_string(s.termination);
+         std::to_string(s.evaluations) + " evaluations, " + std::to_string(s.counts.passes) +
+         " simulator passes, loss " + number(s.initial_loss) + " → " + number(s.loss) + ", " +
+         to_string(s.termination);
 }
 
 std::string full_report(const MinimizeSummary& s) {
@@ -282,7 +334,7 @@ std::string full_report(const MinimizeSummary& s) {
   for (const auto& [name, value] : s.params.items()) {
     row(name, value.is_string() ? value.get<std::string>() : value.dump());
   }
-  out << "\nStopping rules\n";
+  out << "\nStopping rules and budgets\n";
   for (const auto& [name, value] : s.stopping_rules) row(name, number(value));
   out << "\nLoss\n";
   row("initial", number(s.initial_loss));
@@ -292,7 +344,14 @@ std::string full_report(const MinimizeSummary& s) {
   out << "\nWork\n";
   row("iterations", std::to_string(s.iterations) + " (" + std::to_string(s.rejected_steps) +
                         " rejected trials)");
-  row("evaluations", std::to_string(s.evaluations));
+  row("evaluations", std::to_string(s.evaluations) + " (of the loss)");
+  row("simulator passes", std::to_string(s.counts.passes));
+  row("  forward samples", std::to_string(s.counts.forward));
+  row("  VJP samples", std::to_string(s.counts.vjp));
+  row("  Jacobians", std::to_string(s.counts.jacobians));
+  row("  Hessians", std::to_string(s.counts.hessians));
+  row("  time reversals", std::to_string(s.counts.reversals));
+  row("  inverses", std::to_string(s.counts.inverses));
   out << "\nTime (seconds)\n";
   row("rule steps", number(s.step_seconds));
   row("loss evaluations", number(s.evaluation_seconds));

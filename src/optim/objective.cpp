@@ -61,4 +61,12 @@ Matrix Objective::hessian(const Vector& x) const {
   return gauss_newton + simulator_->weighted_hessian(x, context_, loss_->gradient(y, target_));
 }
 
+CheckedObjective::CheckedObjective(const Objective& objective)
+    : given_(&objective),
+      simulator_(&CheckedSimulator::around(objective.simulator(), own_simulator_)) {
+  if (own_simulator_) {
+    own_objective_.emplace(*simulator_, objective.loss(), objective.target(), objective.context());
+  }
+}
+
 }  // namespace physgrad

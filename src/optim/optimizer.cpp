@@ -8,8 +8,25 @@
 namespace physgrad {
 
 Step Optimizer::step(const Objective& objective, const Vector& x, const Domain& domain) {
-  domain.check_dim(x.size(), id().c_str());
-  return propose(objective, x, domain);
+  const std::string rule = id();
+  domain.check_dim(x.size(), rule.c_str());
+  if (x.size() != objective.dim()) {
+    std::ostringstream msg;
+    msg << rule << ": x has " << x.size() << " entries, the objective " << objective.dim();
+    throw Error(msg.str());
+  }
+  // The rule sees the simulator only through a CheckedSimulator (minimize() hands one over).
+  const Step step = propose(CheckedObjective(objective).objective(), x, domain);
+  // An accepted step moves every variable; a rejected trial or a failure may leave dx empty.
+  const bool fits = step.dx.size() == x.size() ||
+                    (step.status != Step::Status::kOk && step.dx.size() == 0);
+  if (!fits) {
+    std::ostringstream msg;
+    msg << "optimizer '" << rule << "': step returned " << step.dx.size()
+        << " entries, expected " << x.size();
+    throw Error(msg.str());
+  }
+  return step;
 }
 
 void require_positive(const char* what, double value) {

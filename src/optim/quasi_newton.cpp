@@ -86,8 +86,14 @@ Step QuasiNewton::propose(const Objective& objective, const Vector& x, const Dom
     result = search(objective, x, pz, domain);
     out.evaluations += result.evaluations;
   }
-  if (!result.success && result.evaluations > 0 && result.non_finite == result.evaluations) {
-    throw NumericalError("line search: all " + std::to_string(result.evaluations) +
+  // A search that failed where the loss or gradient was not finite met numbers, not a hard
+  // function: a numerical failure.
+  if (!result.success && result.non_finite > 0) {
+    const std::string count = result.non_finite == result.evaluations
+                                  ? "all " + std::to_string(result.evaluations)
+                                  : std::to_string(result.non_finite) + " of " +
+                                        std::to_string(result.evaluations);
+    throw NumericalError("line search: " + count +
                          " trial points gave a non-finite loss or gradient");
   }
   if (!result.success) {

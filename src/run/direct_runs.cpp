@@ -73,15 +73,13 @@ std::vector<RuleSetup> with_pg_inverses(const std::vector<RuleSetup>& rules,
 DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Objective& objective,
                         const Vector& x0, int iterations, double tolerance,
                         const nlohmann::json& row_extras,
-                        const std::function<nlohmann::json()>& sample) {
+                        const std::function<nlohmann::json(const IterationRecord&)>& columns) {
   const std::unique_ptr<Optimizer> optimizer = make_optimizer(rule.id, rule.settings);
   MinimizeOptions options;
   options.max_iterations = iterations;
   options.loss_tolerance = tolerance;
-  std::vector<nlohmann::json> samples;
-  options.callback = [&context, &sample, &samples](const IterationRecord&) {
+  options.callback = [&context](const IterationRecord&) {
     context.check_interrupt();
-    if (sample) samples.push_back(sample());
     return false;
   };
   DirectResult result{rule, minimize(*optimizer, objective, x0, options), 0};
@@ -95,8 +93,9 @@ DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Object
                           {"loss", record.loss},
                           {"step_norm", record.step_norm}};
     for (const auto& [key, value] : row_extras.items()) row[key] = value;
-    if (static_cast<std::size_t>(record.iteration) < samples.size()) {
-      for (const auto& [key, value] : samples[record.iteration].items()) row[key] = value;
+    if (columns) {
+      const nlohmann::json extra = columns(record);
+      for (const auto& [key, value] : extra.items()) row[key] = value;
     }
     for (Index i = 0; i < record.x.size(); ++i) {
       std::string column = "x";

@@ -2,10 +2,13 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "physgrad/error.hpp"
 #include "physgrad/learn/sharded_jacobian.hpp"
+#include "physgrad/nn/checked_network.hpp"
+#include "physgrad/physics/checked_simulator.hpp"
 
 namespace physgrad {
 
@@ -17,13 +20,39 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// Dimension checks of check_problem() without reading the values.
-void check_shapes(const Network& network, const LearningProblem& problem, const Dataset& data,
-                  const char* name) {
+const Simulator& require_models(const LearningProblem& problem) {
   if (problem.physics == nullptr || problem.loss == nullptr) {
     throw Error("learning problem needs a simulator and a loss");
   }
-  const Simulator& physics = *problem.physics;
+  return *problem.physics;
+}
+
+// The network and the problem as training uses them: the network through a CheckedNetwork, the
+// simulator through a CheckedSimulator (each the given one when it is checked already), so
+// every size they return is checked where it enters the library.
+class CheckedModels {
+ public:
+  CheckedModels(const Network& network, const LearningProblem& problem)
+      : network_(CheckedNetwork::around(network, own_network_)),
+        physics_(CheckedSimulator::around(require_models(problem), own_physics_)),
+        problem_{&physics_, problem.loss} {}
+
+  const CheckedNetwork& network() const { return network_; }
+  const CheckedSimulator& physics() const { return physics_; }
+  const LearningProblem& problem() const { return problem_; }
+
+ private:
+  std::optional<CheckedNetwork> own_network_;
+  std::optional<CheckedSimulator> own_physics_;
+  const CheckedNetwork& network_;
+  const CheckedSimulator& physics_;
+  LearningProblem problem_;
+};
+
+// Dimension checks of check_problem() without reading the values.
+void check_shapes(const CheckedModels& models, const Dataset& data, const char* name) {
+  const Network& network = models.network();
+  const Simulator& physics = models.physics();
   std::ostringstream msg;
   if (data.targets.cols() != data.inputs.cols() ||
       (data.context.size() != 0 && data.context.cols() != data.inputs.cols())) {
@@ -65,18 +94,21 @@ double loss_sum(const Loss& loss, const Matrix& y, const Matrix& targets, double
 void check_problem(const Network& network, const LearningProblem& problem, const Dataset& data,
                    const char* name) {
   data.validate(name);
-  check_shapes(network, problem, data, name);
+  check_shapes(CheckedModels(network, problem), data, name);
 }
 
-double mean_loss(const Network& network, const LearningProblem& problem, const Dataset& data,
+double mean_loss(const Network& user_network, const LearningProblem& problem, const Dataset& data,
                  const Shard& shard) {
-  check_problem(network, problem, data, "data set");
+  const CheckedModels models(user_network, problem);
+  data.validate("data set");
+  check_shapes(models, data, "data set");
+  const Network& network = models.network();
   const ColumnRange own = shard.columns(data.size());
   double total = 0;
   if (own.count > 0) {
     const Dataset part = shard.active() ? data.columns(own.begin, own.count) : Dataset();
     const Dataset& mine = shard.active() ? part : data;
-    const Matrix y = problem.physics->forward_batch(network.forward(mine.inputs), mine.context);
+    const Matrix y = models.physics().forward_batch(network.forward(mine.inputs), mine.context);
     total = loss_sum(*problem.loss, y, mine.targets, 1.0, nullptr);
   }
   total = shard.sum(total);
@@ -176,10 +208,14 @@ std::string to_string(StepFailure failure) {
 
 StepReport train_step(Network& network, LearningUpdate& update, const LearningProblem& problem,
                       const Dataset& batch, StepState& state, const StepOptions& options) {
-  check_shapes(network, problem, batch, "batch");
+  // The rule and evaluate_batch() see the network and the simulator only through the checked
+  // models; θ is updated on `network` itself.
+  const CheckedModels models(network, problem);
+  check_shapes(models, batch, "batch");
   if (batch.size() == 0) throw Error("train_step: the batch has no samples");
-  if (!state.cache) state.cache = network.new_cache();
+  if (!state.cache) state.cache = models.network().new_cache();
   const auto start = Clock::now();
+  const SimulatorCounts counts_at_start = models.physics().counts();
   StepReport report;
   UpdateStep step;
   // Halving moves θ before the next evaluation; an exception there (a StopRequested from the
@@ -188,8 +224,9 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
   try {
     for (;;) {
       BatchTiming timing;
-      const BatchState evaluated = evaluate_batch(network, problem, batch, update.need(),
-                                                  *state.cache, options.shard, &timing);
+      const BatchState evaluated = evaluate_batch(models.network(), models.problem(), batch,
+                                                  update.need(), *state.cache, options.shard,
+                                                  &timing);
       report.forward_seconds += timing.forward;
       report.derivative_seconds += timing.derivatives;
       report.loss = evaluated.loss;
@@ -201,6 +238,11 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
         const auto update_start = Clock::now();
         try {
           step = update.step(evaluated);
+          if (step.delta.size() != models.network().num_parameters()) {
+            throw Error("learning update '" + update.id() + "': step returned " +
+                        std::to_string(step.delta.size()) + " entries, expected " +
+                        std::to_string(models.network().num_parameters()));
+          }
           if (!all_finite(step.delta)) {
             report.failure = StepFailure::kUpdate;
             report.detail = step.problem;
@@ -234,6 +276,7 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
     throw;
   }
   report.total_seconds = seconds_since(start);
+  report.counts = models.physics().counts() - counts_at_start;
   if (!report.applied()) {
     // A non-finite Δθ is never applied. A non-finite loss or derivative means the last applied
     // step already broke θ: it is undone, back to the θ whose batch was finite.

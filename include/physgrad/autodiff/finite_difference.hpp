@@ -9,7 +9,8 @@
 
 namespace physgrad {
 
-// ∂f/∂x at x by central differences with step h·max(1, |xᵢ|) per component.
+// ∂f/∂x at x by central differences with step h·max(1, |xᵢ|) per component. Throws Error when f
+// returns vectors of different sizes.
 Matrix finite_difference_jacobian(const std::function<Vector(const Vector&)>& f, const Vector& x,
                                   double h = 1e-6);
 
@@ -22,7 +23,8 @@ struct DerivativeCheck {
 };
 
 // Compares jacobian(), vjp() and weighted_hessian() of `simulator` at (x, c) with central
-// differences of forward() and vjp(). `tolerance` bounds each relative error.
+// differences of forward() and vjp(). `tolerance` bounds each relative error. The simulator is
+// called through a CheckedSimulator: a result of the wrong shape is an Error naming it.
 DerivativeCheck check_derivatives(const Simulator& simulator, const Vector& x,
                                   const Vector& context = {}, double tolerance = 1e-6);
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "physgrad/types.hpp"
@@ -28,6 +29,8 @@ class Network {
  public:
   virtual ~Network() = default;
 
+  // A name for messages; default: the C++ type of the network.
+  virtual std::string name() const;
   virtual Index input_dim() const = 0;
   virtual Index output_dim() const = 0;
   virtual Index num_parameters() const = 0;

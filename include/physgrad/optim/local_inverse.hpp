@@ -6,7 +6,7 @@
 #include <string>
 
 #include "physgrad/optim/domain.hpp"
-#include "physgrad/physics/simulator.hpp"
+#include "physgrad/physics/checked_simulator.hpp"
 
 namespace physgrad {
 
@@ -51,6 +51,7 @@ struct LocalInverseResult {
   // Simulator evaluations spent: forward (+ VJP) passes of the numerical inverse; for the
   // closed forms the inverse or reversals and the forward pass of the residual.
   int evaluations = 0;
+  SimulatorCounts counts;  // the simulator's work in this solve (CheckedSimulator)
   bool converged = false;  // the residual meets the absolute or the relative tolerance
 };
 
@@ -60,7 +61,9 @@ struct LocalInverseResult {
 // not finite (a NaN from the simulator or in y) the numerical inverse cannot start: the result
 // is x = NaN, not converged, for the caller's numerical guard to see. Numerical trouble inside
 // the numerical inverse (a non-finite Jacobian, say) throws NumericalError naming it. Throws
-// Error on out-of-range options or mismatched sizes.
+// Error on out-of-range options or mismatched sizes, also of what the simulator returns: it is
+// called through a CheckedSimulator (that of the calling run, whose counts and budget then
+// include this solve, or one of its own).
 LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, const Vector& x0,
                                  const Vector& context, const LocalInverseOptions& options,
                                  const Domain& domain = {});

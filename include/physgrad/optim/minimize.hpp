@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/physics/checked_simulator.hpp"
 
 namespace physgrad {
 
@@ -19,7 +20,11 @@ enum class Termination {
   kGradientTolerance,   // the projected gradient is at most gradient_tolerance
   kFunctionTolerance,   // the last step changed L by at most function_tolerance·L
   kParameterTolerance,  // the last step was at most parameter_tolerance·(‖x‖ + parameter_tolerance)
+  kDiverged,            // a stopping rule held, but L(x) is above L(x₀): a run that made the
+                        // loss worse never counts as converged (the message names the rule)
   kMaxIterations,       // the iteration budget ran out
+  kMaxEvaluations,      // the budget of simulator passes ran out (max_evaluations)
+  kMaxSeconds,          // the time budget ran out (max_seconds)
   kStationary,          // the rule proposed a zero step (gradient zero, nothing to do)
   kNumericalFailure,    // Δx or L(x + Δx) was NaN/Inf, or the rule met a NumericalError; x keeps
                         // its last finite value
@@ -27,7 +32,8 @@ enum class Termination {
   kStopped,             // the callback asked to stop
 };
 // "converged", "relative_loss", "gradient_tolerance", "function_tolerance",
-// "parameter_tolerance", "max_iterations", "stationary", "numerical_failure", "failed", "stopped".
+// "parameter_tolerance", "diverged", "max_iterations", "max_evaluations", "max_seconds",
+// "stationary", "numerical_failure", "failed", "stopped".
 std::string to_string(Termination termination);
 // True for the five stopping rules (the run reached what was asked of it).
 bool converged(Termination termination);
@@ -38,6 +44,7 @@ struct IterationRecord {
   double step_norm = 0;  // ‖Δx‖ of the step that led here
   double seconds = 0;    // wall time since the start of minimize()
   int evaluations = 0;   // cumulative objective evaluations
+  SimulatorCounts counts;  // cumulative simulator work (the rule's inner solves included)
   Vector x;
 };
 
@@ -47,7 +54,7 @@ struct IterationRecord {
 // NaN or infinite quantity never satisfies it.
 struct MinimizeOptions {
   int max_iterations = 100;  // ≥ 1
-  // Absolute: stop once L(x) ≤ loss_tolerance (Termination::kConverged).
+  // Absolute: stop once L(x) ≤ loss_tolerance (Termination::kConverged); ≥ 0.
   double loss_tolerance = 0.0;
   // Called after every iteration (and for the start); return true to stop the run.
   std::function<bool(const IterationRecord&)> callback = nullptr;
@@ -72,6 +79,15 @@ struct MinimizeOptions {
   // The characteristic size sᵢ > 0 of each variable (n entries, or empty for 1): the rules work
   // in z = x ⊘ s (scipy's x_scale). Choose sᵢ about the size of the change xᵢ needs.
   Vector x_scale = Vector();
+  // Budgets, each off at 0. max_evaluations bounds the run's simulator passes
+  // (SimulatorCounts::passes: forward and VJP samples, m per Jacobian, 2n per weighted Hessian,
+  // 1 per time reversal or inverse), the work of the rule's inner solves (pg's numerical local
+  // inverse) included: the evaluation of x₀ is always made, after it no simulator call is made
+  // that would take the passes beyond the budget (kMaxEvaluations). max_seconds bounds the wall
+  // time: no simulator call starts, and no iteration, once it has passed (kMaxSeconds). A run
+  // ended by a budget keeps its last accepted x. ≥ 0.
+  long long max_evaluations = 0;
+  double max_seconds = 0.0;
 };
 
 struct MinimizeSummary {
@@ -84,6 +100,7 @@ struct MinimizeSummary {
   int iterations = 0;                    // accepted updates made (rejected trials count too)
   int rejected_steps = 0;                // of those, trials the rule rejected (x stayed)
   int evaluations = 0;                   // objective evaluations (rule's and minimize's)
+  SimulatorCounts counts;                // the simulator's work in the run (inner solves included)
   double wall_seconds = 0;
   double step_seconds = 0;        // time inside the rule's step()
   double evaluation_seconds = 0;  // time of minimize's own evaluations of L (and ∇L)
@@ -95,17 +112,23 @@ struct MinimizeSummary {
   bool scaled = false;
   Index at_bounds = 0;  // variables of x at one of their bounds
   double gradient_norm = -1;  // the last projected-gradient norm tested (-1: not computed)
-  std::vector<std::pair<std::string, double>> stopping_rules;  // name, value (those set)
+  std::vector<std::pair<std::string, double>> stopping_rules;  // name, value (those set, and
+                                                               // the budgets set)
 };
 
+// The rule sees the objective's simulator through a CheckedSimulator (the sizes of its results
+// checked, its work counted and budgeted); an Error or an exception of the simulator's own
+// propagates, a NumericalError ends the run with kNumericalFailure.
 MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const Vector& x0,
                          const MinimizeOptions& options = {});
 
-// One line: "lbfgs: 34 iterations, 71 evaluations, loss 1.2e+03 → 4.5e-02, gradient_tolerance".
+// One line: "lbfgs: 34 iterations, 71 evaluations, 142 simulator passes, loss 1.2e+03 → 4.5e-02,
+// gradient_tolerance".
 std::string brief_report(const MinimizeSummary& summary);
 // A multi-line report in the manner of Ceres' FullReport: the problem (parameters, bounds,
-// scale), the rule and its options, the stopping rules, initial/final/change of the loss,
-// iterations (rejected trials), evaluations, times, and the termination with its reason.
+// scale), the rule and its options, the stopping rules and budgets, initial/final/change of the
+// loss, iterations (rejected trials), evaluations, the simulator's work by kind, times, and the
+// termination with its reason.
 std::string full_report(const MinimizeSummary& summary);
 
 }  // namespace physgrad

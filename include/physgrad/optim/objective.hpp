@@ -2,8 +2,10 @@
 // with g = Jᵀ ∂L/∂y and the exact Hessian H = Jᵀ (∂²L/∂y²) J + Σ_k (∂L/∂y_k) ∂²P_k/∂x².
 #pragma once
 
+#include <optional>
+
 #include "physgrad/loss/loss.hpp"
-#include "physgrad/physics/simulator.hpp"
+#include "physgrad/physics/checked_simulator.hpp"
 
 namespace physgrad {
 
@@ -32,6 +34,25 @@ class Objective {
   const Loss* loss_;
   Vector target_;
   Vector context_;
+};
+
+// An Objective whose simulator is a CheckedSimulator: `objective` itself when its simulator is
+// one already, else a copy around one of its own (the same loss, target and context). The
+// drivers hand the rules only such objectives.
+class CheckedObjective {
+ public:
+  explicit CheckedObjective(const Objective& objective);
+  CheckedObjective(const CheckedObjective&) = delete;
+  CheckedObjective& operator=(const CheckedObjective&) = delete;
+
+  const Objective& objective() const { return own_objective_ ? *own_objective_ : *given_; }
+  const CheckedSimulator& simulator() const { return *simulator_; }
+
+ private:
+  const Objective* given_;
+  std::optional<CheckedSimulator> own_simulator_;
+  const CheckedSimulator* simulator_;
+  std::optional<Objective> own_objective_;
 };
 
 }  // namespace physgrad

@@ -14,7 +14,8 @@ struct Step {
   enum class Status {
     kOk,        // dx is the proposed update; x + dx lies in the domain's box
     kRejected,  // a trial was tried and rejected (trust region); x stays, the iteration counts;
-                // dx is the rejected trial (minimize() tests its length, as Ceres does)
+                // dx is the rejected trial (minimize() tests its length, as Ceres does), or
+                // empty when the trial's loss was not finite (no length to test)
     kFailed,    // the rule cannot continue (e.g. no acceptable step length)
   };
   Vector dx;
@@ -34,7 +35,10 @@ class Optimizer {
   virtual void reset() {}
   // Proposes Δx at x, which lies in `domain`'s box; x + Δx lies in it too (up to rounding in the
   // sum: minimize() clamps the new iterate). The default domain is unbounded with unit scale.
-  // Throws Error when the domain has another dimension than x.
+  // The rule sees the objective's simulator through a CheckedSimulator (the one minimize() puts
+  // around it, or one of its own). Throws Error when x or the domain has another dimension than
+  // the objective, or the rule returns a dx of another size (an empty dx is allowed for a
+  // rejected trial or a failure).
   Step step(const Objective& objective, const Vector& x, const Domain& domain = {});
 
  private:

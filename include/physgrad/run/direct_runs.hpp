@@ -53,15 +53,17 @@ void require_iterate_memory(const Settings& settings, std::size_t runs);
 
 // Runs one rule from x0, records one metrics row per iterate (with `row_extras` columns) and
 // a summary entry (with `extra_params` merged into params). `tolerance` is the loss level
-// counted as converged. `sample`, when given, is called at the start and after every iteration
-// while the run goes on; the columns it returns join that iterate's metrics row.
+// counted as converged. `columns`, when given, adds the columns it returns for an iterate (its
+// record of the history: loss, time, simulator counts, …) to that iterate's metrics row.
 DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Objective& objective,
                         const Vector& x0, int iterations, double tolerance,
                         const nlohmann::json& row_extras = nlohmann::json::object(),
-                        const std::function<nlohmann::json()>& sample = nullptr);
+                        const std::function<nlohmann::json(const IterationRecord&)>& columns =
+                            nullptr);
 
-// "12" when converged, "diverged at 7" on numerical failure, "diverging (L ×…)" when the
-// budget ran out with the loss above its start, "> N" otherwise.
+// "12" when converged, "diverged at 7" on numerical failure, "diverging (L ×…)" when the run
+// ended (budget, or a stopping rule: Termination::kDiverged) with the loss above its start,
+// "> N" otherwise.
 std::string iterations_cell(const DirectResult& result);
 // The step size a rule actually runs with: "0.5", "line search from 1", "adaptive μ from 0.001".
 std::string step_size_text(const RuleSetup& rule);

@@ -9,7 +9,7 @@
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/nn/network.hpp"
 #include "physgrad/parallel/shard.hpp"
-#include "physgrad/physics/simulator.hpp"
+#include "physgrad/physics/checked_simulator.hpp"
 #include "physgrad/train/dataset.hpp"
 
 namespace physgrad {
@@ -21,8 +21,9 @@ struct LearningProblem {
   const Loss* loss = nullptr;
 };
 
-// Throws Error when the problem lacks a simulator or loss, or `data` (named `name` in the
-// message) does not fit the network and the simulator.
+// Throws Error when the problem lacks a simulator or loss, the network or the simulator has a
+// dimension < 1 (CheckedNetwork, CheckedSimulator), or `data` (named `name` in the message)
+// does not fit them.
 void check_problem(const Network& network, const LearningProblem& problem, const Dataset& data,
                    const char* name);
 
@@ -43,7 +44,10 @@ struct BatchTiming {
 // forms J or J Jᵀ as it needs); or the network outputs and a backprop. With an active shard
 // this rank evaluates its share of the batch and the results are combined so that every rank
 // holds the same loss, ∇θ, ∂L/∂y and Jacobian (a ShardedJacobian). `cache` (from the network's
-// new_cache()) is reused between calls and must outlive the returned state.
+// new_cache()) is reused between calls and must outlive the returned state. The network and the
+// simulator are used as given: train_step() and mean_loss() hand over a CheckedNetwork and a
+// CheckedSimulator, so that every size they return is checked; a caller of its own wraps them
+// the same way.
 BatchState evaluate_batch(const Network& network, const LearningProblem& problem,
                           const Dataset& batch, UpdateNeed need, NetworkCache& cache,
                           const Shard& shard = {}, BatchTiming* timing = nullptr);
@@ -78,6 +82,7 @@ struct StepReport {
   // the rule, the rest of the rule; and the whole call.
   double forward_seconds = 0, derivative_seconds = 0, inversion_seconds = 0, update_seconds = 0;
   double total_seconds = 0;
+  SimulatorCounts counts;  // the simulator's work in this step (local inverses included)
 
   bool applied() const { return failure == StepFailure::kNone; }
 };
@@ -88,10 +93,12 @@ struct StepReport {
 // never reaches θ. When the batch is not finite and the previous step can be halved, it is
 // retried at half length (θ moves back accordingly); if that does not help, or the step cannot
 // be halved, the previous step is undone (θ as before it) unless only this Δθ was bad, and the
-// report says where it failed. Throws Error on mismatched dimensions (see check_problem()).
-// An exception from below (a StopRequested from the simulator) leaves θ and `state` as they were
-// before the call, and so the state of the library's rules, which change it only after their
-// last simulator call: the step can be made again.
+// report says where it failed. Throws Error on mismatched dimensions (see check_problem()), and
+// when the network, the simulator (both seen through CheckedNetwork and CheckedSimulator) or
+// the rule returns a value of the wrong size; an exception of the network's or simulator's own
+// passes through unchanged. An exception from below (a StopRequested from the simulator) leaves
+// θ and `state` as they were before the call, and so the state of the library's rules, which
+// change it only after their last simulator call: the step can be made again.
 StepReport train_step(Network& network, LearningUpdate& update, const LearningProblem& problem,
                       const Dataset& batch, StepState& state, const StepOptions& options = {});
 
