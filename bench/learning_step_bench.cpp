@@ -15,7 +15,7 @@
 #include "physgrad/linalg/power_pinv.hpp"
 #include "physgrad/threads.hpp"
 #include "physgrad/train/trainer.hpp"
-#include "reference_case.hpp"
+#include "registry.hpp"
 
 namespace {
 
@@ -41,7 +41,7 @@ const CaseSpec& case_spec(std::int64_t which) { return kCases[static_cast<std::s
 
 ReferenceCase make_case(std::int64_t which, Index batch = 0) {
   const CaseSpec& spec = case_spec(which);
-  return experiments::reference_case(spec.experiment, batch > 0 ? batch : spec.batch);
+  return experiments::registry().reference(spec.experiment, batch > 0 ? batch : spec.batch);
 }
 
 const char* rule_id(std::int64_t rule) {
@@ -154,7 +154,7 @@ GramCase gram_case(std::int64_t which, Index batch) {
   const BatchState state = evaluate_batch(c.network, c.problem(), c.batch,
                                           UpdateNeed::kStackedJacobian, cache);
   const double rcond =
-      experiments::make_reference_update(c, "hig")->params().at("rcond").get<double>();
+      c.update("hig")->params().at("rcond").get<double>();
   return {state.jacobian->gram(), state.loss_gradient_y, rcond};
 }
 
@@ -272,7 +272,7 @@ void time_steps(benchmark::State& state, ReferenceCase& c, LearningUpdate& updat
 void learning_step(benchmark::State& state) {
   ReferenceCase c = make_case(state.range(0));
   const std::string id = rule_id(state.range(1));
-  const auto update = experiments::make_reference_update(c, id);
+  const auto update = c.update(id);
   time_steps(state, c, *update);
   state.SetLabel(std::string(case_spec(state.range(0)).label) + " " + id);
 }
@@ -280,7 +280,7 @@ void learning_step(benchmark::State& state) {
 // The HIG step on configuration range(0) with the m physics VJPs on range(1) threads.
 void learning_step_threads(benchmark::State& state) {
   ReferenceCase c = make_case(state.range(0));
-  const auto update = experiments::make_reference_update(c, "hig");
+  const auto update = c.update("hig");
   set_jacobian_threads(static_cast<int>(state.range(1)));
   time_steps(state, c, *update);
   set_jacobian_threads(1);
@@ -292,11 +292,11 @@ void learning_step_threads(benchmark::State& state) {
 // 64-h-2h-h-64 tanh network with h = range(1) (|θ| = 4h² + 132h + 64): how the step grows
 // with B·m and |θ|, and where the backend switches (normal path when B·m > |θ|).
 void size_sweep(benchmark::State& state) {
-  ReferenceCase c = experiments::reference_case("poisson", static_cast<Index>(state.range(0)));
+  ReferenceCase c = experiments::registry().reference("poisson", static_cast<Index>(state.range(0)));
   const auto h = static_cast<Index>(state.range(1));
   c.network = Mlp({64, h, 2 * h, h, 64}, Activation::kTanh);
   c.network.initialize(0);
-  const auto update = experiments::make_reference_update(c, "hig");
+  const auto update = c.update("hig");
   time_steps(state, c, *update);
 }
 

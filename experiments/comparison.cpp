@@ -5,7 +5,7 @@
 #include <functional>
 
 #include "physgrad/run/direct_runs.hpp"
-#include "experiment_list.hpp"
+#include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/comparison_toy.hpp"

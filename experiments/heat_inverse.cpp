@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "experiment_list.hpp"
-#include "physgrad/run/learning_runs.hpp"
+#include "registry.hpp"
+#include "physgrad/run/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/memory.hpp"
@@ -82,20 +82,24 @@ HeatData make_data(const HeatDiffusion& physics, Index count, std::uint64_t seed
   return {{y, y, Matrix()}, truth};
 }
 
-class HeatInverse final : public Experiment {
+class HeatInverse final : public LearningExperiment {
  public:
+  HeatInverse()
+      : LearningExperiment(
+            {.time = "20",
+             .eval_every_help = "evaluate every N iterations (default: 250 in 1-D, 40 in 2-D)"}) {}
   std::string name() const override { return "heat-inverse"; }
   std::string description() const override {
     return "fully connected net reconstructs hot boxes x* from their periodic heat diffusion "
            "y* = P(x*): SIP (regularised inverse diffusion) vs Adam through the diffusion";
   }
-  std::vector<OptionSpec> options() const override {
+  std::vector<OptionSpec> own_options() const override {
     // A sample: its true field, input and target, and the network's activations on it.
     const auto bytes_each = [](const Settings& settings) {
       const Index size = cells(settings);
       return sample_bytes(widths(size), 3 * size);
     };
-    std::vector<OptionSpec> options = {
+    return {
         integer_option("dims", "1", "1: a line of n cells; 2: an n×n grid").at_least(1).at_most(2),
         integer_option("n", "", "cells per axis (default: 64 in 1-D, 16 in 2-D)").at_least(8),
         real_option("amount", "",
@@ -106,22 +110,16 @@ class HeatInverse final : public Experiment {
         sample_count_option("test-size", "256",
                             "test samples (also the x losses)", "8", bytes_each),
     };
-    for (OptionSpec& spec : learning_options("20")) {
-      if (spec.name == "eval-every") {
-        spec.help = "evaluate every N iterations (default: 250 in 1-D, 40 in 2-D)";
-      }
-      options.push_back(std::move(spec));
-    }
-    return options;
-  }
-  std::vector<std::string> optimizer_choices() const override {
-    return rule_ids(RuleKind::kLearning);
   }
   std::vector<std::string> default_optimizers() const override { return {"sip", "adam"}; }
-  long long default_iterations() const override { return 0; }
+
+  Shape shape(const Settings& settings) const override {
+    const Index size = cells(settings);
+    return {size, widths(size)};
+  }
 
   // The network has about 8·cells² weights (8n⁴ in 2-D); a rule keeps a few vectors that long.
-  void validate(const Settings& settings) const override {
+  void check(const Settings& settings) const override {
     if (settings.integer("dims") == 2 && settings.has("n") && settings.integer("n") > 32) {
       throw Error("--n: at most 32 in 2-D (the network has ~8n⁴ weights), got " +
                   std::to_string(settings.integer("n")));
@@ -131,7 +129,6 @@ class HeatInverse final : public Experiment {
                        sizeof(double),
                    "--n: " + std::to_string(size) + " cells (a network of ~8·" +
                        std::to_string(size) + "² weights)");
-    require_learning_sizes(settings, size, widths(size));
   }
 
   void run(const Settings& given, RunContext& context) const override {

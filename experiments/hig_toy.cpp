@@ -4,9 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "experiment_list.hpp"
-#include "physgrad/run/learning_runs.hpp"
-#include "reference_case.hpp"
+#include "registry.hpp"
+#include "physgrad/run/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
@@ -66,17 +65,18 @@ ActivationStats activation_stats(const Mlp& network, const Matrix& inputs) {
   return stats;
 }
 
-class HigToy final : public Experiment {
+class HigToy final : public LearningExperiment {
  public:
+  HigToy() : LearningExperiment({.eval_every = "200"}) {}
   std::string name() const override { return "hig-toy"; }
   std::string description() const override {
     return "1-7-2 tanh net learns (sin 6x, cos 9x) through P(y) = (y1, lambda*y2): "
            "Adam vs Gauss-Newton vs HIG";
   }
-  std::vector<OptionSpec> options() const override {
+  std::vector<OptionSpec> own_options() const override {
     // A sample: its input and target, and the network's activations on it.
     const auto bytes_each = [](const Settings&) { return sample_bytes({1, kHidden, 2}, 3); };
-    std::vector<OptionSpec> options = {
+    return {
         real_list_option("lambda", "1,0.01", "scale λ of the second output").above(0),
         integer_option("seeds", "5", "number of seeds per configuration (seed, seed+1, …)")
             .at_least(1)
@@ -86,17 +86,17 @@ class HigToy final : public Experiment {
         sample_count_option("test-size", "256",
                             "test samples (also the activation statistics)", "8", bytes_each),
     };
-    for (OptionSpec& spec : learning_options("", "200")) options.push_back(std::move(spec));
-    return options;
-  }
-  std::vector<std::string> optimizer_choices() const override {
-    return rule_ids(RuleKind::kLearning);
   }
   std::vector<std::string> default_optimizers() const override { return {"adam", "gn", "hig"}; }
   long long default_iterations() const override { return 10000; }
 
-  void validate(const Settings& settings) const override {
-    require_learning_sizes(settings, 2, {1, kHidden, 2});
+  Shape shape(const Settings& /*settings*/) const override { return {2, {1, kHidden, 2}}; }
+
+  // The badly conditioned case λ = 0.01.
+  std::optional<ReferenceCase> reference(Index batch, std::uint64_t seed) const override {
+    return ReferenceCase{std::make_shared<DiagonalScale>(Vector{{1.0, 0.01}}),
+                         std::make_shared<L2Loss>(), make_network(seed),
+                         make_data(batch, 2 * seed), rule_defaults()};
   }
 
   void run(const Settings& settings, RunContext& context) const override {
@@ -194,11 +194,5 @@ class HigToy final : public Experiment {
 }  // namespace
 
 std::unique_ptr<Experiment> make_hig_toy() { return std::make_unique<HigToy>(); }
-
-// The badly conditioned case λ = 0.01.
-ReferenceCase hig_toy_reference(Index batch, std::uint64_t seed) {
-  return {std::make_shared<DiagonalScale>(Vector{{1.0, 0.01}}), std::make_shared<L2Loss>(),
-          make_network(seed), make_data(batch, 2 * seed), rule_defaults()};
-}
 
 }  // namespace physgrad::experiments

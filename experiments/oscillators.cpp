@@ -3,9 +3,8 @@
 // simulator with Adam, Gauss-Newton, HIG or SIP (experiments.md E10 book, E11 paper).
 #include <cmath>
 
-#include "experiment_list.hpp"
-#include "physgrad/run/learning_runs.hpp"
-#include "reference_case.hpp"
+#include "registry.hpp"
+#include "physgrad/run/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"
@@ -134,20 +133,21 @@ void add_trajectory_figures(RunContext& context, const OscillatorConfig& config,
                       line_plot_svg(controls, options)});
 }
 
-class Oscillators final : public Experiment {
+class Oscillators final : public LearningExperiment {
  public:
+  Oscillators() : LearningExperiment({.time = "20"}) {}
   std::string name() const override { return "oscillators"; }
   std::string description() const override {
     return "controls that return coupled oscillators to their start: Adam vs GN vs HIG (paper) "
            "or Adam vs HIG vs SIP (book)";
   }
-  std::vector<OptionSpec> options() const override {
+  std::vector<OptionSpec> own_options() const override {
     // A sample: its state and target, and the network's activations on it.
     const auto bytes_each = [](const Settings& settings) {
       const CoupledOscillators physics(configuration(settings.text("variant")).physics);
       return sample_bytes(widths(physics), 2 * physics.output_dim());
     };
-    std::vector<OptionSpec> options = {
+    return {
         text_option("variant", "paper",
                     "paper: cubic coupling, Nt 96, dt 0.125, relu net; book: linear coupling, "
                     "Nt 24, dt 0.5, tanh net")
@@ -155,20 +155,23 @@ class Oscillators final : public Experiment {
         sample_count_option("train-size", "4096", "training states", "16", bytes_each),
         sample_count_option("test-size", "4096", "test states", "8", bytes_each),
     };
-    for (OptionSpec& spec : learning_options("20")) options.push_back(std::move(spec));
-    return options;
-  }
-  std::vector<std::string> optimizer_choices() const override {
-    return rule_ids(RuleKind::kLearning);
   }
   // Empty: the configuration's own rules (paper: adam, gn, hig; book: adam, hig, sip).
   std::vector<std::string> default_optimizers() const override { return {}; }
-  long long default_iterations() const override { return 0; }
 
-  void validate(const Settings& settings) const override {
-    require_training_limit(settings, "oscillators");
+  Shape shape(const Settings& settings) const override {
     const CoupledOscillators physics(configuration(settings.text("variant")).physics);
-    require_learning_sizes(settings, physics.output_dim(), widths(physics));
+    return {physics.output_dim(), widths(physics)};
+  }
+
+  // The paper's configuration.
+  std::optional<ReferenceCase> reference(Index batch, std::uint64_t seed) const override {
+    const Configuration config = configuration("paper");
+    auto physics = std::make_shared<CoupledOscillators>(config.physics);
+    Mlp network = make_network(*physics, config.activation, seed);
+    Dataset data = make_states(batch, physics->output_dim(), 2 * seed);
+    return ReferenceCase{std::move(physics), std::make_shared<L2Loss>(2.0), std::move(network),
+                         std::move(data), config.defaults};
   }
 
   void run(const Settings& settings, RunContext& context) const override {
@@ -206,15 +209,5 @@ class Oscillators final : public Experiment {
 }  // namespace
 
 std::unique_ptr<Experiment> make_oscillators() { return std::make_unique<Oscillators>(); }
-
-// The paper configuration.
-ReferenceCase oscillators_reference(Index batch, std::uint64_t seed) {
-  const Configuration config = configuration("paper");
-  auto physics = std::make_shared<CoupledOscillators>(config.physics);
-  Mlp network = make_network(*physics, config.activation, seed);
-  Dataset data = make_states(batch, physics->output_dim(), 2 * seed);
-  return {std::move(physics), std::make_shared<L2Loss>(2.0), std::move(network), std::move(data),
-          config.defaults};
-}
 
 }  // namespace physgrad::experiments

@@ -3,9 +3,8 @@
 // request.
 #include <cmath>
 
-#include "experiment_list.hpp"
-#include "physgrad/run/learning_runs.hpp"
-#include "reference_case.hpp"
+#include "registry.hpp"
+#include "physgrad/run/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/poisson.hpp"
@@ -91,36 +90,39 @@ void add_field_figure(RunContext& context, Index n, const Vector& truth, const V
                       field_panels_svg(panels, options)});
 }
 
-class PoissonExperiment final : public Experiment {
+class PoissonExperiment final : public LearningExperiment {
  public:
+  PoissonExperiment() : LearningExperiment({.time = "30"}) {}
   std::string name() const override { return "poisson"; }
   std::string description() const override {
     return "network predicts x from y* = laplace(x*) on an 8x8 grid: Adam vs HIG (SIP optional)";
   }
-  std::vector<OptionSpec> options() const override {
+  std::vector<OptionSpec> own_options() const override {
     // A sample: its field, input and target, and the network's activations on it.
     const auto bytes_each = [](const Settings& settings) {
       const Index cells = settings.integer("grid") * settings.integer("grid");
       return sample_bytes(widths(settings.integer("grid")), 3 * cells);
     };
-    std::vector<OptionSpec> options = {
+    return {
         integer_option("grid", "8", "grid size n (n×n cells)").at_least(2).at_most(64),
         sample_count_option("train-size", "2048", "training samples", "16", bytes_each),
         sample_count_option("test-size", "256", "test samples", "8", bytes_each),
     };
-    for (OptionSpec& spec : learning_options("30")) options.push_back(std::move(spec));
-    return options;
-  }
-  std::vector<std::string> optimizer_choices() const override {
-    return rule_ids(RuleKind::kLearning);
   }
   std::vector<std::string> default_optimizers() const override { return {"adam", "hig"}; }
-  long long default_iterations() const override { return 0; }
 
-  void validate(const Settings& settings) const override {
-    require_training_limit(settings, "poisson");
+  Shape shape(const Settings& settings) const override {
     const Index grid = settings.integer("grid");
-    require_learning_sizes(settings, grid * grid, widths(grid));
+    return {grid * grid, widths(grid)};
+  }
+
+  // The 8×8 grid.
+  std::optional<ReferenceCase> reference(Index batch, std::uint64_t seed) const override {
+    auto physics = std::make_shared<Poisson>(8);
+    Mlp network = make_network(8, seed);
+    Dataset data = make_data(*physics, batch, 2 * seed);
+    return ReferenceCase{std::move(physics), std::make_shared<L2Loss>(), std::move(network),
+                         std::move(data), rule_defaults()};
   }
 
   void run(const Settings& settings, RunContext& context) const override {
@@ -163,14 +165,5 @@ class PoissonExperiment final : public Experiment {
 }  // namespace
 
 std::unique_ptr<Experiment> make_poisson() { return std::make_unique<PoissonExperiment>(); }
-
-// The 8×8 grid.
-ReferenceCase poisson_reference(Index batch, std::uint64_t seed) {
-  auto physics = std::make_shared<Poisson>(8);
-  Mlp network = make_network(8, seed);
-  Dataset data = make_data(*physics, batch, 2 * seed);
-  return {std::move(physics), std::make_shared<L2Loss>(), std::move(network), std::move(data),
-          rule_defaults()};
-}
 
 }  // namespace physgrad::experiments

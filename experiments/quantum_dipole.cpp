@@ -4,9 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "experiment_list.hpp"
-#include "physgrad/run/learning_runs.hpp"
-#include "reference_case.hpp"
+#include "registry.hpp"
+#include "physgrad/run/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/fidelity.hpp"
 #include "physgrad/physics/quantum_dipole.hpp"
@@ -126,14 +125,15 @@ void add_state_figures(RunContext& context, const QuantumDipoleConfig& config,
       controls, "Test target 1: dipole controls u(t)", "time t", end_time, "control u", false);
 }
 
-class QuantumDipoleExperiment final : public Experiment {
+class QuantumDipoleExperiment final : public LearningExperiment {
  public:
+  QuantumDipoleExperiment() : LearningExperiment({.time = "30"}) {}
   std::string name() const override { return "quantum-dipole"; }
   std::string description() const override {
     return "dipole controls that steer a 1-D quantum state to a target superposition: "
            "Adam vs HIG";
   }
-  std::vector<OptionSpec> options() const override {
+  std::vector<OptionSpec> own_options() const override {
     // A sample: its target and start state, the states of its trajectory, and the network's
     // activations on it.
     const auto bytes_each = [](const Settings& settings) {
@@ -141,7 +141,7 @@ class QuantumDipoleExperiment final : public Experiment {
       const Index state = physics.output_dim();
       return sample_bytes(widths(physics), (3 + settings.integer("steps")) * state);
     };
-    std::vector<OptionSpec> options = {
+    return {
         sample_count_option("train-size", "1024", "training targets", "16", bytes_each),
         sample_count_option("test-size", "1024", "test targets", "8", bytes_each),
         integer_option("steps", "384", "Crank-Nicolson steps Nt (dt = 0.05)")
@@ -149,19 +149,24 @@ class QuantumDipoleExperiment final : public Experiment {
             .at_most(1e5)
             .quick("8"),
     };
-    for (OptionSpec& spec : learning_options("30")) options.push_back(std::move(spec));
-    return options;
-  }
-  std::vector<std::string> optimizer_choices() const override {
-    return rule_ids(RuleKind::kLearning);
   }
   std::vector<std::string> default_optimizers() const override { return {"adam", "hig"}; }
-  long long default_iterations() const override { return 0; }
 
-  void validate(const Settings& settings) const override {
-    require_training_limit(settings, "quantum-dipole");
+  Shape shape(const Settings& settings) const override {
     const QuantumDipole physics(configuration(settings));
-    require_learning_sizes(settings, physics.output_dim(), widths(physics));
+    return {physics.output_dim(), widths(physics)};
+  }
+
+  // The paper's configuration.
+  std::optional<ReferenceCase> reference(Index batch, std::uint64_t seed) const override {
+    const QuantumDipoleConfig config = QuantumDipoleConfig::paper();
+    auto physics = std::make_shared<QuantumDipole>(config);
+    Mlp network = make_network(*physics, seed);
+    return ReferenceCase{std::move(physics), std::make_shared<FidelityLoss>(), std::move(network),
+                         make_targets(batch, config.points, 2 * seed), rule_defaults()};
+  }
+
+  void check(const Settings& settings) const override {
     for (const std::string& id : settings.texts("optimizers")) {
       if (id == "sip") throw Error("quantum-dipole: --optimizers sip needs an inverse simulator; "
                                    "this one has none");
@@ -199,15 +204,6 @@ class QuantumDipoleExperiment final : public Experiment {
 
 std::unique_ptr<Experiment> make_quantum_dipole() {
   return std::make_unique<QuantumDipoleExperiment>();
-}
-
-// The paper configuration (Nt 384).
-ReferenceCase quantum_dipole_reference(Index batch, std::uint64_t seed) {
-  const QuantumDipoleConfig config = QuantumDipoleConfig::paper();
-  auto physics = std::make_shared<QuantumDipole>(config);
-  Mlp network = make_network(*physics, seed);
-  return {std::move(physics), std::make_shared<FidelityLoss>(), std::move(network),
-          make_targets(batch, config.points, 2 * seed), rule_defaults()};
 }
 
 }  // namespace physgrad::experiments

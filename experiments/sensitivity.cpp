@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "physgrad/run/direct_runs.hpp"
-#include "experiment_list.hpp"
+#include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"

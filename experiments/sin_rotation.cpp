@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "experiment_list.hpp"
-#include "physgrad/run/learning_runs.hpp"
+#include "registry.hpp"
+#include "physgrad/run/learning_experiment.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/sin_rotation.hpp"
 #include "physgrad/report/colors.hpp"
@@ -54,17 +54,18 @@ double x_distance(const SinRotation& physics, const Matrix& x, const Matrix& tar
   return sum / static_cast<double>(x.cols());
 }
 
-class SinRotationExperiment final : public Experiment {
+class SinRotationExperiment final : public LearningExperiment {
  public:
+  SinRotationExperiment() : LearningExperiment({.time = "8", .eval_every = "1000"}) {}
   std::string name() const override { return "sin-rotation"; }
   std::string description() const override {
     return "2-32-64-32-2 ReLU net inverts the rotated sine map P(x) = SinRotation(xi, phi): "
            "SIP vs Adam vs SGD, x-distance to the nearest exact solution";
   }
-  std::vector<OptionSpec> options() const override {
+  std::vector<OptionSpec> own_options() const override {
     // A sample: its input and target, and the network's activations on it.
     const auto bytes_each = [](const Settings&) { return sample_bytes(kWidths, 4); };
-    std::vector<OptionSpec> options = {
+    return {
         real_list_option("xi", "1,32", "conditioning ξ (Jacobian singular values differ by ξ²)")
             .above(0),
         real_option("phi", "15", "coupling angle φ in degrees").at_least(-360).at_most(360),
@@ -79,18 +80,10 @@ class SinRotationExperiment final : public Experiment {
         sample_count_option("test-size", "1000",
                             "test samples (also the x-distance)", "8", bytes_each),
     };
-    for (OptionSpec& spec : learning_options("8", "1000")) options.push_back(std::move(spec));
-    return options;
-  }
-  std::vector<std::string> optimizer_choices() const override {
-    return rule_ids(RuleKind::kLearning);
   }
   std::vector<std::string> default_optimizers() const override { return {"sip", "adam", "sgd"}; }
-  long long default_iterations() const override { return 0; }
 
-  void validate(const Settings& settings) const override {
-    require_learning_sizes(settings, 2, kWidths);
-  }
+  Shape shape(const Settings& /*settings*/) const override { return {2, kWidths}; }
 
   void run(const Settings& settings, RunContext& context) const override {
     const double phi = settings.real("phi");

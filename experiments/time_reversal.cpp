@@ -8,7 +8,7 @@
 #include <map>
 
 #include "physgrad/run/direct_runs.hpp"
-#include "experiment_list.hpp"
+#include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"

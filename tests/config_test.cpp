@@ -18,7 +18,7 @@
 #include <typeinfo>
 
 #include "physgrad/run/config_file.hpp"
-#include "experiment_list.hpp"
+#include "registry.hpp"
 #include "physgrad/run/experiment.hpp"
 #include "physgrad/error.hpp"
 
@@ -30,7 +30,7 @@ using json = nlohmann::json;
 
 Settings resolve_json(const std::string& name, const std::string& text,
                       const OptionTexts& flags = {}) {
-  const Experiment& experiment = find_experiment(name);
+  const Experiment& experiment = registry().find(name);
   OptionTexts given = config_options(experiment, parse_config_json(text));
   given.insert(given.end(), flags.begin(), flags.end());
   return resolve_settings(experiment, given);
@@ -52,7 +52,7 @@ std::string config_error(const std::string& name, const std::string& text) {
 
 std::string option_names(const std::string& name) {
   std::string names;
-  for (const OptionSpec& spec : all_options(find_experiment(name))) {
+  for (const OptionSpec& spec : all_options(registry().find(name))) {
     names += (names.empty() ? "" : ", ") + spec.name;
   }
   return names;
@@ -76,7 +76,7 @@ TEST(ConfigFile, ResolvesToTheSameSettingsAsTheSameValuesGivenAsFlags) {
   };
   for (const auto& [name, text, flags] : cases) {
     EXPECT_EQ(resolve_json(name, text).json(),
-              resolve_settings(find_experiment(name), flags).json())
+              resolve_settings(registry().find(name), flags).json())
         << name;
   }
 }
@@ -222,7 +222,7 @@ TEST(ConfigFile, EveryBadValueIsOneErrorWithAnExactMessage) {
 TEST(ConfigFile, FileErrorsNameThePath) {
   const fs::path dir = fs::temp_directory_path() / ("physgrad_config_" + std::to_string(getpid()));
   fs::create_directories(dir);
-  const Experiment& comparison = find_experiment("comparison");
+  const Experiment& comparison = registry().find("comparison");
   const auto file_error = [&](const fs::path& path) {
     return error_of([&] { read_config_file(comparison, path); });
   };
@@ -251,7 +251,7 @@ TEST(DescribeExperiment, TableHasEveryOptionWithKindDefaultAndRange) {
       EXPECT_EQ(table.rows[i][2], specs[i].default_text.empty() ? "unset" : specs[i].default_text);
     }
   }
-  const RunContext::Table table = options_table(find_experiment("scaled-toy"));
+  const RunContext::Table table = options_table(registry().find("scaled-toy"));
   const auto row = [&](const std::string& name) {
     for (const auto& r : table.rows) {
       if (r[0] == name) return r;
@@ -460,7 +460,7 @@ TEST(FuzzConfig, RandomDocumentsResolveOrThrowErrorOnly) {
   int documents = 0;
   for (; documents < 2000; ++documents) {
     if (std::chrono::steady_clock::now() - start > std::chrono::seconds(4)) break;
-    const Experiment& experiment = *random.pick(registry());
+    const Experiment& experiment = *random.pick(registry().experiments());
     const auto [text, kind] = random.document(experiment);
     try {
       const Settings settings = resolve_settings(
@@ -489,7 +489,7 @@ TEST(FuzzOptions, RandomTextsParseToValidValuesOrThrowErrorOnly) {
   RandomInput random(77);
   int accepted = 0, rejected = 0;
   for (int i = 0; i < 5000; ++i) {
-    const Experiment& experiment = *random.pick(registry());
+    const Experiment& experiment = *random.pick(registry().experiments());
     const OptionSpec spec = random.pick(all_options(experiment));
     const std::string text = random.option_text(spec);
     try {

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "cli_fixture.hpp"
-#include "experiment_list.hpp"
+#include "registry.hpp"
 #include "physgrad/run/experiment.hpp"
 
 namespace {
@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 class Defaults : public Cli, public ::testing::WithParamInterface<std::string> {};
 
 TEST_P(Defaults, RunToTheEndWithACompleteResult) {
-  const ex::Experiment& experiment = ex::find_experiment(GetParam());
+  const ex::Experiment& experiment = ex::registry().find(GetParam());
   std::string args = "run " + experiment.name() + " --out result";
   for (const ex::OptionSpec& spec : ex::all_options(experiment)) {
     if (!spec.quick_text.empty()) args += " --" + spec.name + " " + spec.quick_text;

@@ -6,14 +6,14 @@
 #include <utility>
 #include <vector>
 
-#include "experiment_list.hpp"
+#include "registry.hpp"
 #include "physgrad/run/experiment.hpp"
 
 namespace physgrad::experiments::testing {
 
 inline RunContext run_experiment(const std::string& name,
                                  const std::vector<std::pair<std::string, std::string>>& given) {
-  const Experiment& experiment = find_experiment(name);
+  const Experiment& experiment = registry().find(name);
   RunContext context;
   context.set_quiet(true);
   experiment.run(resolve_settings(experiment, given), context);

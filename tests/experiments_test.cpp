@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "experiment_list.hpp"
+#include "registry.hpp"
 #include "physgrad/run/experiment.hpp"
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
@@ -111,7 +111,7 @@ TEST(HigToyExperiment, HalfInverseGradientsBeatAdamAndGaussNewtonWhenIllConditio
 }
 
 TEST(ExperimentSettings, DefaultsResolveAndBadValuesNameTheOption) {
-  const Experiment& experiment = find_experiment("scaled-toy");
+  const Experiment& experiment = registry().find("scaled-toy");
   const Settings settings = resolve_settings(experiment, {});
   EXPECT_EQ(settings.integer("iters"), 1000);
   EXPECT_FALSE(settings.has("lr"));
@@ -134,13 +134,13 @@ TEST(ExperimentSettings, DefaultsResolveAndBadValuesNameTheOption) {
   EXPECT_EQ(message("alpha", "1,,2"), "--alpha: empty entry in list '1,,2'");
   EXPECT_EQ(message("tol-mode", "loose"),
             "--tol-mode: unknown value 'loose' (known: relative, absolute)");
-  EXPECT_THROW(find_experiment("scaled_toy"), Error);
+  EXPECT_THROW(registry().find("scaled_toy"), Error);
 }
 
 // One number syntax for reals and integers, on the command line and in config files: decimal,
 // with an optional sign; what strtod reads besides is not a number.
 TEST(ExperimentSettings, NumbersAreDecimal) {
-  const Experiment& experiment = find_experiment("scaled-toy");
+  const Experiment& experiment = registry().find("scaled-toy");
   const auto read = [&](const std::string& name, const std::string& text) {
     return resolve_settings(experiment, {{name, text}});
   };

@@ -3,7 +3,7 @@
 // each experiment exists for.
 #include <gtest/gtest.h>
 
-#include "experiment_list.hpp"
+#include "registry.hpp"
 #include "physgrad/run/experiment.hpp"
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
@@ -64,7 +64,7 @@ TEST(HeatExperiment, SipReconstructsTheInitialStateBetterThanAdam) {
 }
 
 TEST(HeatExperiment, RejectsTwoDimensionalGridsTooLargeForTheNetwork) {
-  const Experiment& experiment = find_experiment("heat-inverse");
+  const Experiment& experiment = registry().find("heat-inverse");
   try {
     resolve_settings(experiment, {{"dims", "2"}, {"n", "40"}});
     FAIL() << "no error";

@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "physgrad/run/experiment.hpp"
+#include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/text.hpp"
 #include "physgrad/threads.hpp"
-#include "reference_case.hpp"
 
 namespace physgrad::cli {
 
@@ -67,7 +67,7 @@ BenchCommand::BenchCommand(CLI::App& app)
           "bench", "time steps of an update on a reference experiment, one JSON line: physgrad bench "
                    "NAME [--optimizer U] [--batch B] [--steps N] [--warmup W] [--threads T]")) {
   command_->add_option("NAME", name_,
-                       "reference experiment: " + comma_list(ex::reference_case_names()))
+                       "reference experiment: " + comma_list(ex::registry().reference_names()))
       ->required();
   command_->add_option("--optimizer", optimizer_,
                        "update rule: " + comma_list(rule_ids(RuleKind::kLearning)))
@@ -90,10 +90,8 @@ void BenchCommand::run(std::ostream& out) const {
   const long long steps = read_integer("steps", steps_, 1, kMaxSteps);
   const long long warmup = read_integer("warmup", warmup_, 0, kMaxSteps);
   const long long threads = read_integer("threads", threads_, 1, 1024);
-  const auto& names = ex::reference_case_names();
-  if (std::find(names.begin(), names.end(), name_) == names.end()) {
-    ex::reference_case(name_, 1);  // throws, naming the known configurations
-  }
+  // The case at one sample: throws for an unknown NAME, naming the known ones.
+  const ex::ReferenceCase single = ex::registry().reference(name_, 1);
   find_rule(RuleKind::kLearning, optimizer_);  // throws for an unknown rule, naming the known ones
   if (std::getenv("OPENBLAS_NUM_THREADS") == nullptr && std::getenv("OMP_NUM_THREADS") == nullptr) {
     set_blas_threads(1);
@@ -101,8 +99,7 @@ void BenchCommand::run(std::ostream& out) const {
   set_jacobian_threads(static_cast<int>(threads));
 
   // The rule's own batch size, step size and τ in NAME, as `physgrad run NAME` uses them.
-  const ex::ReferenceCase single = ex::reference_case(name_, 1);
-  const Index batch = batch_.empty() ? ex::reference_batch(single, optimizer_)
+  const Index batch = batch_.empty() ? single.batch_size(optimizer_)
                                      : read_integer("batch", batch_, 1);
   // The reference eigendecomposition holds three B·m × B·m matrices and dsyevd's workspace of
   // about two more; refuse a batch for which they cannot fit before allocating anything.
@@ -113,8 +110,8 @@ void BenchCommand::run(std::ostream& out) const {
   require_memory(5 * order * order * sizeof(double),
                  "--batch: " + std::to_string(batch) +
                      " (the reference eigendecomposition of a " + size + " matrix)");
-  ex::ReferenceCase reference = ex::reference_case(name_, batch);
-  const auto update = ex::make_reference_update(reference, optimizer_);
+  ex::ReferenceCase reference = ex::registry().reference(name_, batch);
+  const auto update = reference.update(optimizer_);
   const LearningProblem problem = reference.problem();
   Mlp& network = reference.network;
 

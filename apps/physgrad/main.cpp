@@ -23,7 +23,7 @@
 #include "bench_command.hpp"
 #include "physgrad/run/checkpoint.hpp"
 #include "physgrad/run/config_file.hpp"
-#include "experiment_list.hpp"
+#include "registry.hpp"
 #include "physgrad/run/experiment.hpp"
 #include "physgrad/run/interrupt.hpp"
 #include "physgrad/catalogue.hpp"
@@ -284,7 +284,7 @@ int resume_run(const std::string& text) {
     if (!config.is_object() || !config.contains("experiment") || !config["experiment"].is_string()) {
       throw physgrad::Error("names no experiment");
     }
-    experiment = &ex::find_experiment(config["experiment"].get<std::string>());
+    experiment = &ex::registry().find(config["experiment"].get<std::string>());
     ex::OptionTexts given = ex::config_options(*experiment, config);
     given.emplace_back("out", where.shown);
     settings.emplace(ex::resolve_settings(*experiment, given));
@@ -361,7 +361,7 @@ int main(int argc, char** argv) {
     // subcommand is required" or "not expected".
     if (argc == 1 || argv[1][0] != '-') check_subcommand(app, argc > 1 ? argv[1] : "");
     if (argc > 2 && std::string(argv[1]) == "run" && argv[2][0] != '-') {
-      ex::find_experiment(argv[2]);
+      ex::registry().find(argv[2]);
     }
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -398,7 +398,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (describe->parsed()) {
-      print_table(ex::options_table(ex::find_experiment(describe_name)));
+      print_table(ex::options_table(ex::registry().find(describe_name)));
       return 0;
     }
     reserve_blas_buffer();

@@ -37,31 +37,6 @@ struct RuleDefaults {
   std::optional<Index> batch;
 };
 
-// The options every learning experiment has, after the common ones: batch, rcond, epochs, time,
-// eval-every (optional, so each rule keeps its own defaults unless one is given; an experiment
-// may give time and eval-every defaults).
-std::vector<OptionSpec> learning_options(const std::string& default_time = "",
-                                         const std::string& default_eval_every = "");
-// An option counting samples (--train-size, --test-size): at least 1, refused when its samples of
-// `bytes_each` bytes do not fit in memory, `quick` in the quick check of every experiment.
-OptionSpec sample_count_option(std::string name, std::string default_text, std::string help,
-                               std::string quick,
-                               std::function<double(const Settings&)> bytes_each);
-// The bytes one sample needs at least: its `data_values` doubles (inputs, targets, context) and
-// the activations of a network of `widths` kept for the backward pass.
-double sample_bytes(const std::vector<Index>& widths, Index data_values);
-// Throws Error unless --iters, --epochs or --time limits the training.
-void require_training_limit(const Settings& settings, const std::string& experiment);
-// Throws Error naming --batch when a Gauss-Newton or HIG step (when one is selected) on the
-// given batch with `outputs` physics outputs per sample and a network of `widths` would not fit
-// in memory or would take more than kMaxStepMultiplyAdds, and naming --eval-every when the
-// evaluations an iteration or epoch limit allows would not fit in memory.
-void require_learning_sizes(const Settings& settings, Index outputs,
-                            const std::vector<Index>& widths);
-// A Jacobian step forms a k × k matrix, k = min(B·m, |θ|), from B·m rows of |θ| entries: about
-// B·m·|θ|·k + k³ multiply-adds, at most this many (about two minutes on one core).
-inline constexpr double kMaxStepMultiplyAdds = 1e12;
-
 // Controls u₀ … u_{N−1}, each held for dt, as steps over [0, N·dt].
 Series held_controls(const std::string& label, const Vector& u, double dt,
                      const std::string& color);

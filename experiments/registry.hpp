@@ -1,17 +1,14 @@
-// Factories of the built-in experiments; registry.cpp lists them in display order.
+// The reference experiments: registry() is the one list (registry.cpp), in display order; each
+// experiment's file defines its factory.
 #pragma once
 
 #include <memory>
 
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/registry.hpp"
 
 namespace physgrad::experiments {
 
-// Every registered experiment, in display order.
-const std::vector<std::unique_ptr<Experiment>>& registry();
-// Throws Error "unknown experiment 'x' (known: ...)".
-const Experiment& find_experiment(const std::string& name);
-
+const Registry& registry();
 
 std::unique_ptr<Experiment> make_scaled_toy();
 std::unique_ptr<Experiment> make_sensitivity();

@@ -1,0 +1,155 @@
+#include "physgrad/run/learning_experiment.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "physgrad/catalogue.hpp"
+#include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
+
+namespace physgrad::experiments {
+
+namespace {
+
+// Throws Error unless --iters, --epochs or --time limits the training.
+void require_training_limit(const Settings& settings, const std::string& experiment) {
+  if (!settings.has("iters") && !settings.has("epochs") && !settings.has("time")) {
+    throw Error(experiment + ": give at least one of --iters, --epochs, --time");
+  }
+}
+
+// Throws Error naming --batch when a Gauss-Newton or HIG step (when one is selected) on the
+// given batch with `outputs` physics outputs per sample and a network of `widths` would not fit
+// in memory or would take more than kMaxStepMultiplyAdds, and naming --eval-every when the
+// evaluations an iteration or epoch limit allows would not fit in memory.
+void require_learning_sizes(const Settings& settings, Index outputs,
+                            const std::vector<Index>& widths) {
+  double parameters = 0;
+  for (std::size_t i = 0; i + 1 < widths.size(); ++i) {
+    parameters += static_cast<double>(widths[i] + 1) * static_cast<double>(widths[i + 1]);
+  }
+  const double train_size = static_cast<double>(settings.integer("train-size"));
+  bool jacobian = !settings.has("optimizers");  // the default rules may include gn or hig
+  for (const std::string& id : settings.has("optimizers") ? settings.texts("optimizers")
+                                                          : std::vector<std::string>{}) {
+    jacobian = jacobian || id == "gn" || id == "hig";
+  }
+  if (jacobian && settings.has("batch")) {
+    const long long given = settings.integer("batch");
+    const double rows =
+        static_cast<double>(outputs) * std::min(static_cast<double>(given), train_size);
+    const double k = std::min(rows, parameters);
+    const auto whole = [](double value) { return std::to_string(static_cast<long long>(value)); };
+    const std::string what = "--batch: " + std::to_string(given) + " (a gn or hig step forms a " +
+                             whole(k) + "² matrix from " + whole(rows) + " Jacobian rows of " +
+                             whole(parameters) + " weights)";
+    // The matrix with the eigendecomposition's copy and workspace; the rows when they are
+    // formed (the normal path, rows > weights).
+    require_memory(8 * (3 * k * k + (rows > parameters ? rows * parameters : 0)), what);
+    const double work = rows * parameters * k + k * k * k;
+    if (work > kMaxStepMultiplyAdds) {
+      throw Error(what + " takes " + format_value(work) + " multiply-adds, more than the " +
+                  format_value(kMaxStepMultiplyAdds) + " (about two minutes) a step may take");
+    }
+  }
+  // Each evaluation keeps a record and a metrics row per run (about 1 KiB).
+  if (settings.has("eval-every") && (settings.has("iters") || settings.has("epochs"))) {
+    // The fewest iterations the limit allows: a batch of every sample unless one is given.
+    const double batch = settings.has("batch")
+                             ? std::min(static_cast<double>(settings.integer("batch")), train_size)
+                             : train_size;
+    const double iterations =
+        settings.has("iters")
+            ? static_cast<double>(settings.integer("iters"))
+            : static_cast<double>(settings.integer("epochs")) * std::ceil(train_size / batch);
+    const double runs = settings.has("optimizers")
+                            ? static_cast<double>(settings.texts("optimizers").size())
+                            : 1.0;
+    const long long every = settings.integer("eval-every");
+    require_memory(1024 * runs * (iterations / static_cast<double>(every) + 2),
+                   "--eval-every: " + std::to_string(every) + " (" + format_value(iterations) +
+                       " iterations, each run keeping every evaluation)");
+  }
+}
+
+// The options every learning experiment has, after the common ones: optional, so that each rule
+// keeps its own defaults unless one is given; an experiment may give time and eval-every
+// defaults.
+std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
+  return {
+      integer_option("batch", "",
+                     "mini-batch size for every rule (default: each rule's own); with gn or hig "
+                     "one step may take at most 10¹² multiply-adds, B·m·|θ|·min(B·m, |θ|) for m "
+                     "outputs (about two minutes)")
+          .at_least(1),
+      real_option("rcond", "", "relative truncation τ of gn and hig (default: each rule's own)")
+          .at_least(0)
+          .at_most(0.5),
+      integer_option("epochs", "", "epochs per run (at most 10⁹, as --iters)")
+          .at_least(1)
+          .at_most(1e9),
+      real_option("time", defaults.time,
+                  "training-time budget per run in seconds, evaluations excluded (the first of "
+                  "--iters, --epochs, --time reached ends a run; a run limited by --time alone is "
+                  "also evaluated every 1/40 of it)")
+          .above(0),
+      integer_option("eval-every", defaults.eval_every,
+                     defaults.eval_every_help.empty()
+                         ? "evaluate every N iterations (default: every epoch)"
+                         : defaults.eval_every_help)
+          .at_least(1),
+      integer_option("checkpoint-every", "",
+                     "also save a checkpoint every N iterations (physgrad resume continues it)")
+          .at_least(1),
+      real_option("checkpoint-seconds", "60",
+                  "save a checkpoint of the run in progress at least this often (wall seconds)")
+          .above(0),
+  };
+}
+
+}  // namespace
+
+std::unique_ptr<LearningUpdate> ReferenceCase::update(const std::string& id) const {
+  const auto found = defaults.find(id);
+  return make_learning_update(id, found == defaults.end() ? RuleSettings{} : found->second.settings);
+}
+
+Index ReferenceCase::batch_size(const std::string& id) const {
+  const auto found = defaults.find(id);
+  const std::optional<Index> own = found == defaults.end() ? std::nullopt : found->second.batch;
+  return own.value_or(TrainerOptions{}.batch_size);
+}
+
+std::vector<OptionSpec> LearningExperiment::options() const {
+  std::vector<OptionSpec> options = own_options();
+  for (OptionSpec& spec : learning_options(defaults_)) options.push_back(std::move(spec));
+  return options;
+}
+
+std::vector<std::string> LearningExperiment::optimizer_choices() const {
+  return rule_ids(RuleKind::kLearning);
+}
+
+void LearningExperiment::validate(const Settings& settings) const {
+  check(settings);
+  require_training_limit(settings, name());
+  const Shape sizes = shape(settings);
+  require_learning_sizes(settings, sizes.outputs, sizes.widths);
+}
+
+OptionSpec sample_count_option(std::string name, std::string default_text, std::string help,
+                               std::string quick,
+                               std::function<double(const Settings&)> bytes_each) {
+  return integer_option(std::move(name), std::move(default_text), std::move(help))
+      .at_least(1)
+      .needs_bytes_each(std::move(bytes_each))
+      .quick(std::move(quick));
+}
+
+double sample_bytes(const std::vector<Index>& widths, Index data_values) {
+  double values = static_cast<double>(data_values);
+  for (const Index width : widths) values += 2.0 * static_cast<double>(width);
+  return values * sizeof(double);
+}
+
+}  // namespace physgrad::experiments
