@@ -15,7 +15,7 @@
 #include "physgrad/linalg/power_pinv.hpp"
 #include "physgrad/threads.hpp"
 #include "physgrad/train/trainer.hpp"
-#include "registry.hpp"
+#include "physgrad/run/registry.hpp"
 
 namespace {
 

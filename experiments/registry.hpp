@@ -1,5 +1,5 @@
-// The reference experiments: registry() is the one list (registry.cpp), in display order; each
-// experiment's file defines its factory.
+// The reference experiments: each experiment's file defines its factory; registry.cpp lists
+// them in display order as registry() (physgrad/run/registry.hpp).
 #pragma once
 
 #include <memory>
@@ -7,8 +7,6 @@
 #include "physgrad/run/registry.hpp"
 
 namespace physgrad::experiments {
-
-const Registry& registry();
 
 std::unique_ptr<Experiment> make_scaled_toy();
 std::unique_ptr<Experiment> make_sensitivity();

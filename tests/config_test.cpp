@@ -18,7 +18,7 @@
 #include <typeinfo>
 
 #include "physgrad/run/config_file.hpp"
-#include "registry.hpp"
+#include "physgrad/run/registry.hpp"
 #include "physgrad/run/experiment.hpp"
 #include "physgrad/error.hpp"
 

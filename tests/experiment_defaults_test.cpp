@@ -10,7 +10,7 @@
 #include <string>
 
 #include "cli_fixture.hpp"
-#include "registry.hpp"
+#include "physgrad/run/registry.hpp"
 #include "physgrad/run/experiment.hpp"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "registry.hpp"
+#include "physgrad/run/registry.hpp"
 #include "physgrad/run/experiment.hpp"
 
 namespace physgrad::experiments::testing {
@@ -15,7 +15,6 @@ inline RunContext run_experiment(const std::string& name,
                                  const std::vector<std::pair<std::string, std::string>>& given) {
   const Experiment& experiment = registry().find(name);
   RunContext context;
-  context.set_quiet(true);
   experiment.run(resolve_settings(experiment, given), context);
   return context;
 }

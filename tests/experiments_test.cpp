@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "registry.hpp"
+#include "physgrad/run/registry.hpp"
 #include "physgrad/run/experiment.hpp"
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"

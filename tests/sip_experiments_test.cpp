@@ -3,7 +3,7 @@
 // each experiment exists for.
 #include <gtest/gtest.h>
 
-#include "registry.hpp"
+#include "physgrad/run/registry.hpp"
 #include "physgrad/run/experiment.hpp"
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"

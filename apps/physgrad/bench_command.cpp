@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "physgrad/run/experiment.hpp"
-#include "registry.hpp"
+#include "physgrad/run/registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/text.hpp"

@@ -6,37 +6,28 @@
 // signal), other runs write nothing.
 #include <CLI/CLI.hpp>
 #include <cblas.h>
-#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
-#include <cstdlib>
-#include <ctime>
+#include <cstdio>
 #include <iomanip>
 #include <iostream>
 #include <map>
 #include <new>
-#include <optional>
-#include <sstream>
 
 #include "bench_command.hpp"
-#include "physgrad/run/checkpoint.hpp"
-#include "physgrad/run/config_file.hpp"
-#include "registry.hpp"
-#include "physgrad/run/experiment.hpp"
-#include "physgrad/run/interrupt.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
-#include "physgrad/io/folder_handle.hpp"
 #include "physgrad/memory.hpp"
-#include "physgrad/io/atomic_file.hpp"
-#include "physgrad/io/checkpoint_file.hpp"
-#include "physgrad/text.hpp"
-#include "physgrad/threads.hpp"
-#include "ranks.hpp"
-#include "physgrad/run/run_folder.hpp"
+#include "physgrad/run/config_file.hpp"
+#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/interrupt.hpp"
+#include "physgrad/run/registry.hpp"
+#include "physgrad/run/run.hpp"
 #include "physgrad/run/run_index.hpp"
+#include "physgrad/text.hpp"
+#include "ranks.hpp"
 
 namespace {
 
@@ -44,15 +35,6 @@ namespace ex = physgrad::experiments;
 namespace fs = std::filesystem;
 
 constexpr int kUsageError = 2;
-
-std::string timestamp() {
-  const std::time_t now = std::time(nullptr);
-  std::tm local{};
-  localtime_r(&now, &local);
-  std::ostringstream out;
-  out << std::put_time(&local, "%Y%m%d-%H%M%S");
-  return out.str();
-}
 
 std::string type_name(const ex::OptionSpec& spec) {
   switch (spec.kind) {
@@ -179,128 +161,68 @@ void print_rules(bool markdown) {
   }
 }
 
-// Claims the run folder: --out, or a new runs/NAME-<timestamp>[-N]. Only the writing rank
-// claims one (under mpirun every rank trains its share; rank 0 alone prints and writes).
-// A blank --out is refused (locate_folder) as it was typed, from `given`: the settings hold it
-// without surrounding blanks.
-std::optional<ex::RunFolder> claim_new_folder(const ex::Experiment& experiment,
-                                              const ex::Settings& settings,
-                                              const ex::OptionTexts& given) {
-  if (!physgrad::cli::is_writer()) return std::nullopt;
-  if (settings.has("out")) {
-    std::string out = settings.text("out");
-    if (out.empty()) {
-      for (const auto& [name, text] : given) {
-        if (name == "out") out = text;  // the last one counts, as in the settings
-      }
+// Progress on stderr: an updating line on a terminal, a plain line at most every 2 s otherwise.
+class StderrProgress {
+ public:
+  void show(const std::string& line) {
+    static const bool terminal = isatty(fileno(stderr)) != 0;
+    const double now =
+        std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    if (terminal) {
+      std::cerr << "\r\033[K" << line << std::flush;
+      line_open_ = true;
+    } else if (now - last_seconds_ >= 2.0) {
+      std::cerr << line << '\n';
+      last_seconds_ = now;
     }
-    return ex::RunFolder::create(ex::locate_folder(out, "--out"));
   }
-  return ex::RunFolder::create_unique("runs", experiment.name() + "-" + timestamp());
+  void end() {
+    if (line_open_) std::cerr << '\n';
+    line_open_ = false;
+  }
+
+ private:
+  bool line_open_ = false;
+  double last_seconds_ = -1e9;
+};
+
+// What the CLI gives a run: its progress and notices on stderr, the command line, the ranks.
+ex::RunHooks cli_hooks(StderrProgress& progress, const std::string& command_line) {
+  ex::RunHooks hooks;
+  hooks.progress = [&progress](const std::string& line) { progress.show(line); };
+  hooks.progress_end = [&progress] { progress.end(); };
+  hooks.log = [](const std::string& text) { std::cerr << "physgrad: " << text << '\n'; };
+  hooks.command = command_line;
+  hooks.communicator = physgrad::cli::communicator();
+  return hooks;
 }
 
-// Runs `experiment` into `folder` (absent on the ranks that do not write): writes config.json
-// into a new one, or continues the checkpoint `resumed` when it is not null. Everything the run
-// writes goes through the folder's handle. Whatever ends the run, the folder is committed or
-// left as RunFolder::abandon() says.
-int run_experiment(const ex::Experiment& experiment, const ex::Settings& settings,
-                   const std::string& command_line, std::optional<ex::RunFolder>& folder,
-                   const nlohmann::json& resumed = nullptr) {
-  // One BLAS thread unless asked: the matrices of most runs are small, and a multithreaded
-  // BLAS on busy cores costs more than it saves.
-  if (settings.has("threads")) {
-    physgrad::set_blas_threads(static_cast<int>(settings.integer("threads")));
-  } else if (std::getenv("OPENBLAS_NUM_THREADS") == nullptr &&
-             std::getenv("OMP_NUM_THREADS") == nullptr) {
-    physgrad::set_blas_threads(1);
+// Prints what a run ended with; the exit code (128 + signal for a run stopped on request).
+int report_outcome(const ex::RunOutcome& outcome) {
+  if (!physgrad::cli::is_writer()) return outcome.finished ? 0 : 128 + outcome.signal;
+  if (!outcome.finished) {
+    std::cerr << "physgrad: " << outcome.stopped << '\n';
+    return 128 + outcome.signal;
   }
-  const bool writer = folder.has_value();
-  try {
-    if (writer && !folder->resuming()) {
-      physgrad::write_file_atomic(
-          folder->handle(), ex::kConfigFile,
-          ex::config_document(experiment, settings, command_line).dump(2) + "\n");
-      ex::fault_point("claimed");
-    }
-    ex::ExperimentCheckpoint checkpoint(writer ? &folder->handle() : nullptr,
-                                        ex::config_document(experiment, settings, command_line),
-                                        resumed);
-    const std::string changed =
-        checkpoint.set_environment({{"blas_threads", physgrad::blas_threads()},
-                                    {"ranks", physgrad::cli::communicator()->size()}});
-    if (!changed.empty() && writer) {
-      std::cerr << "physgrad: warning: the checkpoint was written with " << changed
-                << "; the continued run may differ from an uninterrupted one in the last bits\n";
-    }
-    ex::RunContext context;
-    context.set_experiment_name(experiment.name());
-    context.set_stop_flag(&ex::stop_flag());
-    context.set_checkpoint(&checkpoint);
-    context.set_communicator(physgrad::cli::communicator());
-    context.set_quiet(!writer);
-    experiment.run(settings, context);
-    if (!writer) return 0;
-    ex::write_run_folder(folder->staging(), experiment, settings, context, command_line);
-    folder->commit();
-    for (const auto& table : context.tables()) print_table(table);
-    std::cout << "report: " << (fs::path(folder->shown_now()) / "report.html").string() << '\n';
-  } catch (const ex::Interrupted& e) {
-    if (writer) std::cerr << "physgrad: " << e.what() << "; " << folder->abandon() << '\n';
-    return 128 + ex::received_signal();
-  } catch (const std::exception& e) {
-    if (!writer) throw;
-    throw physgrad::Error(std::string(e.what()) + "; " + folder->abandon());
-  }
+  for (const auto& table : outcome.tables) print_table(table);
+  std::cout << "report: " << outcome.report.string() << '\n';
   return 0;
 }
 
-// A new run of `experiment` with the options `given`.
+// A new run of `experiment` with the options `given`. A blank --out is refused (as Run::start
+// refuses it) as it was typed, from `given`: the settings hold it without surrounding blanks.
 int start_run(const ex::Experiment& experiment, const ex::OptionTexts& given,
               const std::string& command_line) {
   const ex::Settings settings = ex::resolve_settings(experiment, given);
-  std::optional<ex::RunFolder> folder = claim_new_folder(experiment, settings, given);
-  return run_experiment(experiment, settings, command_line, folder);
-}
-
-// Continues the unfinished run in `text` with the settings of its config.json: from its
-// checkpoint, or from the start when it has none. Both are read through the handle of the
-// claimed folder (the other ranks open it without a claim).
-int resume_run(const std::string& text) {
-  const ex::FolderPath where = ex::locate_folder(text, "resume");
-  std::optional<ex::RunFolder> folder;
-  physgrad::FolderHandle unclaimed;
-  if (physgrad::cli::is_writer()) {
-    folder.emplace(ex::RunFolder::reopen(where));
-    ex::fault_point("claimed");
-  } else {
-    unclaimed = physgrad::FolderHandle::open(where.path, where.shown);
-  }
-  const physgrad::FolderHandle& handle = folder ? folder->handle() : unclaimed;
-  const nlohmann::json config = ex::read_config_document(handle, ex::kConfigFile);
-  // The saved settings are read as a config file would be, errors naming the file.
-  const ex::Experiment* experiment = nullptr;
-  std::optional<ex::Settings> settings;
-  try {
-    if (!config.is_object() || !config.contains("experiment") || !config["experiment"].is_string()) {
-      throw physgrad::Error("names no experiment");
+  fs::path out;
+  if (settings.has("out") && settings.text("out").empty()) {
+    for (const auto& [name, text] : given) {
+      if (name == "out") out = text;  // the last one counts, as in the settings
     }
-    experiment = &ex::registry().find(config["experiment"].get<std::string>());
-    ex::OptionTexts given = ex::config_options(*experiment, config);
-    given.emplace_back("out", where.shown);
-    settings.emplace(ex::resolve_settings(*experiment, given));
-  } catch (const physgrad::Error& e) {
-    throw physgrad::Error("resume: '" + handle.shown(ex::kConfigFile) + "': " + e.what());
   }
-  nlohmann::json resumed;
-  if (::faccessat(handle.fd(), ex::kCheckpointFile, F_OK, 0) == 0) {
-    resumed = physgrad::read_checkpoint_file(handle, ex::kCheckpointFile);
-  } else if (folder) {
-    std::cerr << "physgrad: " << where.shown << " has no checkpoint; the run starts again from "
-              << "the beginning with its saved settings\n";
-  }
-  const std::string command =
-      config.contains("command") && config["command"].is_string() ? config["command"].get<std::string>() : "";
-  return run_experiment(*experiment, *settings, command, folder, resumed);
+  StderrProgress progress;
+  return report_outcome(
+      ex::Run::start(experiment, settings, out, cli_hooks(progress, command_line)));
 }
 
 }  // namespace
@@ -403,7 +325,10 @@ int main(int argc, char** argv) {
     }
     reserve_blas_buffer();
     ex::install_interrupt_handlers();
-    if (resume->parsed()) return resume_run(resume_folder);
+    if (resume->parsed()) {
+      StderrProgress progress;
+      return report_outcome(ex::Run::resume(resume_folder, cli_hooks(progress, command_line)));
+    }
     for (const auto& experiment : ex::registry()) {
       CLI::App* sub = run->get_subcommand(experiment->name());
       if (!sub->parsed()) continue;

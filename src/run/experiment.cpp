@@ -1,13 +1,9 @@
 #include "physgrad/run/experiment.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <iostream>
 #include <sstream>
 
 #include "physgrad/run/interrupt.hpp"
@@ -232,23 +228,11 @@ void RunContext::add_metrics_row(nlohmann::json row) { metrics_.push_back(std::m
 void RunContext::add_run(nlohmann::json run) { runs_.push_back(std::move(run)); }
 
 void RunContext::progress(const std::string& line) {
-  if (quiet_) return;
-  static const bool terminal = isatty(fileno(stderr)) != 0;
-  const double now = std::chrono::duration<double>(
-                         std::chrono::steady_clock::now().time_since_epoch())
-                         .count();
-  if (terminal) {
-    std::cerr << "\r\033[K" << line << std::flush;
-    progress_line_open_ = true;
-  } else if (now - last_progress_seconds_ >= 2.0) {
-    std::cerr << line << '\n';
-    last_progress_seconds_ = now;
-  }
+  if (show_progress_) show_progress_(line);
 }
 
 void RunContext::finish_progress() {
-  if (progress_line_open_) std::cerr << '\n';
-  progress_line_open_ = false;
+  if (end_progress_) end_progress_();
 }
 
 void RunContext::check_interrupt() const {

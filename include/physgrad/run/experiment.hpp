@@ -89,7 +89,7 @@ class Settings {
   nlohmann::json values_;
 };
 
-// Collects what a run produces; the CLI turns it into the run folder.
+// Collects what a run produces; Run (run.hpp) turns it into the run folder.
 class RunContext {
  public:
   struct Figure {
@@ -113,8 +113,10 @@ class RunContext {
   void add_note(std::string text) { notes_.push_back(std::move(text)); }
   // A trained network {"label", "seed", "widths", "parameters"} for networks.json.
   void add_network(nlohmann::json network) { networks_.push_back(std::move(network)); }
-  // Progress on stderr: an updating line on a terminal, periodic plain lines otherwise.
+  // A progress line, handed to the function set_progress() gave (none: the run is silent).
   void progress(const std::string& line);
+  // The progress lines of one sweep have ended.
+  void finish_progress();
 
   const std::vector<nlohmann::json>& metrics() const { return metrics_; }
   const std::vector<nlohmann::json>& runs() const { return runs_; }
@@ -122,7 +124,11 @@ class RunContext {
   const std::vector<Table>& tables() const { return tables_; }
   const std::vector<std::string>& notes() const { return notes_; }
   const std::vector<nlohmann::json>& networks() const { return networks_; }
-  void set_quiet(bool quiet) { quiet_ = quiet; }
+  // Where progress lines go: `show` gets each line, `end` is told when a sweep's lines end.
+  void set_progress(std::function<void(const std::string&)> show, std::function<void()> end) {
+    show_progress_ = std::move(show);
+    end_progress_ = std::move(end);
+  }
   void set_experiment_name(std::string name) { experiment_name_ = std::move(name); }
   const std::string& experiment_name() const { return experiment_name_; }
   // The ranks that train together (data-parallel learning); none: this process alone.
@@ -130,9 +136,8 @@ class RunContext {
     communicator_ = std::move(communicator);
   }
   const std::shared_ptr<Communicator>& communicator() const { return communicator_; }
-  void finish_progress();
 
-  // Set by the CLI: the flag a stop request sets, and where learning runs keep their
+  // Set by Run (run.hpp): the flag a stop request sets, and where learning runs keep their
   // checkpoint. Both may stay null (no interruption, no checkpoint).
   void set_stop_flag(const std::atomic<bool>* stop) { stop_ = stop; }
   const std::atomic<bool>* stop_flag() const { return stop_; }
@@ -156,9 +161,8 @@ class RunContext {
   ExperimentCheckpoint* checkpoint_ = nullptr;
   long long learning_runs_ = 0;
   std::shared_ptr<Communicator> communicator_;
-  bool quiet_ = false;
-  bool progress_line_open_ = false;
-  double last_progress_seconds_ = -1e9;
+  std::function<void(const std::string&)> show_progress_;
+  std::function<void()> end_progress_;
 };
 
 class Experiment {

@@ -1,6 +1,6 @@
 // Registry — the experiments a front end offers, in display order and found by name, and the
 // reference cases of the learning experiments among them (what `physgrad bench` and the
-// micro-benchmarks time). The reference experiments' one list is experiments/registry.cpp.
+// micro-benchmarks time). registry() is the program's one list, experiments/registry.cpp.
 #pragma once
 
 #include <cstdint>
@@ -35,5 +35,9 @@ class Registry {
  private:
   std::vector<std::unique_ptr<Experiment>> experiments_;
 };
+
+// The experiments of this program, in display order (Run::resume finds a run's experiment here).
+// Defined by experiments/registry.cpp, the one list of the reference experiments.
+const Registry& registry();
 
 }  // namespace physgrad::experiments
