@@ -15,7 +15,7 @@ RESULTS_DIR ?= docs/results
 EXPERIMENTS  = scaled-toy sensitivity comparison hig-toy sin-rotation heat-inverse oscillators \
                quantum-dipole poisson time-reversal
 
-.PHONY: all deps deps-test build demo test test-sanitize bench bench-mpi results clean
+.PHONY: all deps deps-test configure build demo test test-sanitize bench bench-mpi results clean
 
 all: build
 
@@ -34,12 +34,17 @@ deps:
 deps-test:
 	$(call install_missing,$(TEST_PACKAGES))
 
-build: deps
+configure: deps
 	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
+
+# Everything: the libraries, the CLI, the tests, the benchmarks and the examples.
+build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
-# Each demo run gets a folder of its own (runs/hig-toy-<timestamp>); earlier ones are kept.
-demo: build
+# Builds only the CLI it runs. Each demo run gets a folder of its own
+# (runs/hig-toy-<timestamp>); earlier ones are kept.
+demo: configure
+	cmake --build $(BUILD_DIR) --target physgrad_cli -j $(JOBS)
 	$(BUILD_DIR)/physgrad run hig-toy --lambda 0.01
 
 test: build deps-test
