@@ -5,7 +5,7 @@ BUILD_DIR   ?= build
 JOBS        ?= $(shell nproc)
 DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapacke-dev \
                libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev \
-               libopenmpi-dev openmpi-bin
+               libopenmpi-dev openmpi-bin libscalapack-openmpi-dev
 # Only the tests need these: Chromium loads the HTML reports (layout, no script, no request).
 TEST_PACKAGES = chromium
 

@@ -33,6 +33,7 @@
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/io/checkpoint_file.hpp"
 #include "physgrad/text.hpp"
+#include "physgrad/parallel/distributed_eigen.hpp"
 #include "physgrad/threads.hpp"
 #include "ranks.hpp"
 #include "physgrad/run/run_folder.hpp"
@@ -214,6 +215,9 @@ int run_experiment(const ex::Experiment& experiment, const ex::Settings& setting
              std::getenv("OMP_NUM_THREADS") == nullptr) {
     physgrad::set_blas_threads(1);
   }
+  physgrad::set_distributed_gram_rows(
+      settings.has("distributed-gram-rows") ? settings.integer("distributed-gram-rows")
+                                            : physgrad::kDefaultDistributedGramRows);
   const bool writer = folder.has_value();
   try {
     if (writer && !folder->resuming()) {
