@@ -17,6 +17,8 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 export OPENBLAS_NUM_THREADS=1
+# Ranks waiting in a collective yield the core (this machine is often oversubscribed).
+export OMPI_MCA_mpi_yield_when_idle=1
 
 echo "load average at the start: $(cut -d' ' -f1-3 /proc/loadavg)"
 # "seconds_per_step derivatives inversion" of a run folder.
