@@ -54,6 +54,7 @@ bench: build
 # Step time of data-parallel training with 1 and 2 ranks (docs/distributed.md).
 bench-mpi: build
 	bench/distributed_steps.sh $(BUILD_DIR) 2
+	bench/distributed_hig.sh $(BUILD_DIR) 2 3
 
 # Every reference experiment with its defaults (about 7 minutes): figures, summaries and the
 # printed tables in $(RESULTS_DIR), indexed with the reports' captions in $(RESULTS_DIR)/README.md.
