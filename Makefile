@@ -5,7 +5,7 @@ BUILD_DIR   ?= build
 JOBS        ?= $(shell nproc)
 DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapacke-dev \
                libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev \
-               libopenmpi-dev openmpi-bin
+               libopenmpi-dev openmpi-bin libscalapack-openmpi-dev
 # Only the tests need these: Chromium loads the HTML reports (layout, no script, no request).
 TEST_PACKAGES = chromium
 
@@ -59,6 +59,7 @@ bench: build
 # Step time of data-parallel training with 1 and 2 ranks (docs/distributed.md).
 bench-mpi: build
 	bench/distributed_steps.sh $(BUILD_DIR) 2
+	bench/distributed_hig.sh $(BUILD_DIR) 2 3
 
 # Every reference experiment with its defaults (about 7 minutes): figures, summaries and the
 # printed tables in $(RESULTS_DIR), indexed with the reports' captions in $(RESULTS_DIR)/README.md.

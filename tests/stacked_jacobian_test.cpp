@@ -10,6 +10,7 @@
 #include "physgrad/autodiff/finite_difference.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/nn/dense_layer_gram.hpp"
+#include "physgrad/parallel/distributed_eigen.hpp"
 #include "physgrad/threads.hpp"
 
 namespace physgrad {
@@ -109,15 +110,25 @@ TEST(EvaluateBatch, GradientMatchesFiniteDifferencesAndTheJacobianPath) {
             1e-12);
 }
 
+// A 3-5-4-2 tanh network on 6 samples with 3 random cotangents per sample (18 Gram columns).
+struct SmallGram {
+  explicit SmallGram(unsigned seed) : network({3, 5, 4, 2}, Activation::kTanh) {
+    network.initialize(seed);
+    network.forward(Matrix::Random(3, 6), cache);
+    cotangents = {Matrix::Random(2, 6), Matrix::Random(2, 6), Matrix::Random(2, 6)};
+  }
+  Mlp network;
+  MlpCache cache;
+  std::vector<Matrix> cotangents;
+};
+
 // Mlp's per_sample_gram() (layer factors, DenseLayerGram) equals the Network default, which forms
 // the gradient rows, for several cotangents per sample.
 TEST(DenseLayerGram, MlpGramFromLayerFactorsEqualsTheFormedRows) {
-  Mlp network({3, 5, 4, 2}, Activation::kTanh);
-  network.initialize(11);
-  MlpCache cache;
-  network.forward(Matrix::Random(3, 6), cache);
-  const std::vector<Matrix> cotangents = {Matrix::Random(2, 6), Matrix::Random(2, 6),
-                                          Matrix::Random(2, 6)};
+  SmallGram s(11);
+  const Mlp& network = s.network;
+  const MlpCache& cache = s.cache;
+  const std::vector<Matrix>& cotangents = s.cotangents;
   const Matrix factored = network.per_sample_gram(cache, cotangents);
   const Matrix formed = network.Network::per_sample_gram(cache, cotangents);
   ASSERT_EQ(factored.rows(), 18);
@@ -125,6 +136,36 @@ TEST(DenseLayerGram, MlpGramFromLayerFactorsEqualsTheFormedRows) {
   EXPECT_TRUE(factored.isApprox(factored.transpose(), 0.0));  // exactly symmetric
   EXPECT_THROW(network.per_sample_gram(cache, {Matrix::Random(2, 5)}), Error);
   EXPECT_EQ(network.per_sample_gram(cache, {}).size(), 0);
+}
+
+// Selected columns of the Gram matrix (a rank's block-cyclic share) equal those columns of the
+// whole one, for Mlp's layer factors and for the Network default.
+TEST(DenseLayerGram, SelectedColumnsEqualThoseOfTheWholeMatrix) {
+  SmallGram s(12);
+  const Matrix whole = s.network.per_sample_gram(s.cache, s.cotangents);
+  for (int rank = 0; rank < 3; ++rank) {
+    const std::vector<Index> columns = block_cyclic_columns(18, 4, rank, 3);
+    const Matrix factored = s.network.per_sample_gram_columns(s.cache, s.cotangents, columns);
+    const Matrix formed =
+        s.network.Network::per_sample_gram_columns(s.cache, s.cotangents, columns);
+    ASSERT_EQ(factored.cols(), static_cast<Index>(columns.size()));
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      EXPECT_LT((factored.col(Index(i)) - whole.col(columns[i])).cwiseAbs().maxCoeff(), 1e-13);
+      EXPECT_LT((formed.col(Index(i)) - whole.col(columns[i])).cwiseAbs().maxCoeff(), 1e-13);
+    }
+  }
+  EXPECT_THROW(s.network.per_sample_gram_columns(s.cache, s.cotangents, {18}), Error);
+  EXPECT_THROW(s.network.Network::per_sample_gram_columns(s.cache, s.cotangents, {-1}), Error);
+}
+
+// 1 × K block-cyclic layout: blocks of b columns dealt to the ranks in turn, every column once.
+TEST(DenseLayerGram, BlockCyclicColumnsDealBlocksInTurn) {
+  EXPECT_EQ(block_cyclic_columns(10, 2, 0, 3), (std::vector<Index>{0, 1, 6, 7}));
+  EXPECT_EQ(block_cyclic_columns(10, 2, 1, 3), (std::vector<Index>{2, 3, 8, 9}));
+  EXPECT_EQ(block_cyclic_columns(10, 2, 2, 3), (std::vector<Index>{4, 5}));
+  EXPECT_TRUE(block_cyclic_columns(3, 4, 1, 2).empty());
+  EXPECT_THROW(block_cyclic_columns(3, 0, 0, 1), Error);
+  EXPECT_THROW(block_cyclic_columns(3, 1, 2, 2), Error);
 }
 
 TEST(DenseLayerGram, RejectsShapesThatDoNotFitAndASecondFinish) {

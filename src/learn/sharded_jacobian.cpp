@@ -1,6 +1,12 @@
 #include "physgrad/learn/sharded_jacobian.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <memory>
+#include <string>
+
+#include "physgrad/error.hpp"
+#include "physgrad/parallel/distributed_eigen.hpp"
 
 namespace physgrad {
 
@@ -38,6 +44,45 @@ Vector ShardedJacobian::apply_transpose(const Vector& c) const {
                         : Matrix(network_->output_dim(), 0);
   return network_->backward(*cache_,
                             shard_.gather_columns({gx}, network_->output_dim(), batch_).front());
+}
+
+std::optional<Vector> ShardedJacobian::shared_gram_apply(const Vector& g,
+                                                         const PowerPinvOptions& options,
+                                                         PowerPinvInfo* info,
+                                                         JacobianTiming* timing) const {
+  DistributedEigensolver* solver =
+      shard_.active() ? shard_.communicator()->eigensolver() : nullptr;
+  const Index n = rows(), threshold = distributed_gram_rows();
+  if (solver == nullptr || threshold == 0 || n < threshold) return std::nullopt;
+  if (g.size() != n) {
+    throw Error("power_pinv_apply: J has " + std::to_string(n) + " rows but the vector has " +
+                std::to_string(g.size()) + " entries");
+  }
+  using Clock = std::chrono::steady_clock;
+  const auto seconds_since = [](Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+  };
+  auto start = Clock::now();
+  Matrix columns =
+      whole().gram_columns(block_cyclic_columns(n, solver->block(), solver->rank(), solver->size()));
+  const double forming = seconds_since(start);
+  start = Clock::now();
+  PowerPinvInfo out;
+  out.backend = PinvBackend::kGram;
+  out.rcond_used = std::max(options.rcond, kMinGramRcond);
+  DistributedPowerInfo power;
+  Vector x = distributed_power_part(*solver, std::move(columns), n, g, options.kappa,
+                                    out.rcond_used, &power);
+  shard_.sum(x);  // U Σ^{−1−κ} Uᵀ g, the same bits on every rank
+  out.rank = power.kept;
+  out.sigma_max = power.sigma_max;
+  Vector result = apply_transpose(x);
+  if (timing != nullptr) {
+    timing->forming_seconds += forming;
+    timing->inversion_seconds += seconds_since(start);
+  }
+  if (info != nullptr) *info = out;
+  return result;
 }
 
 StackedJacobian::Normal ShardedJacobian::normal(const Vector& g) const {

@@ -108,6 +108,10 @@ LocalJacobian::LocalJacobian(const Network& network, const NetworkCache& cache,
 
 Matrix LocalJacobian::gram() const { return network_->per_sample_gram(*cache_, output_cotangents_); }
 
+Matrix LocalJacobian::gram_columns(const std::vector<Index>& columns) const {
+  return network_->per_sample_gram_columns(*cache_, output_cotangents_, columns);
+}
+
 Vector LocalJacobian::apply_transpose(const Vector& c) const {
   // Σ_{i,k} c_{k·B+i} ∂y_ik/∂θ = ∇θ of Σ_i C_iᵀ y_i with C (m × B) holding c output by output.
   const Matrix weights = c.reshaped(batch(), outputs()).transpose();
@@ -140,6 +144,9 @@ Vector power_pinv_apply(const StackedJacobian& j, const Vector& g, const PowerPi
   JacobianTiming& time = timing != nullptr ? *timing : local;
   switch (resolve_pinv_backend(j.rows(), j.cols(), options)) {
     case PinvBackend::kGram: {
+      if (std::optional<Vector> shared = j.shared_gram_apply(g, options, info, &time)) {
+        return std::move(*shared);
+      }
       Matrix gram = timed(time.forming_seconds, [&] { return j.gram(); });
       return timed(time.inversion_seconds, [&] {
         return power_pinv_apply_gram(

@@ -95,4 +95,15 @@ Matrix CheckedNetwork::per_sample_gram(const NetworkCache& cache,
   return gram;
 }
 
+Matrix CheckedNetwork::per_sample_gram_columns(const NetworkCache& cache,
+                                               const std::vector<Matrix>& cotangents,
+                                               const std::vector<Index>& selected) const {
+  Matrix gram = inner_->per_sample_gram_columns(cache, cotangents, selected);
+  const Index rows = cotangents.empty()
+                         ? 0
+                         : cotangents.front().cols() * static_cast<Index>(cotangents.size());
+  check_result("per_sample_gram_columns", gram, rows, static_cast<Index>(selected.size()));
+  return gram;
+}
+
 }  // namespace physgrad

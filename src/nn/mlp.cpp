@@ -236,8 +236,8 @@ void Mlp::per_sample_gradients(const NetworkCache& network_cache, const Matrix& 
   });
 }
 
-Matrix Mlp::per_sample_gram(const NetworkCache& network_cache,
-                            const std::vector<Matrix>& cotangents) const {
+void Mlp::add_layer_factors(const NetworkCache& network_cache,
+                            const std::vector<Matrix>& cotangents, DenseLayerGram& gram) const {
   const MlpCache& cache = mlp_cache(network_cache);
   for (const Matrix& block : cotangents) check_cache(*this, cache, block);
   const Index batch = cache.activations[0].cols();
@@ -252,7 +252,6 @@ Matrix Mlp::per_sample_gram(const NetworkCache& network_cache,
     delta.middleCols(k * batch, batch) = cotangents[static_cast<std::size_t>(k)];
   }
   times_slope(delta, cache.derivatives.back());
-  DenseLayerGram gram(delta.cols(), batch);
   Matrix next;
   for (Index l = num_layers() - 1;; --l) {
     gram.add(delta, cache.activations[static_cast<std::size_t>(l)]);
@@ -261,6 +260,31 @@ Matrix Mlp::per_sample_gram(const NetworkCache& network_cache,
     times_slope(next, cache.derivatives[static_cast<std::size_t>(l - 1)]);
     delta.swap(next);
   }
+}
+
+namespace {
+
+// K·B columns of the Gram matrix of K cotangent blocks over `batch` samples.
+Index gram_columns(const std::vector<Matrix>& cotangents, Index batch) {
+  return static_cast<Index>(cotangents.size()) * batch;
+}
+
+}  // namespace
+
+Matrix Mlp::per_sample_gram(const NetworkCache& network_cache,
+                            const std::vector<Matrix>& cotangents) const {
+  const Index batch = mlp_cache(network_cache).activations[0].cols();
+  DenseLayerGram gram(gram_columns(cotangents, batch), batch);
+  add_layer_factors(network_cache, cotangents, gram);
+  return gram.finish();
+}
+
+Matrix Mlp::per_sample_gram_columns(const NetworkCache& network_cache,
+                                    const std::vector<Matrix>& cotangents,
+                                    const std::vector<Index>& selected) const {
+  const Index batch = mlp_cache(network_cache).activations[0].cols();
+  DenseLayerGram gram(gram_columns(cotangents, batch), batch, selected);
+  add_layer_factors(network_cache, cotangents, gram);
   return gram.finish();
 }
 

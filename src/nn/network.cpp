@@ -64,4 +64,19 @@ Matrix Network::per_sample_gram(const NetworkCache& cache,
   return gram;
 }
 
+Matrix Network::per_sample_gram_columns(const NetworkCache& cache,
+                                        const std::vector<Matrix>& cotangents,
+                                        const std::vector<Index>& selected) const {
+  const Matrix gram = per_sample_gram(cache, cotangents);
+  Matrix out(gram.rows(), static_cast<Index>(selected.size()));
+  for (std::size_t s = 0; s < selected.size(); ++s) {
+    if (selected[s] < 0 || selected[s] >= gram.cols()) {
+      throw Error("per_sample_gram_columns: column " + std::to_string(selected[s]) +
+                  " outside [0, " + std::to_string(gram.cols()) + ")");
+    }
+    out.col(static_cast<Index>(s)) = gram.col(selected[s]);
+  }
+  return out;
+}
+
 }  // namespace physgrad

@@ -4,9 +4,11 @@
 
 #include <climits>
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include "physgrad/error.hpp"
+#include "physgrad/parallel/scalapack_eigensolver.hpp"
 
 namespace physgrad {
 
@@ -41,8 +43,10 @@ class MpiCommunicator final : public Communicator {
     MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
     MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
     MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    if (size_ > 1) eigensolver_ = scalapack_eigensolver();
   }
   ~MpiCommunicator() override {
+    eigensolver_.reset();  // its BLACS grid ends before MPI does
     int finalized = 0;
     MPI_Finalized(&finalized);
     if (finalized == 0) MPI_Finalize();
@@ -100,10 +104,12 @@ class MpiCommunicator final : public Communicator {
   }
 
   void abort(int exit_code) override { MPI_Abort(MPI_COMM_WORLD, exit_code); }
+  DistributedEigensolver* eigensolver() override { return eigensolver_.get(); }
 
  private:
   int rank_ = 0;
   int size_ = 1;
+  std::unique_ptr<DistributedEigensolver> eigensolver_;
 };
 
 }  // namespace

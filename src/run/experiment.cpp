@@ -264,6 +264,11 @@ std::vector<OptionSpec> common_options(const Experiment& experiment) {
                      "else 1)")
           .at_least(1)
           .at_most(256),
+      integer_option("distributed-gram-rows", "",
+                     "under mpirun, B·m from which the ranks share the Gram eigendecomposition "
+                     "(ScaLAPACK; 0: never; default 2048, docs/distributed.md)")
+          .at_least(0)
+          .at_most(1e9),
       integer_option("seed", "0", "random seed of stochastic parts (data, initialisation)").at_least(0).at_most(4294967295.0),
       text_option("out", "", "run folder (default: runs/NAME-<timestamp>)"),
   };

@@ -12,6 +12,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/io/checkpoint_file.hpp"
+#include "physgrad/parallel/distributed_eigen.hpp"
 #include "physgrad/run/checkpoint.hpp"
 #include "physgrad/run/config_file.hpp"
 #include "physgrad/run/interrupt.hpp"
@@ -64,6 +65,9 @@ RunOutcome run_in(const Experiment& experiment, const Settings& settings,
              std::getenv("OMP_NUM_THREADS") == nullptr) {
     set_blas_threads(1);
   }
+  set_distributed_gram_rows(settings.has("distributed-gram-rows")
+                                ? settings.integer("distributed-gram-rows")
+                                : kDefaultDistributedGramRows);
   const std::shared_ptr<Communicator> communicator = communicator_of(hooks);
   const bool writer = folder.has_value();
   const nlohmann::json config = config_document(experiment, settings, command);

@@ -16,6 +16,11 @@ namespace physgrad {
 //     batch, so the results are the one-process bits.
 //   apply_transpose(c): each rank's physics VJP with its share of c, B·n doubles, then one
 //     backward pass through the network on the whole batch.
+//   shared_gram_apply(g): from distributed_gram_rows() rows on, when the communicator has a
+//     DistributedEigensolver: nothing more to form J Jᵀ — each rank forms its block-cyclic
+//     columns of it from the gathered cotangents — the solver's own traffic, a sum of B·m
+//     doubles for U Σ^{−1−κ} Uᵀ g, then apply_transpose(). Its eigensolver differs from the one
+//     process's, so the result agrees with one process to ~ε·(σ_max/σ_min,kept)², not bit for bit.
 //   normal(g): the gathered J's Jᵀ J when that moves less data; otherwise Σ over ranks of
 //     J_rᵀ J_r (lower triangle) and J_rᵀ g_r, |θ|(|θ|+1)/2 + |θ| doubles, which splits the
 //     O(B·m·|θ|²) product but rounds differently (sums_normal_equations()).
@@ -36,6 +41,9 @@ class ShardedJacobian final : public StackedJacobian {
   Vector apply_transpose(const Vector& c) const override;
   Matrix materialize() const override { return whole().materialize(); }
   Normal normal(const Vector& g) const override;
+  std::optional<Vector> shared_gram_apply(const Vector& g, const PowerPinvOptions& options,
+                                          PowerPinvInfo* info,
+                                          JacobianTiming* timing) const override;
 
  private:
   // The one-process Jacobian of the whole batch from every rank's cotangents (gathered once).

@@ -2,6 +2,7 @@
 // output k) in the forms the Jacobian rules use: J Jᵀ, Jᵀc, J, or JᵀJ with Jᵀg; and J^{−κ}g.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "physgrad/linalg/power_pinv.hpp"
@@ -9,6 +10,8 @@
 #include "physgrad/physics/simulator.hpp"
 
 namespace physgrad {
+
+struct JacobianTiming;
 
 // An update rule sees only this interface, so the same rule runs on one process (LocalJacobian)
 // and on the ranks of a data-parallel run (ShardedJacobian, sharded_jacobian.hpp).
@@ -33,6 +36,15 @@ class StackedJacobian {
     Vector rhs;
   };
   virtual Normal normal(const Vector& g) const = 0;
+  // J^{−κ} g on the Gram path when the ranks of a data-parallel run solve it together, each
+  // forming and holding some columns of J Jᵀ (ShardedJacobian from distributed_gram_rows() rows
+  // on, parallel/distributed_eigen.hpp); nothing when this process solves it alone from gram().
+  virtual std::optional<Vector> shared_gram_apply(const Vector& /*g*/,
+                                                  const PowerPinvOptions& /*options*/,
+                                                  PowerPinvInfo* /*info*/,
+                                                  JacobianTiming* /*timing*/) const {
+    return std::nullopt;
+  }
 };
 
 // J of one process's batch. For a dense network J Jᵀ comes from the layer factors (the
@@ -56,6 +68,8 @@ class LocalJacobian final : public StackedJacobian {
   Index outputs() const override { return static_cast<Index>(output_cotangents_.size()); }
   Index cols() const override { return network_->num_parameters(); }
   Matrix gram() const override;
+  // The given columns of J Jᵀ (rows × columns.size()) from the layer factors.
+  Matrix gram_columns(const std::vector<Index>& columns) const;
   Vector apply_transpose(const Vector& c) const override;
   Matrix materialize() const override;
   Normal normal(const Vector& g) const override;

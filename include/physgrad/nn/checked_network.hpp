@@ -43,6 +43,8 @@ class CheckedNetwork final : public Network {
                             StridedMatrixRef out) const override;
   Matrix per_sample_gram(const NetworkCache& cache,
                          const std::vector<Matrix>& cotangents) const override;
+  Matrix per_sample_gram_columns(const NetworkCache& cache, const std::vector<Matrix>& cotangents,
+                                 const std::vector<Index>& selected) const override;
 
  private:
   // Throw Error unless `result` is rows×cols, or has `size` entries.

@@ -12,6 +12,8 @@
 
 namespace physgrad {
 
+class DenseLayerGram;
+
 // Weight initialisation: Glorot uniform U(±√(6/(fan_in + fan_out))), He uniform U(±√(6/fan_in)).
 enum class Init { kGlorotUniform, kHeUniform };
 
@@ -73,9 +75,15 @@ class Mlp final : public Network {
   // the gradient rows are never formed.
   Matrix per_sample_gram(const NetworkCache& cache,
                          const std::vector<Matrix>& cotangents) const override;
+  // The same sweep, with only the selected columns formed (one dgemm per layer).
+  Matrix per_sample_gram_columns(const NetworkCache& cache, const std::vector<Matrix>& cotangents,
+                                 const std::vector<Index>& selected) const override;
 
  private:
   Activation activation(Index layer) const;
+  // Adds every layer's factors of the K·B cotangents to `gram` (one backward sweep).
+  void add_layer_factors(const NetworkCache& cache, const std::vector<Matrix>& cotangents,
+                         DenseLayerGram& gram) const;
 
   std::vector<Index> widths_;
   std::vector<Index> offsets_;  // offsets_[l] = start of layer l in θ; back() = |θ|

@@ -60,6 +60,12 @@ class Network {
   // the K·B gradient rows (per_sample_gradients) and multiplies them (dsyrk).
   virtual Matrix per_sample_gram(const NetworkCache& cache,
                                  const std::vector<Matrix>& cotangents) const;
+  // The columns `selected` of per_sample_gram() ((K·B) × selected.size(), in the order given),
+  // for a rank that holds only some columns of the Gram matrix. The default forms the whole
+  // matrix and copies them; throws Error on a column outside [0, K·B).
+  virtual Matrix per_sample_gram_columns(const NetworkCache& cache,
+                                         const std::vector<Matrix>& cotangents,
+                                         const std::vector<Index>& selected) const;
 };
 
 }  // namespace physgrad

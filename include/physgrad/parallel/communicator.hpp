@@ -10,6 +10,8 @@
 
 namespace physgrad {
 
+class DistributedEigensolver;  // distributed_eigen.hpp
+
 // Every rank calls each collective in the same order with matching sizes. Results are the same
 // bits on every rank (the sum is reduced on rank 0 and broadcast, so no reduction order can make
 // ranks drift apart).
@@ -31,6 +33,9 @@ class Communicator {
   // Ends every rank after an unrecoverable error on this one (so none waits forever in a
   // collective); the serial communicator has nothing to end and returns.
   virtual void abort(int exit_code) = 0;
+  // The ranks' solver for symmetric eigenproblems held by columns (distributed_eigen.hpp), or
+  // null when they have none (then every rank solves the whole problem itself).
+  virtual DistributedEigensolver* eigensolver() { return nullptr; }
 
   // Convenience forms on vectors.
   void allreduce_sum(std::vector<double>& data) { allreduce_sum(data.data(), data.size()); }
