@@ -5,9 +5,10 @@ BUILD_DIR   ?= build
 JOBS        ?= $(shell nproc)
 DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapacke-dev \
                libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev \
-               libopenmpi-dev openmpi-bin
-# Only the tests need these: Chromium loads the HTML reports (layout, no script, no request).
-TEST_PACKAGES = chromium
+               libopenmpi-dev openmpi-bin pybind11-dev python3-dev python3-numpy
+# Only the tests need these: Chromium loads the HTML reports (layout, no script, no request);
+# pytest, torch and SciPy run the Python package's tests and examples (docs/python.md).
+TEST_PACKAGES = chromium python3-pytest python3-torch python3-scipy
 
 SANITIZE_DIR ?= build-sanitize
 
@@ -34,8 +35,9 @@ deps:
 deps-test:
 	$(call install_missing,$(TEST_PACKAGES))
 
+# The Python package is built for Debian's interpreter, which has the Debian numpy and torch.
 build: deps
-	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
 # Each demo run gets a folder of its own (runs/hig-toy-<timestamp>); earlier ones are kept.
