@@ -6,8 +6,11 @@ JOBS        ?= $(shell nproc)
 DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapacke-dev \
                libcli11-dev nlohmann-json3-dev libgtest-dev libbenchmark-dev \
                libopenmpi-dev openmpi-bin libscalapack-openmpi-dev
-# Only the tests need these: Chromium loads the HTML reports (layout, no script, no request).
-TEST_PACKAGES = chromium
+# The Python package (built by `make build` and `make test`, not needed by `make demo`).
+PYTHON_PACKAGES = pybind11-dev python3-dev python3-numpy
+# Only the tests need these: Chromium loads the HTML reports (layout, no script, no request);
+# pytest, torch and SciPy run the Python package's tests and examples (docs/python.md).
+TEST_PACKAGES = chromium python3-pytest python3-torch python3-scipy
 
 SANITIZE_DIR ?= build-sanitize
 
@@ -15,7 +18,7 @@ RESULTS_DIR ?= docs/results
 EXPERIMENTS  = scaled-toy sensitivity comparison hig-toy sin-rotation heat-inverse oscillators \
                quantum-dipole poisson time-reversal
 
-.PHONY: all deps deps-test configure build demo test test-sanitize bench bench-mpi results clean
+.PHONY: all deps deps-test deps-python configure build demo test test-sanitize bench bench-mpi results clean
 
 all: build
 
@@ -34,11 +37,16 @@ deps:
 deps-test:
 	$(call install_missing,$(TEST_PACKAGES))
 
-configure: deps
-	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release
+deps-python:
+	$(call install_missing,$(PYTHON_PACKAGES))
 
-# Everything: the libraries, the CLI, the tests, the benchmarks and the examples.
-build: configure
+# The Python package is built for Debian's interpreter, which has the Debian numpy and torch.
+configure: deps
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3
+
+# Everything: the libraries, the CLI, the Python package, the tests, benchmarks and examples.
+build: deps-python
+	$(MAKE) configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
 # Builds only the CLI it runs. Each demo run gets a folder of its own

@@ -1,0 +1,113 @@
+"""physgrad's Jacobian rules as torch optimizers (docs/python.md).
+
+HIG and GN step with Δθ = −lr·J^{−κ}·∂L/∂y (κ = ½ and 1), computed by the library
+(HigUpdate on a MappedJacobian) from the per-sample Jacobian J of shape (B, m, P) and ∂L/∂y of
+shape (B, m). A float64 tensor is read where it lies, never copied; float32 is converted once.
+"""
+
+import functorch
+import torch
+from torch.nn.utils import stateless
+
+from . import _physgrad
+
+
+def per_sample_jacobian(model, simulate, inputs, chunk=None, dtype=None):
+    """J[i, k, :] = ∂y_ik/∂θ for y_i = simulate(model(inputs[i])), as one (B, m, P) tensor.
+
+    Built with functorch (vmap over samples of jacrev in θ), `chunk` samples at a time so that
+    the autograd memory is bounded by the chunk; each chunk is written into the one J.
+    """
+    names = [n for n, _ in model.named_parameters()]
+    values = tuple(p.detach() for _, p in model.named_parameters())
+
+    def output(theta, x):
+        params = dict(zip(names, theta))
+        return simulate(stateless.functional_call(model, params, (x.unsqueeze(0),))).squeeze(0)
+
+    jac = functorch.vmap(functorch.jacrev(output), in_dims=(None, 0))
+    batch = inputs.shape[0]
+    chunk = batch if chunk is None else max(1, int(chunk))
+    total = sum(v.numel() for v in values)
+    jacobian = None
+    for start in range(0, batch, chunk):
+        parts = jac(values, inputs[start:start + chunk])
+        flat = torch.cat([part.reshape(part.shape[0], part.shape[1], -1) for part in parts], dim=2)
+        if jacobian is None:
+            jacobian = torch.empty((batch, flat.shape[1], total),
+                                   dtype=dtype or flat.dtype)
+        jacobian[start:start + flat.shape[0]] = flat
+    return jacobian
+
+
+class _JacobianRule(torch.optim.Optimizer):
+    """Δθ = −lr·J^{−κ}·∂L/∂y over the parameters, in the order given.
+
+    step(closure): closure() returns (loss, J, dL_dy) with J of shape (B, m, P) (P the number
+    of parameters, in their order, each flattened) and dL_dy of shape (B, m), ∂(mean loss)/∂y.
+    J is handed to the library without a copy when it is a C-contiguous float64 CPU tensor.
+    """
+
+    kappa = 0.5
+
+    def __init__(self, params, lr=1.0, rcond=1e-6, backend="auto"):
+        super().__init__(params, dict(lr=lr, rcond=rcond, backend=backend))
+        self.last_info = None
+
+    @torch.no_grad()
+    def step(self, closure):
+        with torch.enable_grad():
+            loss, jacobian, dl_dy = closure()
+        group = self.param_groups[0]
+        if len(self.param_groups) != 1:
+            raise ValueError("physgrad.torch: one parameter group only")
+        delta, info = self.jacobian_step(jacobian, dl_dy, group)
+        offset = 0
+        for p in group["params"]:
+            n = p.numel()
+            p.add_(torch.from_numpy(delta[offset:offset + n]).view_as(p).to(p.dtype))
+            offset += n
+        if offset != delta.shape[0]:
+            raise ValueError(f"physgrad.torch: the Jacobian has {delta.shape[0]} columns, "
+                             f"the parameters {offset} entries")
+        self.last_info = info
+        return loss
+
+    def jacobian_step(self, jacobian, dl_dy, group=None):
+        """(Δθ, info) for J and dL/dy (tensors or arrays) without changing the parameters."""
+        group = group or self.param_groups[0]
+        j = jacobian.detach()
+        if j.device.type != "cpu":
+            raise ValueError("physgrad.torch: the Jacobian must be on the CPU")
+        g = dl_dy.detach().reshape(-1).to(torch.float64).numpy()
+        return _physgrad.jacobian_step(j.numpy(), g, lr=group["lr"], kappa=self.kappa,
+                                       rcond=group["rcond"], backend=group["backend"])
+
+
+class HIG(_JacobianRule):
+    """Half-inverse gradients: Δθ = −lr·J^{−½}·∂L/∂y (truncated at rcond·σ_max)."""
+
+    kappa = 0.5
+
+
+class GN(_JacobianRule):
+    """Gauss-Newton: Δθ = −lr·J⁺·∂L/∂y (truncated at rcond·σ_max)."""
+
+    kappa = 1.0
+
+
+def jacobian_closure(model, simulate, loss_fn, inputs, targets, chunk=None):
+    """A closure for HIG/GN.step: y = simulate(model(inputs)), loss = loss_fn(y, targets) (the
+    batch mean), J from per_sample_jacobian (in chunks) and ∂loss/∂y by autograd."""
+
+    def closure():
+        with torch.no_grad():
+            y = simulate(model(inputs))
+        y = y.detach().requires_grad_(True)
+        loss = loss_fn(y, targets)
+        (dl_dy,) = torch.autograd.grad(loss, y)
+        jacobian = per_sample_jacobian(model, simulate, inputs, chunk=chunk,
+                                       dtype=torch.float64)
+        return loss.detach(), jacobian, dl_dy
+
+    return closure

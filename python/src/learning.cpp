@@ -1,0 +1,158 @@
+// Learning from PyTorch: the Jacobian step of HIG and Gauss-Newton (HigUpdate) on a per-sample
+// Jacobian given as an array that is read in place, and a reference case's first step computed
+// by the library alone, for comparison.
+#include <pybind11/numpy.h>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+
+#include "bindings.hpp"
+#include "physgrad/error.hpp"
+#include "physgrad/learn/hig.hpp"
+#include "physgrad/learn/mapped_jacobian.hpp"
+#include "physgrad/train/step.hpp"
+#include "python_simulator.hpp"
+#include "reference_case.hpp"
+
+namespace physgrad::python {
+
+namespace {
+
+// Δθ = −η J^{−κ} g for J given as an array of shape (B, m, P) or (B·m, P), C-contiguous: float64
+// is read where it lies; float32 is converted once into a double copy (the step is double).
+py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradient_y, double lr,
+                        double kappa, double rcond, const std::string& backend) {
+  if (jacobian.ndim() != 2 && jacobian.ndim() != 3) {
+    throw Error("jacobian_step: the Jacobian has " + std::to_string(jacobian.ndim()) +
+                " dimensions, expected (B, m, P) or (B·m, P)");
+  }
+  if (!(jacobian.flags() & py::array::c_style)) {
+    throw Error("jacobian_step: the Jacobian is not C-contiguous (make it contiguous first)");
+  }
+  const Index batch = jacobian.shape(0);
+  const Index outputs = jacobian.ndim() == 3 ? jacobian.shape(1) : 1;
+  const Index cols = jacobian.shape(jacobian.ndim() - 1);
+  const double* data = nullptr;
+  Matrix converted;  // float32 only
+  if (py::isinstance<py::array_t<double>>(jacobian)) {
+    data = static_cast<const double*>(jacobian.data());
+  } else if (py::isinstance<py::array_t<float>>(jacobian)) {
+    using RowMajorFloat = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    converted = Eigen::Map<const RowMajorFloat>(static_cast<const float*>(jacobian.data()),
+                                                batch * outputs, cols)
+                    .transpose()
+                    .cast<double>();
+    data = converted.data();
+  } else {
+    throw Error("jacobian_step: the Jacobian's dtype is " +
+                std::string(py::str(jacobian.dtype())) + ", expected float64 or float32");
+  }
+  const Vector g = to_vector(loss_gradient_y, "jacobian_step", "loss_gradient_y");
+  if (g.size() != batch * outputs) {
+    throw Error("jacobian_step: dL/dy has " + std::to_string(g.size()) + " entries, the Jacobian " +
+                std::to_string(batch * outputs) + " rows");
+  }
+  HigUpdate update({.lr = lr, .kappa = kappa, .rcond = rcond,
+                    .backend = parse_pinv_backend(backend)});
+  const auto mapped = std::make_shared<MappedJacobian>(data, batch, outputs, cols);
+  BatchState state;
+  state.batch_size = batch;
+  state.jacobian = mapped;
+  state.loss_gradient_y = g;
+  UpdateStep step;
+  {
+    py::gil_scoped_release released;
+    step = update.step(state);
+  }
+  py::dict info;
+  info["backend"] = to_string(update.last_info().backend);
+  info["rank"] = update.last_info().rank;
+  info["sigma_max"] = update.last_info().sigma_max;
+  info["rcond_used"] = update.last_info().rcond_used;
+  info["data_address"] = reinterpret_cast<std::uintptr_t>(mapped->data());
+  info["converted"] = converted.size() != 0;
+  info["jacobian_seconds"] = step.jacobian_seconds;
+  info["inversion_seconds"] = step.inversion_seconds;
+  return py::make_tuple(to_numpy(step.delta), info);
+}
+
+// Seconds per step of `repeats` steps made in one C++ loop on the same mapped J (no Python
+// between them): what jacobian_step costs without its binding, for bench/python_step.py.
+double time_jacobian_step(const py::array_t<double, py::array::c_style>& jacobian,
+                          const py::object& loss_gradient_y, double lr, double kappa,
+                          double rcond, int repeats) {
+  if (jacobian.ndim() != 3 || repeats < 1) {
+    throw Error("time_jacobian_step: expected J of shape (B, m, P) and repeats ≥ 1");
+  }
+  HigUpdate update({.lr = lr, .kappa = kappa, .rcond = rcond});
+  BatchState state;
+  state.jacobian = std::make_shared<MappedJacobian>(jacobian.data(), jacobian.shape(0),
+                                                    jacobian.shape(1), jacobian.shape(2));
+  state.loss_gradient_y = to_vector(loss_gradient_y, "time_jacobian_step", "loss_gradient_y");
+  py::gil_scoped_release released;
+  const auto start = std::chrono::steady_clock::now();
+  for (int r = 0; r < repeats; ++r) update.step(state);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / repeats;
+}
+
+// A reference case's first batch (experiments/reference_case.hpp): the stacked Jacobian as
+// (B, m, P) and ∂(mean L)/∂y as (B, m), both sample-major, θ, and the first step of rule `rule`
+// with the case's options computed by the library twice: "delta" from the network's own stacked
+// Jacobian (J Jᵀ from the layer factors, as train() steps), "delta_formed" from the formed J
+// returned here (J Jᵀ by dsyrk on it, as a step on a given Jacobian computes it).
+py::dict reference_step(const std::string& name, Index batch, const std::string& rule) {
+  const experiments::ReferenceCase c = experiments::reference_case(name, batch);
+  const std::unique_ptr<LearningUpdate> update = experiments::make_reference_update(c, rule);
+  if (update->need() != UpdateNeed::kStackedJacobian) {
+    throw Error("reference_step: rule '" + rule + "' does not step on the stacked Jacobian");
+  }
+  auto cache = c.network.new_cache();
+  const BatchState state = evaluate_batch(c.network, c.problem(), c.batch,
+                                          UpdateNeed::kStackedJacobian, *cache);
+  const Vector delta = update->step(state).delta;
+  const Matrix j = state.jacobian->materialize();  // row k·B + i
+  const Index b = state.jacobian->batch(), m = state.jacobian->outputs(), p = j.cols();
+  py::array_t<double> jacobian({b, m, p});
+  py::array_t<double> gy({b, m});
+  auto jv = jacobian.mutable_unchecked<3>();
+  auto gv = gy.mutable_unchecked<2>();
+  for (Index i = 0; i < b; ++i) {
+    for (Index k = 0; k < m; ++k) {
+      gv(i, k) = state.loss_gradient_y(k * b + i);
+      for (Index q = 0; q < p; ++q) jv(i, k, q) = j(k * b + i, q);
+    }
+  }
+  BatchState formed;
+  formed.batch_size = b;
+  formed.jacobian = std::make_shared<MappedJacobian>(jacobian.data(), b, m, p);
+  formed.loss_gradient_y = Eigen::Map<const Vector>(gy.data(), b * m);
+  const Vector delta_formed = experiments::make_reference_update(c, rule)->step(formed).delta;
+  py::dict out;
+  out["delta_formed"] = to_numpy(delta_formed);
+  out["jacobian"] = jacobian;
+  out["loss_gradient_y"] = gy;
+  out["delta"] = to_numpy(delta);
+  out["parameters"] = to_numpy(Vector(c.network.parameters()));
+  out["loss"] = state.loss;
+  out["params"] = to_python(update->params());
+  return out;
+}
+
+}  // namespace
+
+void bind_learning(py::module_& m) {
+  m.def("jacobian_step", &jacobian_step, py::arg("jacobian"), py::arg("loss_gradient_y"),
+        py::arg("lr") = 1.0, py::arg("kappa") = 0.5, py::arg("rcond") = 1e-6,
+        py::arg("backend") = "auto",
+        "Δθ = −lr·J^{−κ}·dL/dy (HigUpdate) for J of shape (B, m, P) or (B·m, P), C-contiguous "
+        "float64 (read in place) or float32 (converted once); returns (Δθ, info).");
+  m.def("_time_jacobian_step", &time_jacobian_step, py::arg("jacobian"),
+        py::arg("loss_gradient_y"), py::arg("lr"), py::arg("kappa"), py::arg("rcond"),
+        py::arg("repeats"));
+  m.def("reference_step", &reference_step, py::arg("name") = "oscillators",
+        py::arg("batch") = 128, py::arg("rule") = "hig",
+        "A reference case's first batch and the library's first step of `rule` on it.");
+}
+
+}  // namespace physgrad::python

@@ -1,0 +1,88 @@
+// PythonSimulator — a Simulator whose methods are a Python object's (numpy in and out): forward
+// required; vjp, jacobian, inverse and time_reversal optional, what is missing derived (J by
+// central differences of forward, Jᵀg from J); CallbackErrors carries a Python exception out.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <optional>
+#include <string>
+
+#include "physgrad/physics/simulator.hpp"
+
+namespace physgrad::python {
+
+namespace py = pybind11;
+
+// A Python exception raised in a callback while the library ran. The callback keeps it here and
+// throws CallbackFailed, which unwinds the library; the binding then raises the original
+// exception in Python with `context` ("rule lm, iteration 3") added to its message.
+struct CallbackErrors {
+  std::optional<py::error_already_set> error;
+  std::string method;  // the callback that raised it ("forward", "vjp", ...)
+  int iteration = 0;   // the iteration the library was in (updated by the caller)
+};
+struct CallbackFailed : std::exception {
+  const char* what() const noexcept override { return "a Python callback raised an exception"; }
+};
+
+// Runs `body` holding the GIL; a Python exception it raises is kept in `errors` (named `method`)
+// and CallbackFailed thrown in its place.
+template <class Body>
+auto call_python(CallbackErrors& errors, const char* method, Body&& body) {
+  py::gil_scoped_acquire gil;
+  try {
+    return body();
+  } catch (py::error_already_set& e) {
+    if (!errors.error) {
+      errors.error.emplace(std::move(e));
+      errors.method = method;
+    }
+    throw CallbackFailed();
+  }
+}
+
+// Raises in Python the exception kept in `errors` (whose message gains " (in CONTEXT, METHOD)"),
+// with the GIL held. Call it from the binding after the library unwound with CallbackFailed.
+[[noreturn]] void raise_kept(CallbackErrors& errors, const std::string& context);
+
+// numpy ↔ Eigen copies for the small vectors of the direct problems.
+py::array_t<double> to_numpy(const Vector& v);
+py::array_t<double> to_numpy(const Matrix& m);  // row-major copy, shape (rows, cols)
+// `value` as a vector (any array-like of numbers, flattened when 1 × n or n × 1); throws Error
+// "WHO: METHOD returned ..." for anything else.
+Vector to_vector(const py::handle& value, const std::string& who, const char* method);
+
+class PythonSimulator final : public Simulator {
+ public:
+  // `n` inputs; `m` outputs, or -1 to ask the object (its output_dim, else the size of one
+  // forward at x0). Holds a reference to `errors`, which must outlive it.
+  PythonSimulator(py::object simulator, Index n, Index m, const Vector& x0,
+                  CallbackErrors& errors);
+
+  std::string name() const override { return name_; }
+  Index input_dim() const override { return n_; }
+  Index output_dim() const override { return m_; }
+
+  Matrix forward_batch(const Matrix& x, const Matrix& context) const override;
+  Matrix vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const override;
+  Matrix jacobian(const Vector& x, const Vector& context = {}) const override;
+
+  bool has_inverse() const override { return has_inverse_; }
+  Vector inverse(const Vector& y, const Vector& x0, const Vector& context = {}) const override;
+  bool has_time_reversal() const override { return has_time_reversal_; }
+  Vector time_reversal(const Vector& y, const Vector& context = {}) const override;
+
+ private:
+  Vector call_vector(const char* method, const Vector& a, const Vector* b, Index size) const;
+  Matrix finite_difference(const Vector& x) const;
+
+  py::object object_;
+  CallbackErrors* errors_;
+  std::string name_;
+  Index n_ = 0, m_ = 0;
+  bool has_vjp_ = false, has_jacobian_ = false, has_inverse_ = false, has_time_reversal_ = false;
+};
+
+}  // namespace physgrad::python
