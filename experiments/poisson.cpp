@@ -150,6 +150,7 @@ class PoissonExperiment final : public Experiment {
       trained.emplace_back(&r, std::move(network));
     }
     sweep.add_loss_figures(context, tag, "poisson");
+    sweep.set_time_message(tag, "poisson");
     add_field_figure(context, n, x_test.col(0), y_test.col(0), trained);
     sweep.add_tables();
     context.add_note(

@@ -246,6 +246,12 @@ void RunContext::progress(const std::string& line) {
   }
 }
 
+void RunContext::progress_event(const std::string& line) {
+  if (quiet_) return;
+  finish_progress();
+  std::cerr << line << '\n';
+}
+
 void RunContext::finish_progress() {
   if (progress_line_open_) std::cerr << '\n';
   progress_line_open_ = false;
