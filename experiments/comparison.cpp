@@ -100,9 +100,33 @@ class Comparison final : public Experiment {
         "with u = x₀ − x₁; √2 ≈ 1.414 means the update points straight at the minimum.");
 
     add_figures(context, x0, physics, results);
+    context.set_message("trajectories_x.svg", closest_sentence(results, iterations));
   }
 
  private:
+  // Which rule ends closest to the minimum x = 0, and how many times closer than each rule that
+  // ends farther.
+  static std::string closest_sentence(const std::vector<DirectResult>& results, int iterations) {
+    const auto distance = [](const DirectResult& r) { return r.summary.x.norm(); };
+    if (results.empty()) return "No rule ran.";
+    // The first rule within round-off of the smallest distance (PG's inverses tie to 1e-6).
+    double smallest = INFINITY;
+    for (const DirectResult& r : results) smallest = std::min(smallest, distance(r));
+    const auto best = std::find_if(results.begin(), results.end(), [&](const DirectResult& r) {
+      return distance(r) <= smallest * (1 + 1e-4);
+    });
+    std::string out = "After " + std::to_string(iterations) + " steps " + best->rule.label +
+                      " ends " + format_value(distance(*best)) + " from the minimum";
+    std::string closer;
+    for (const DirectResult& r : results) {
+      const double ratio = distance(r) / distance(*best);
+      if (!(ratio > 1 + 1e-3)) continue;  // itself, and rules that tie with it
+      closer += (closer.empty() ? ": " : ", ") + format_value(ratio) + "× closer than " +
+                r.rule.label + " (" + format_value(distance(r)) + ")";
+    }
+    return out + closer + ".";
+  }
+
   inline static const std::map<std::string, double> kDefaultLr = {
       {"gd", 0.01}, {"momentum", 0.01}, {"adam", 0.3}, {"newton", 1.0 / 3.0},
       {"gn", 0.3},  {"ig", 0.3},        {"pg", 0.3}};

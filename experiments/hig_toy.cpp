@@ -11,6 +11,7 @@
 #include "physgrad/physics/diagonal_scale.hpp"
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/line_plot.hpp"
+#include "physgrad/report/svg_document.hpp"
 #include "physgrad/run/sampling.hpp"
 
 namespace physgrad::experiments {
@@ -127,12 +128,58 @@ class HigToy final : public LearningExperiment {
                     &test_set, observe);
         }
       }
-      add_figures(context, sweep, lambda, tag);
+    }
+    add_message_figure(context, sweep, settings.reals("lambda"));
+    for (const double lambda : settings.reals("lambda")) {
+      add_figures(context, sweep, lambda, "λ=" + format_value(lambda));
     }
     sweep.add_tables();
   }
 
  private:
+  // Test loss vs iteration for every λ side by side on one y axis, and the ratio of the best
+  // rule's median final test loss to the next rule's at each λ, the last (the hardest) first.
+  static void add_message_figure(RunContext& context, const LearningSweep& sweep,
+                                 const std::vector<double>& lambdas) {
+    const auto test_loss = [](const TrainingRecord& r) { return r.test_loss; };
+    double lo = INFINITY, hi = 0;
+    for (const double lambda : lambdas) {
+      for (const auto& group : sweep.rule_groups("λ=" + format_value(lambda))) {
+        for (const LearningResult* run : group) {
+          for (const TrainingRecord& r : run->summary.history) {
+            if (std::isfinite(r.test_loss) && r.test_loss > 0) {
+              lo = std::min(lo, r.test_loss);
+              hi = std::max(hi, r.test_loss);
+            }
+          }
+        }
+      }
+    }
+    const auto range = lo <= hi ? std::optional(std::pair(lo, hi)) : std::nullopt;
+    std::vector<std::string> panels;
+    std::string sentence;
+    for (auto lambda = lambdas.rbegin(); lambda != lambdas.rend(); ++lambda) {
+      const std::string tag = "λ=" + format_value(*lambda);
+      const std::string ratio =
+          lowest_value_sentence(sweep.final_medians(tag, test_loss), "median final test loss");
+      sentence += sentence.empty() ? "At λ = " + format_value(*lambda) + ", " + ratio
+                                   : " At λ = " + format_value(*lambda) + ": " + ratio;
+    }
+    for (const double lambda : lambdas) {
+      const std::string tag = "λ=" + format_value(lambda);
+      panels.push_back(LearningSweep::metric_figure(sweep.rule_groups(tag), "", "Test loss (" + tag + ")",
+                                                    "mean test loss", test_loss,
+                                                    LearningSweep::Progress::kIteration, true, range)
+                           .svg);
+    }
+    const std::string file = "loss_by_lambda.svg";
+    context.add_figure({file,
+                        "Test loss vs iteration for each λ, one y axis. Line: median over the "
+                        "seeds; band: their minimum to maximum. Dots: evaluations.",
+                        svg::side_by_side(panels)});
+    context.set_message(file, sentence);
+  }
+
   static void add_figures(RunContext& context, const LearningSweep& sweep, double lambda,
                           const std::string& tag) {
     const std::vector<const LearningResult*> runs = sweep.first_seed_runs(tag);
@@ -164,7 +211,7 @@ class HigToy final : public LearningExperiment {
     context.add_figure({"activations_lambda_" + file_tag + ".svg",
                         "Neuron saturation: a band collapsing onto ±1 means saturated neurons (" +
                             tag + ", first seed).",
-                        line_plot_svg(bands, band_options)});
+                        line_plot_svg(bands, band_options), tag});
 
     std::vector<Series> paths;
     // P(f(x)) is compared with ŷ(x) directly, so the target dot is ŷ of the tracked input.
@@ -187,7 +234,7 @@ class HigToy final : public LearningExperiment {
     context.add_figure({"trajectory_lambda_" + file_tag + ".svg",
                         "Path of one validation sample in physics output space (" + tag +
                             ", first seed).",
-                        line_plot_svg(paths, path_options)});
+                        line_plot_svg(paths, path_options), tag});
   }
 };
 

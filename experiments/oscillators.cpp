@@ -188,6 +188,7 @@ class Oscillators final : public LearningExperiment {
     LearningSweep sweep(settings, context, config.defaults);
     const std::vector<std::string> rules =
         settings.has("optimizers") ? settings.texts("optimizers") : config.rules;
+    sweep.plan_runs(rules.size());
     std::vector<std::pair<const LearningResult*, Mlp>> trained;
     for (const std::string& id : rules) {
       Mlp network = make_network(physics, config.activation, seed);
@@ -196,6 +197,7 @@ class Oscillators final : public LearningExperiment {
       trained.emplace_back(&r, std::move(network));
     }
     sweep.add_loss_figures(context, config_name, config_name, true);
+    sweep.set_time_message(config_name, config_name);
     add_trajectory_figures(context, config.physics, test_set.inputs.col(0), trained);
     sweep.add_tables();
     context.add_note(

@@ -152,6 +152,7 @@ class PoissonExperiment final : public LearningExperiment {
       trained.emplace_back(&r, std::move(network));
     }
     sweep.add_loss_figures(context, tag, "poisson");
+    sweep.set_time_message(tag, "poisson");
     add_field_figure(context, n, x_test.col(0), y_test.col(0), trained);
     sweep.add_tables();
     context.add_note(

@@ -192,6 +192,7 @@ class QuantumDipoleExperiment final : public LearningExperiment {
       trained.emplace_back(&r, std::move(network));
     }
     sweep.add_loss_figures(context, tag, "dipole", true, "mean test infidelity 1 − |⟨ψ*|ψ(T)⟩|²");
+    sweep.set_time_message(tag, "dipole", "final test infidelity");
     add_state_figures(context, config, test_set.inputs.col(0), test_set.context.col(0), trained);
     sweep.add_tables();
     context.add_note(

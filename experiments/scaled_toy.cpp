@@ -81,12 +81,53 @@ class ScaledToy final : public Experiment {
 
     add_iteration_table(context, alphas, by_alpha, tol, relative);
     add_iteration_figure(context, alphas, by_alpha);
+    context.set_message("iterations_vs_alpha.svg", invariance_sentence(alphas, by_alpha));
     for (std::size_t a = 0; a < alphas.size(); ++a) {
       add_alpha_figures(context, alphas[a], x0, by_alpha[a]);
     }
   }
 
  private:
+  // The rules that need the same iterations at every α, and how far the first other rule's
+  // count moves (ratio to the first invariant rule at the first α).
+  static std::string invariance_sentence(const std::vector<double>& alphas,
+                                         const std::vector<std::vector<DirectResult>>& by_alpha) {
+    const auto converged = [](const DirectResult& r) {
+      return r.summary.termination == Termination::kConverged;
+    };
+    std::vector<std::size_t> invariant, varying;
+    for (std::size_t r = 0; r < by_alpha.front().size(); ++r) {
+      bool same = true;
+      for (const auto& results : by_alpha) {
+        same = same && converged(results[r]) &&
+               results[r].summary.iterations == by_alpha.front()[r].summary.iterations;
+      }
+      (same ? invariant : varying).push_back(r);
+    }
+    const auto& first = by_alpha.front();
+    std::string out;
+    for (const std::size_t r : invariant) {
+      out += (out.empty() ? "" : ", ") + first[r].rule.label + " (" +
+             std::to_string(first[r].summary.iterations) + ")";
+    }
+    out = invariant.empty() ? "No rule needs the same iterations at every α"
+                            : out + " need the same iterations at every α from " +
+                                  format_value(alphas.front()) + " to " +
+                                  format_value(alphas.back());
+    if (varying.empty()) return out + ".";
+    const DirectResult& moved = first[varying.front()];
+    out += "; " + moved.rule.label + " needs " + iterations_cell(moved) + " at α = " +
+           format_value(alphas.front());
+    if (!invariant.empty() && converged(moved) && first[invariant.front()].summary.iterations > 0) {
+      out += " (" +
+             format_value(static_cast<double>(moved.summary.iterations) /
+                          static_cast<double>(first[invariant.front()].summary.iterations)) +
+             "× " + first[invariant.front()].rule.label + "'s)";
+    }
+    return out + " and " + iterations_cell(by_alpha.back()[varying.front()]) + " at α = " +
+           format_value(alphas.back()) + ".";
+  }
+
   inline static const std::map<std::string, double> kDefaultLr = {
       {"gd", 0.01},     {"momentum", 0.01}, {"adam", 0.01}, {"newton", 0.5},
       {"gn", 0.5},      {"ig", 0.5},        {"pg", 0.5}};
@@ -155,9 +196,9 @@ class ScaledToy final : public Experiment {
     context.add_figure({"landscape_alpha_" + tag + ".svg",
                         "x-space trajectories for α = " + tag +
                             " over the isolines of L (log-spaced levels).",
-                        landscape_svg(grid, trajectories(results), options)});
+                        landscape_svg(grid, trajectories(results), options), tag});
     context.add_figure({"loss_alpha_" + tag + ".svg", "Loss per iteration for α = " + tag + ".",
-                        loss_curves_svg(results, "Loss vs iteration, α = " + tag)});
+                        loss_curves_svg(results, "Loss vs iteration, α = " + tag), tag});
   }
 };
 

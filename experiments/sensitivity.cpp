@@ -78,10 +78,30 @@ class Sensitivity final : public Experiment {
     add_table(context, "Loss after one step relative to the start, L(x₁)/L(x₀)", alphas, by_alpha,
               [&](const DirectResult& r) { return format_value(loss_ratio(r)); });
     add_table(context, "Iterations until L(x) ≤ tol·L(x₀)", alphas, by_alpha, iterations_cell);
-    add_figure(context, "step_vs_alpha.svg", "First step |Δx| vs α", "|Δx₁|", alphas, by_alpha,
+    add_figure(context, "step_vs_alpha.svg", "First step |Δx| vs α", "|Δx₁|",
+               " GD's step ηα²x grows with slope 2, the square of the sensitivity; "
+               "Newton's and IG's are flat.",
+               alphas, by_alpha,
                first_step);
     add_figure(context, "loss_ratio_vs_alpha.svg", "Loss ratio after the first step vs α",
-               "L(x₁)/L(x₀)", alphas, by_alpha, loss_ratio);
+               "L(x₁)/L(x₀)",
+               " Once GD overshoots (ηα² > 2), L(x₁)/L(x₀) = (1 − ηα²)² grows with slope 4; "
+               "Newton's and IG's ratio (1 − η)² is flat.",
+               alphas, by_alpha, loss_ratio);
+    // The message: how much each rule's first step changes from the smallest to the largest α.
+    std::string sentence;
+    for (std::size_t r = 0; r < by_alpha.front().size(); ++r) {
+      const double from = first_step(by_alpha.front()[r]), to = first_step(by_alpha.back()[r]);
+      const double growth = to / from;
+      sentence += (sentence.empty() ? "" : "; ") + by_alpha.front()[r].rule.label + "'s " +
+                  (std::abs(growth - 1) < 1e-6
+                       ? "stays " + format_value(from)
+                       : "goes from " + format_value(from) + " to " + format_value(to) + " (×" +
+                             format_value(growth) + ")");
+    }
+    context.set_message("step_vs_alpha.svg", "From α = " + format_value(alphas.front()) +
+                                                 " to " + format_value(alphas.back()) +
+                                                 ", the first step |Δx₁|: " + sentence + ".");
   }
 
  private:
@@ -105,7 +125,8 @@ class Sensitivity final : public Experiment {
 
   template <typename Value>
   static void add_figure(RunContext& context, const std::string& file, const std::string& title,
-                         const std::string& y_label, const std::vector<double>& alphas,
+                         const std::string& y_label, const std::string& slope_note,
+                         const std::vector<double>& alphas,
                          const std::vector<std::vector<DirectResult>>& by_alpha, Value value) {
     std::vector<Series> series;
     for (std::size_t r = 0; r < by_alpha.front().size(); ++r) {
@@ -123,8 +144,7 @@ class Sensitivity final : public Experiment {
     options.y_label = y_label;
     options.log_x = true;
     options.log_y = true;
-    context.add_figure({file, title + " (log-log; slope 2 = the square of the sensitivity)",
-                        line_plot_svg(series, options)});
+    context.add_figure({file, title + " (log-log)." + slope_note, line_plot_svg(series, options)});
   }
 };
 

@@ -132,6 +132,21 @@ class SinRotationExperiment final : public LearningExperiment {
           "x-distance to the nearest exact solution vs time (" + tag + ")",
           "mean |f(y*) − x_closest| on the test set",
           [](const TrainingRecord& r) { return r.extras["x_distance"].get<double>(); });
+      // The message: at the stiffest ξ, how much closer to an exact solution the best rule lands.
+      if (xi == *std::max_element(xis.begin(), xis.end())) {
+        context.set_message(
+            "x_distance_vs_time_xi_" + format_value(xi) + ".svg",
+            "At ξ = " + format_value(xi) + ", " +
+                lowest_value_sentence(
+                    sweep.final_medians(tag, [](const TrainingRecord& r) {
+                      return r.extras["x_distance"].get<double>();
+                    }),
+                    "final x-distance to the nearest exact solution") +
+                " Lowest test loss: " +
+                lowest_value_sentence(
+                    sweep.final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }),
+                    "final test loss"));
+      }
       if (xi == 1.0) add_landscape(context, phi, form, runs);
       sweep.add_tables();
     }
@@ -244,7 +259,7 @@ class SinRotationExperiment final : public LearningExperiment {
              (runs.empty() ? std::string()
                            : std::string(" Paths: the network's output f(y*) at each evaluation "
                                          "(circle: start, square: end, first seed)")),
-         landscape_svg(grid, trajectories, options)});
+         landscape_svg(grid, trajectories, options), "ξ=1"});
   }
 };
 

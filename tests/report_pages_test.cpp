@@ -1,12 +1,14 @@
 // Every experiment's report, rendered at tiny sizes through the command line, and the index of
 // their folders (`physgrad report`): each SVG file and each SVG inside report.html and
 // index.html is well-formed, with finite coordinates inside its view box; the figures that carry
-// each experiment's message exist; every table has a caption. When Chromium is installed, the
-// pages are also loaded at 420 px wide: no SVG error in the console and nothing wider than the
-// page outside a table's scroll box. Run folders with hostile names and contents (a script or
-// another site as a link, bytes that are not UTF-8, bidirectional controls, fields of the wrong
-// type, huge files) give pages whose every link is a local file, that run no script and ask no
-// server, are valid UTF-8 and XML, and an index that says what it left out.
+// each experiment's message exist, and each report opens with the message figure that
+// docs/results.md names; every table has a caption. When Chromium is installed, the pages are
+// also loaded at 420 px wide: no SVG error in the console, nothing wider than the page outside
+// a table's or a figure's scroll box, and no text inside a figure below 11 px. Run folders with
+// hostile names and contents (a script or another site as a link, bytes that are not UTF-8,
+// bidirectional controls, fields of the wrong type, huge files) give pages whose every link is
+// a local file, that run no script and ask no server, are valid UTF-8 and XML, and an index
+// that says what it left out.
 #include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <iconv.h>
@@ -28,6 +30,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <sstream>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <regex>
@@ -382,7 +386,7 @@ TEST_F(ReportPages, EverySvgIsWellFormedAndInsideItsViewBox) {
   EXPECT_NE(seeds.find("HIG (λ=0.01), median of 2"), std::string::npos);
   EXPECT_NE(seeds.find("fill-opacity=\"0.18\""), std::string::npos);
   const std::string diverged = read_file(dir_ / "scaled-toy" / "loss_alpha_100.svg");
-  EXPECT_NE(diverged.find(">diverged at 77<"), std::string::npos);
+  EXPECT_NE(diverged.find(">diverged at 77, ends off scale at "), std::string::npos);
   for (const char* label : {">1e10<", ">1e100<", ">1e300<"}) {
     EXPECT_EQ(diverged.find(label), std::string::npos) << label;
   }
@@ -392,6 +396,55 @@ TEST_F(ReportPages, EverySvgIsWellFormedAndInsideItsViewBox) {
   EXPECT_GE(overlays.size(), 6u);  // one per learning experiment
   for (const std::string& svg : overlays) check(svg, "index.html");
   EXPECT_GT(checked, 60u);
+}
+
+// Experiment name → its message figure, as docs/results.md names it: the line
+// "Message figure: `FILE`" in the section "## NAME — `physgrad run NAME …`".
+std::map<std::string, std::string> documented_messages() {
+  const std::string text = read_file(fs::path(PHYSGRAD_SOURCE_DIR) / "docs" / "results.md");
+  static const std::regex heading(R"(^## ([a-z0-9-]+) — )");
+  static const std::regex message(R"(^Message figure: `([^`]+)`)");
+  std::map<std::string, std::string> found;
+  std::string section;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    std::smatch m;
+    if (std::regex_search(line, m, heading)) section = m[1];
+    if (std::regex_search(line, m, message) && !section.empty()) found[section] = m[1];
+  }
+  return found;
+}
+
+// The experiment a case runs: the word after "run ".
+std::string experiment_of(const Case& c) {
+  const std::string rest = c.args.substr(4);
+  return rest.substr(0, rest.find(' '));
+}
+
+TEST_F(ReportPages, EachReportOpensWithTheMessageFigureTheResultsDocumentNames) {
+  ASSERT_TRUE(make_reports());
+  const std::map<std::string, std::string> messages = documented_messages();
+  std::size_t checked = 0;
+  for (const Case& c : cases()) {
+    const std::string name = experiment_of(c);
+    ASSERT_TRUE(messages.contains(name)) << "docs/results.md names no message figure of " << name;
+    if (c.folder != name) continue;  // a variant (e.g. 2-D) names its files differently
+    const std::string html = read_file(dir_ / c.folder / "report.html");
+    const std::size_t first = html.find("<figure");
+    ASSERT_NE(first, std::string::npos) << c.folder;
+    EXPECT_EQ(html.substr(first, html.find('>', first) - first),
+              "<figure id=\"" + messages.at(name) + "\"")
+        << c.folder;
+    // The sentence under it, with a ratio or the numbers it compares.
+    const std::size_t sentence = html.find("<p class=\"message\">", first);
+    ASSERT_NE(sentence, std::string::npos) << c.folder;
+    EXPECT_LT(sentence, html.find("</figure>", first)) << c.folder;
+    const std::string text = html.substr(sentence, html.find("</p>", sentence) - sentence);
+    EXPECT_NE(text.find_first_of("0123456789"), std::string::npos) << c.folder << ": " << text;
+    ++checked;
+  }
+  EXPECT_EQ(checked + 1, cases().size());  // all but the 2-D variant
+  EXPECT_EQ(messages.size(), checked);    // and no documented experiment without a case
 }
 
 TEST_F(ReportPages, ReportOfAFolderWithoutRunFoldersIsAOneLineError) {
@@ -453,12 +506,21 @@ TEST_F(ReportPages, ChromiumShowsThemWithoutErrorsAt420PixelsWide) {
     std::string html = read_file(dir_ / pages[k]);
     const std::string script =
         "<script>window.addEventListener('load', () => { let worst = 0, what = '';"
+        "const boxes = '.table, .figure-scroll';"
         "for (const e of document.body.querySelectorAll('*')) {"
         "if (e.closest('svg') && e.tagName.toLowerCase() !== 'svg') continue;"
-        "if (e.closest('.table') && !e.classList.contains('table')) continue;"
+        "if (e.parentElement && e.parentElement.closest(boxes)) continue;"
         "const r = e.getBoundingClientRect().right; if (r > worst) { worst = r; what = e.tagName; }}"
+        "let smallest = 1e9, text = '';"
+        "for (const t of document.querySelectorAll('svg text')) {"
+        "const svg = t.ownerSVGElement; const box = svg.viewBox.baseVal;"
+        "if (!box || box.width === 0) continue;"
+        "const px = parseFloat(getComputedStyle(t).fontSize) *"
+        " svg.getBoundingClientRect().width / box.width;"
+        "if (px < smallest) { smallest = px; text = t.textContent.slice(0, 20); }}"
         "console.log('physgrad-layout " + std::to_string(k) +
-        " ' + window.innerWidth + ' ' + Math.ceil(worst) + ' ' + what); });</script>\n";
+        " ' + window.innerWidth + ' ' + Math.ceil(worst) + ' ' + smallest.toFixed(2) + ' ' +"
+        " what + ' ' + text); });</script>\n";
     html.replace(html.rfind("</body>"), 7, script + "</body>");
     const fs::path copy = dir_ / pages[k];
     std::ofstream(copy.parent_path() / ("checked_" + copy.filename().string())) << html;
@@ -477,9 +539,14 @@ TEST_F(ReportPages, ChromiumShowsThemWithoutErrorsAt420PixelsWide) {
     const std::size_t at = console.find(tag);
     ASSERT_NE(at, std::string::npos) << pages[k] << " was not laid out:\n" << console;
     int width = 0, right = 0;
-    ASSERT_EQ(std::sscanf(console.c_str() + at + tag.size(), "%d %d", &width, &right), 2);
+    double smallest_text = 0;
+    ASSERT_EQ(std::sscanf(console.c_str() + at + tag.size(), "%d %d %lf", &width, &right,
+                          &smallest_text),
+              3);
     EXPECT_EQ(width, 420) << pages[k];
     EXPECT_LE(right, width) << pages[k] << ": " << console.substr(at, 80);
+    // Text inside figures stays readable: at least 11 px (figures scroll rather than shrink).
+    EXPECT_GE(smallest_text, 10.99) << pages[k] << ": " << console.substr(at, 120);
   }
 }
 

@@ -191,6 +191,7 @@ ex::RunHooks cli_hooks(StderrProgress& progress, const std::string& command_line
   ex::RunHooks hooks;
   hooks.progress = [&progress](const std::string& line) { progress.show(line); };
   hooks.progress_end = [&progress] { progress.end(); };
+  hooks.progress_event = [](const std::string& line) { std::cerr << line << '\n'; };
   hooks.log = [](const std::string& text) { std::cerr << "physgrad: " << text << '\n'; };
   hooks.command = command_line;
   hooks.communicator = physgrad::cli::communicator();

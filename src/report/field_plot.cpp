@@ -151,11 +151,7 @@ std::string shading(const Grid2D& g, const Scale& sx, const Scale& sy, const Col
 }
 
 double color_bar_width(const ColorScale& scale, const std::string& label) {
-  double widest = 0;
-  for (const Tick& t : bar_axis(scale, 1, 0).ticks) {
-    widest = std::max(widest, svg::text_width(t.label));
-  }
-  return kBarWidth + 10 + widest + (label.empty() ? 4 : 24);
+  return kBarWidth + 10 + widest_label(bar_axis(scale, 1, 0)) + (label.empty() ? 4 : 24);
 }
 
 std::string color_bar(const svg::Box& bar, const ColorScale& scale, const std::string& label) {
@@ -170,9 +166,8 @@ std::string color_bar(const svg::Box& bar, const ColorScale& scale, const std::s
   const Axis axis = bar_axis(scale, bar.bottom, bar.top);
   out += right_ticks(bar.right, bar, axis);
   if (!label.empty()) {
-    double widest = 0;
-    for (const Tick& t : axis.ticks) widest = std::max(widest, svg::text_width(t.label));
-    out += "<text transform=\"translate(" + svg::num(bar.right + 10 + widest + 16) + " " +
+    out += "<text transform=\"translate(" + svg::num(bar.right + 10 + widest_label(axis) + 16) +
+           " " +
            svg::num((bar.top + bar.bottom) / 2) + ") rotate(-90)\" text-anchor=\"middle\">" +
            xml_escape(label) + "</text>\n";
   }
@@ -204,7 +199,7 @@ std::string field_panels_svg(const std::vector<FieldPanel>& panels,
     grids.push_back(&p.grid);
   }
   const ColorScale scale = ColorScale::of(grids, options.log, options.diverging);
-  const double top = options.title.empty() ? 26.0 : 46.0;
+  const double top = plot::top_margin(!options.title.empty()) + 10;  // and the panel titles
   // Cells: each node stands for the cell around it, so the axes reach half a cell further.
   const auto cell_extent = [](const Grid2D& g) {
     const double hx = 0.5 * (g.x_max - g.x_min) / (g.nx - 1);
@@ -217,9 +212,7 @@ std::string field_panels_svg(const std::vector<FieldPanel>& panels,
     const Grid2D& g = panels[k].grid;
     const svg::Box extent = cell_extent(g);
     plot::Axis ay = plot::fixed_axis(extent.top, extent.bottom, false, 1, 0);
-    double widest = 0;
-    for (const plot::Tick& t : ay.ticks) widest = std::max(widest, svg::text_width(t.label));
-    const double left = x + widest + (k == 0 && !options.y_label.empty() ? 34 : 14);
+    const double left = x + plot::left_margin(ay, k == 0 && !options.y_label.empty());
     const svg::Box box = plot::equal_aspect_box(
         {left, top, left + options.panel_width, top + 4.0 * options.panel_width},
         extent.width(), extent.height());
@@ -238,7 +231,7 @@ std::string field_panels_svg(const std::vector<FieldPanel>& panels,
   const int width = static_cast<int>(
       std::ceil(std::max(bar.left + plot::color_bar_width(scale, options.value_label) + 4,
                          svg::text_width(options.title, 14) + 20)));
-  const int height = static_cast<int>(std::ceil(row_bottom + 52));
+  const int height = static_cast<int>(std::ceil(row_bottom + plot::kBottomMargin));
   std::string out = svg::open(width, height) + body + plot::color_bar(bar, scale, options.value_label);
   if (!options.title.empty()) {
     out += svg::text(width / 2.0, 20, options.title,

@@ -1,5 +1,11 @@
 #include "physgrad/report/html_report.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <tuple>
+#include <utility>
+
 #include "physgrad/error.hpp"
 #include "physgrad/text.hpp"
 
@@ -21,8 +27,28 @@ th:first-child,td:first-child{text-align:left}
 .figures{display:flex;flex-wrap:wrap;gap:1.5em;align-items:flex-start}
 figure{margin:0;min-width:0;max-width:100%}
 figure svg{display:block;max-width:100%;height:auto}
+.figure-scroll{overflow-x:auto;max-width:100%}
 figcaption{font-size:.9em;color:#555;margin-top:.3em;max-width:640px}
+p.message{font-size:1.15em;font-weight:600;color:#222;margin:.2em 0 .4em}
 )";
+
+// The width (px) at which an SVG document of svg::open() shows its smallest text at 11 px: its
+// width × 11 / its smallest font-size (12 when it names none).
+int readable_width(const std::string& svg) {
+  constexpr double kSmallestReadable = 11;
+  const auto number_after = [&](const std::string& key, std::size_t from) {
+    const std::size_t at = svg.find(key, from);
+    return at == std::string::npos ? std::pair(0.0, at)
+                                   : std::pair(std::atof(svg.c_str() + at + key.size()), at);
+  };
+  const double width = number_after(" width=\"", 0).first;
+  double smallest = 12;
+  for (auto [size, at] = number_after("font-size=\"", 0); at != std::string::npos;
+       std::tie(size, at) = number_after("font-size=\"", at + 1)) {
+    if (size > 0) smallest = std::min(smallest, size);
+  }
+  return static_cast<int>(std::ceil(width * kSmallestReadable / smallest));
+}
 
 bool blank(std::string_view line) {
   return line.find_first_not_of(" \t\r") == std::string_view::npos;
@@ -132,19 +158,26 @@ std::string html_report(const std::string& title, const std::string& intro,
     for (const HtmlTable& table : section.tables) {
       out += table_html(table, "section '" + section.heading + "'");
     }
-    if (!section.figures.empty()) {
-      out += "<div class=\"figures\">\n";
-      for (const HtmlFigure& figure : section.figures) {
-        out += (figure.id.empty() ? std::string("<figure>\n")
-                                  : "<figure id=\"" + xml_escape(figure.id) + "\">\n") +
-               figure.svg;
-        if (!figure.caption.empty()) {
-          out += "<figcaption>" + xml_escape(figure.caption) + "</figcaption>\n";
-        }
-        out += "</figure>\n";
+    for (std::size_t k = 0; k < section.figures.size(); ++k) {
+      const HtmlFigure& figure = section.figures[k];
+      if (k == 0 || figure.row != section.figures[k - 1].row) {
+        out += std::string(k == 0 ? "" : "</div>\n") + "<div class=\"figures\">\n";
       }
-      out += "</div>\n";
+      out += (figure.id.empty() ? std::string("<figure>\n")
+                                : "<figure id=\"" + xml_escape(figure.id) + "\">\n") +
+             "<div class=\"figure-scroll\"><div style=\"min-width:" +
+             std::to_string(readable_width(figure.svg)) + "px\">\n" + figure.svg +
+             "</div></div>\n";
+      if (!figure.message.empty() || !figure.caption.empty()) {
+        out += "<figcaption>" +
+               (figure.message.empty()
+                    ? std::string()
+                    : "<p class=\"message\">" + xml_escape(figure.message) + "</p>") +
+               xml_escape(figure.caption) + "</figcaption>\n";
+      }
+      out += "</figure>\n";
     }
+    if (!section.figures.empty()) out += "</div>\n";
     out += "</section>\n";
   }
   return out + "</body>\n</html>\n";

@@ -55,12 +55,10 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
       ColorScale::of({&grid}, options.log_levels, false, options.value_range);
   plot::Axis ax = plot::fixed_axis(grid.x_min, grid.x_max, false, 0, 1);
   plot::Axis ay = plot::fixed_axis(grid.y_min, grid.y_max, false, 1, 0);
-  double widest = 0;
-  for (const plot::Tick& t : ay.ticks) widest = std::max(widest, svg::text_width(t.label));
   const double right = plot::color_bar_width(scale, options.value_label) + 14;
-  const Box available{widest + (options.y_label.empty() ? 16 : 34),
-                      options.title.empty() ? 16.0 : 36.0, options.width - right,
-                      options.height - 52.0};
+  const Box available{plot::left_margin(ay, !options.y_label.empty()),
+                      plot::top_margin(!options.title.empty()), options.width - right,
+                      options.height - plot::kBottomMargin};
   const Box box = options.equal_aspect
                       ? plot::equal_aspect_box(available, grid.x_max - grid.x_min,
                                                grid.y_max - grid.y_min)
@@ -84,17 +82,51 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
   }
 
   std::vector<plot::LegendEntry> entries;
+  std::vector<std::vector<Polyline>> drawn;
+  std::string notes;
   for (std::size_t n = 0; n < trajectories.size(); ++n) {
     const Trajectory& t = trajectories[n];
     const std::string color = xml_escape(t.color.empty() ? palette_color(n) : t.color);
-    const std::vector<Polyline> pieces = plot::to_pixels(t.x, t.y, ax.scale, ay.scale, false);
+    std::vector<Polyline> pieces = plot::to_pixels(t.x, t.y, ax.scale, ay.scale, false);
+    // A path that leaves the view (a diverging rule) is drawn up to its last step inside, and
+    // its way out as an arrow at the frame labelled with the step: no stripes across the field.
+    std::string left_at;
+    if (!pieces.empty()) {
+      Polyline& path = pieces.front();
+      const auto out = std::find_if(path.begin(), path.end(),
+                                    [&](const Point& p) { return !svg::inside(p, box); });
+      if (out != path.end() && out != path.begin()) {
+        Point a = *(out - 1), b = *out;
+        const auto step = out - path.begin();
+        if (plot::clip_segment(a, b, box)) {
+          notes += svg::path(std::string("M") + num(a.x) + " " + num(a.y) + "L" + num(b.x) + " " +
+                                 num(b.y),
+                             "stroke=\"" + color + "\" stroke-width=\"1.6\" stroke-dasharray=\"2 3\"");
+          notes += "<circle cx=\"" + num(b.x) + "\" cy=\"" + num(b.y) + "\" r=\"3.5\" fill=\"" +
+                   color + "\" stroke=\"white\"/>\n";
+        }
+        left_at = " (leaves the view at step " + std::to_string(step) + ")";
+        path.erase(out, path.end());
+      } else if (out == path.begin()) {
+        left_at = " (outside the view)";
+        path.clear();
+      }
+      if (path.empty()) pieces.clear();
+    }
+    const int retraced = plot::retraces(pieces, drawn);
+    drawn.push_back(pieces);
+    const std::string dashes = retraced > 0 ? plot::dash_pattern(retraced) : "";
     const std::string d = plot::line_path(pieces, bounds);
-    content += svg::path(d,
-                         "fill=\"none\" stroke=\"white\" stroke-opacity=\"0.7\" "
-                         "stroke-width=\"3.6\" stroke-linejoin=\"round\" stroke-linecap=\"round\"");
+    // A white halo under the path, but not under one that retraces another (it would hide it).
+    if (dashes.empty()) {
+      content += svg::path(d,
+                           "fill=\"none\" stroke=\"white\" stroke-opacity=\"0.7\" "
+                           "stroke-width=\"3.6\" stroke-linejoin=\"round\" stroke-linecap=\"round\"");
+    }
     content += svg::path(d, "fill=\"none\" stroke=\"" + color +
                                 "\" stroke-width=\"1.6\" stroke-linejoin=\"round\" "
-                                "stroke-linecap=\"round\"");
+                                "stroke-linecap=\"round\"" +
+                                (dashes.empty() ? "" : " stroke-dasharray=\"" + dashes + "\""));
     content += svg::path(plot::dot_path(pieces, bounds),
                          "stroke=\"" + color + "\" stroke-width=\"3.6\" stroke-linecap=\"round\"");
     if (!pieces.empty() && svg::inside(pieces[0].front(), bounds)) {
@@ -102,12 +134,12 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
       content += "<circle cx=\"" + num(p.x) + "\" cy=\"" + num(p.y) +
                  "\" r=\"4.5\" fill=\"white\" stroke=\"" + color + "\" stroke-width=\"1.8\"/>\n";
     }
-    if (!pieces.empty() && svg::inside(pieces[0].back(), bounds)) {
+    if (!pieces.empty() && left_at.empty() && svg::inside(pieces[0].back(), bounds)) {
       const Point& p = pieces[0].back();
       content += svg::rect({p.x - 4, p.y - 4, p.x + 4, p.y + 4},
                            "fill=\"" + color + "\" stroke=\"white\"");
     }
-    entries.push_back({t.label, color, true, false, true, false});
+    entries.push_back({t.label + left_at, color, true, dashes, true, false});
   }
   for (const Marker& m : options.markers) {
     const Point p{ax.scale(m.x), ay.scale(m.y)};
@@ -129,7 +161,7 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
       plot::legend(entries, box, plot::Occupancy(box), below, width, false);
   const int height = static_cast<int>(std::ceil(below + legend.height_below + 8));
   const Box bar{box.right + 12, box.top, box.right + 26, box.bottom};
-  return svg::open(width, height) + svg::clipped(box, content) +
+  return svg::open(width, height) + svg::clipped(box, content) + notes +
          plot::axes(width, box, ax, ay, {options.title, options.x_label, options.y_label}) +
          plot::color_bar(bar, scale, options.value_label) + legend.svg + "</svg>\n";
 }

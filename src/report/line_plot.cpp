@@ -96,6 +96,16 @@ std::string cross(const Point& p, const std::string& color) {
   return svg::path(d, "stroke=\"" + color + "\" stroke-width=\"2.2\" fill=\"none\"");
 }
 
+// An arrow at p pointing up (or down) out of the frame: a value beyond the axis.
+std::string edge_arrow(const Point& p, bool up, const std::string& color) {
+  const double tip = up ? -5 : 5;
+  return svg::path(std::string("M") + num(p.x) + " " + num(p.y - tip) + "V" + num(p.y + tip) +
+                       "M" + num(p.x - 4) + " " + num(p.y + tip - (up ? -4 : 4)) + "L" +
+                       num(p.x) + " " + num(p.y + tip) + "L" + num(p.x + 4) + " " +
+                       num(p.y + tip - (up ? -4 : 4)),
+                   "stroke=\"" + color + "\" stroke-width=\"2\" fill=\"none\"");
+}
+
 // A ▼ with its tip at p.
 std::string down_triangle(const Point& p, const std::string& color) {
   return svg::path(std::string("M") + num(p.x - 4.5) + " " + num(p.y - 8) + "h9L" + num(p.x) + " " + num(p.y) +
@@ -123,12 +133,15 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
                        plot::usable(fixed->second, options.log_x) && fixed->first < fixed->second;
   Axis ax = fixed_x ? plot::fixed_axis(fixed->first, fixed->second, options.log_x, 0, 1)
                     : plot::data_axis(range.x_lo, range.x_hi, range.found(), options.log_x, 0, 1);
-  Axis ay = plot::data_axis(range.y_lo, range.y_hi, range.found(), options.log_y, 1, 0);
-  double widest = 0;
-  for (const plot::Tick& t : ay.ticks) widest = std::max(widest, svg::text_width(t.label));
-  const Box box{std::max(40.0, widest + (options.y_label.empty() ? 16 : 34)),
-                options.title.empty() ? 16.0 : 36.0, options.width - 16.0,
-                options.height - 52.0};
+  const auto& shared = options.y_range;
+  const bool fixed_y = shared && plot::usable(shared->first, options.log_y) &&
+                       plot::usable(shared->second, options.log_y) &&
+                       shared->first <= shared->second;
+  Axis ay = fixed_y ? plot::data_axis(shared->first, shared->second, true, options.log_y, 1, 0)
+                    : plot::data_axis(range.y_lo, range.y_hi, range.found(), options.log_y, 1, 0);
+  const Box box{std::max(40.0, plot::left_margin(ay, !options.y_label.empty())),
+                plot::top_margin(!options.title.empty()), options.width - 16.0,
+                options.height - plot::kBottomMargin};
   ax.scale.p0 = box.left;
   ax.scale.p1 = box.right;
   ay.scale.p0 = box.bottom;
@@ -144,6 +157,7 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
   plot::Occupancy occupied(box);
   std::vector<plot::LegendEntry> entries;
   std::vector<Box> note_boxes;
+  std::vector<std::vector<Polyline>> drawn;  // the pieces of the series before
   for (std::size_t n = 0; n < series.size(); ++n) {
     const Series& s = series[n];
     const std::string color = xml_escape(s.color.empty() ? palette_color(n) : s.color);
@@ -151,10 +165,12 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
     staircase(s, s.y, x, y);
     std::vector<Polyline> pieces(1);
     std::string zero_note;
+    double last_value = NAN;  // the value of the last point drawn
     for (std::size_t k = 0; k < x.size(); ++k) {
       const Point p{ax.scale(x[k]), y_pixel(y[k])};
       if (std::isfinite(p.x) && std::isfinite(p.y)) {
         pieces.back().push_back(p);
+        last_value = y[k];
         if (options.log_y && y[k] <= 0 && zero_note.empty()) {
           zero_note = (y[k] == 0 ? " (0 from " : " (≤ 0 from ") + short_number(x[k]) + " ▼)";
           notes += down_triangle(p, color);
@@ -175,11 +191,16 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
         occupied.mark_segment({ax.scale(band_x[k]), sy(low[k])}, {ax.scale(band_x[k]), sy(high[k])});
       }
     }
+    // A series that retraces an earlier one gets its own dashes, so that both stay visible.
+    const int retraced = plot::retraces(pieces, drawn);
+    drawn.push_back(pieces);
+    const std::string dashes =
+        retraced > 0 ? plot::dash_pattern(retraced) : s.dashed ? plot::dash_pattern(0) : "";
     content += svg::path(plot::line_path(pieces, bounds),
                          "fill=\"none\" stroke=\"" + color +
                              "\" stroke-width=\"1.8\" stroke-linejoin=\"round\" "
                              "stroke-linecap=\"round\"" +
-                             (s.dashed ? " stroke-dasharray=\"6 4\"" : ""));
+                             (dashes.empty() ? "" : " stroke-dasharray=\"" + dashes + "\""));
     if (s.markers) {
       const std::vector<Polyline> points = plot::to_pixels(s.x, s.y, ax.scale, sy, false);
       const std::size_t count = points.empty() ? 0 : points.front().size();
@@ -197,11 +218,16 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
       while (last > 0 && !std::isfinite(s.y[last - 1])) --last;
       end = last > 0 ? "not finite after x = " + short_number(s.x[last - 1]) : "";
     }
+    // A series whose end lies off the scale (above or below the frame) ends in an arrow at
+    // the frame's edge with its value, never on the curves inside.
+    const bool off_scale =
+        !pieces.empty() && (pieces.back().back().y < box.top || pieces.back().back().y > box.bottom);
+    if (off_scale) end = (end.empty() ? "" : end + ", ") + "ends off scale at " + short_number(last_value);
     if (!end.empty() && !pieces.empty()) {
       const Point last = pieces.back().back();
       Point at{std::clamp(last.x, box.left + 5, box.right - 5),
                std::clamp(last.y, box.top + 5, box.bottom - 5)};
-      notes += cross(at, color);
+      notes += off_scale ? edge_arrow(at, last.y < box.top, color) : cross(at, color);
       const double w = svg::text_width(end);
       const bool left_side = at.x > (box.left + box.right) / 2;
       double lx = left_side ? at.x - 8 - w : at.x + 8;
@@ -219,7 +245,7 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
                          "fill=\"" + color +
                              "\" stroke=\"white\" stroke-width=\"3\" paint-order=\"stroke\"");
     }
-    entries.push_back({s.label.empty() ? "" : s.label + zero_note, color, true, s.dashed,
+    entries.push_back({s.label.empty() ? "" : s.label + zero_note, color, true, dashes,
                        s.markers, has_band(s)});
   }
   const plot::LegendLayout legend =

@@ -187,6 +187,20 @@ std::string grid_lines(const svg::Box& b, const Axis& ax, const Axis& ay) {
   return svg::path(d, "stroke=\"#e3e3e3\" fill=\"none\"");
 }
 
+double widest_label(const Axis& axis) {
+  double widest = 0;
+  for (const Tick& t : axis.ticks) widest = std::max(widest, svg::text_width(t.label));
+  return widest;
+}
+
+// Tick labels end 8 px left of the frame; a y axis label is 12 px high, centred 16 px left of
+// the labels, so that it needs 34 px beside them.
+double left_margin(const Axis& ay, bool has_y_label) {
+  return widest_label(ay) + (has_y_label ? 34 : 16);
+}
+
+double top_margin(bool has_title) { return has_title ? 36 : 16; }
+
 std::string axes(int width, const svg::Box& b, const Axis& ax, const Axis& ay,
                  const AxisTitles& titles) {
   std::string out = svg::rect(b, "fill=\"none\" stroke=\"#333\"");
@@ -197,15 +211,11 @@ std::string axes(int width, const svg::Box& b, const Axis& ax, const Axis& ay,
     marks += std::string("M") + num(x) + " " + num(b.bottom) + "v" + (t.label.empty() ? "3" : "5");
     if (!t.label.empty()) labels += svg::text(x, b.bottom + 18, t.label, "text-anchor=\"middle\"");
   }
-  double widest = 0;
   for (const Tick& t : ay.ticks) {
     const double y = ay.scale(t.value);
     if (!(y >= b.top - 0.5 && y <= b.bottom + 0.5)) continue;
     marks += std::string("M") + num(b.left) + " " + num(y) + "h" + (t.label.empty() ? "-3" : "-5");
-    if (!t.label.empty()) {
-      labels += svg::text(b.left - 8, y + 4, t.label, "text-anchor=\"end\"");
-      widest = std::max(widest, svg::text_width(t.label));
-    }
+    if (!t.label.empty()) labels += svg::text(b.left - 8, y + 4, t.label, "text-anchor=\"end\"");
   }
   out += svg::path(marks, "stroke=\"#333\" fill=\"none\"");
   out += "<g fill=\"#333\">\n" + labels + "</g>\n";
@@ -218,7 +228,7 @@ std::string axes(int width, const svg::Box& b, const Axis& ax, const Axis& ay,
                      "text-anchor=\"middle\"");
   }
   if (!titles.y_label.empty()) {
-    const double x = std::max(14.0, b.left - 16 - widest);
+    const double x = std::max(14.0, b.left - 16 - widest_label(ay));
     out += "<text transform=\"translate(" + num(x) + " " + num((b.top + b.bottom) / 2) +
            ") rotate(-90)\" text-anchor=\"middle\">" + xml_escape(titles.y_label) + "</text>\n";
   }

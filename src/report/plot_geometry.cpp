@@ -163,4 +163,33 @@ std::string band_path(const std::vector<double>& x, const std::vector<double>& l
   return d + "Z";
 }
 
+namespace {
+
+bool coincide(const std::vector<Polyline>& a, const std::vector<Polyline>& b) {
+  if (a.size() != b.size() || a.empty()) return false;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    if (a[k].size() != b[k].size()) return false;
+    for (std::size_t i = 0; i < a[k].size(); ++i) {
+      if (std::abs(a[k][i].x - b[k][i].x) > 0.5 || std::abs(a[k][i].y - b[k][i].y) > 0.5) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+int retraces(const std::vector<Polyline>& pieces,
+             const std::vector<std::vector<Polyline>>& earlier) {
+  int count = 0;
+  for (const auto& other : earlier) count += coincide(pieces, other) ? 1 : 0;
+  return count;
+}
+
+std::string dash_pattern(int k) {
+  static const char* const patterns[] = {"6 4", "2 3", "9 3 2 3", "1 4", "12 4"};
+  return patterns[static_cast<std::size_t>(k) % std::size(patterns)];
+}
+
 }  // namespace physgrad::plot

@@ -74,7 +74,7 @@ std::string entry_svg(const LegendEntry& e, double x, double y) {
   if (e.line) {
     out += svg::path(std::string("M") + num(x) + " " + num(y) + "h" + num(kSwatch),
                      "stroke=\"" + color + "\" stroke-width=\"2\"" +
-                         (e.dashed ? " stroke-dasharray=\"6 4\"" : ""));
+                         (e.dashes.empty() ? "" : " stroke-dasharray=\"" + e.dashes + "\""));
   }
   if (e.dot || !e.line) {
     out += "<circle cx=\"" + num(x + kSwatch / 2) + "\" cy=\"" + num(y) + "\" r=\"" +

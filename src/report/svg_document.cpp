@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 
+#include "physgrad/error.hpp"
 #include "physgrad/io/hash.hpp"
 
 namespace physgrad::svg {
@@ -59,6 +60,30 @@ std::string open(int width, int height) {
          "\" font-family=\"Helvetica, Arial, sans-serif\" font-size=\"12\">\n"
          "<rect width=\"" +
          w + "\" height=\"" + h + "\" fill=\"white\"/>\n";
+}
+
+std::string side_by_side(const std::vector<std::string>& documents, int gap) {
+  std::string body;
+  int width = 0, height = 0;
+  for (const std::string& document : documents) {
+    // open() writes the size first and the white background right after the opening tag.
+    int w = 0, h = 0;
+    const std::size_t tag_end = document.find(">\n");
+    const std::size_t background = document.find("/>\n", tag_end);
+    const std::size_t close = document.rfind("</svg>");
+    if (document.rfind("<svg ", 0) != 0 || tag_end == std::string::npos ||
+        background == std::string::npos || close == std::string::npos ||
+        std::sscanf(document.c_str(), "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" "
+                                      "height=\"%d\"", &w, &h) != 2) {
+      throw Error("side_by_side: a figure is not an SVG document of svg::open()");
+    }
+    if (width > 0) width += gap;
+    body += "<g transform=\"translate(" + std::to_string(width) + " 0)\">\n" +
+            document.substr(background + 3, close - background - 3) + "</g>\n";
+    width += w;
+    height = std::max(height, h);
+  }
+  return open(width, height) + body + "</svg>\n";
 }
 
 std::string clipped(const Box& b, const std::string& content) {

@@ -152,7 +152,8 @@ std::string step_size_text(const RuleSetup& rule) {
 
 std::string loss_curves_svg(const std::vector<DirectResult>& results, const std::string& title,
                             const std::string& x_label,
-                            const std::function<double(std::size_t, std::size_t)>& x_of) {
+                            const std::function<double(std::size_t, std::size_t)>& x_of,
+                            bool log_x) {
   std::vector<Series> series;
   for (std::size_t r = 0; r < results.size(); ++r) {
     const DirectResult& result = results[r];
@@ -165,6 +166,7 @@ std::string loss_curves_svg(const std::vector<DirectResult>& results, const std:
       line.y.push_back(history[k].loss);
     }
     line.markers = line.x.size() <= 40;
+    line.steps = static_cast<bool>(x_of);
     // Dashed: PG through a numerical local inverse (solid: analytic or time-reversal inverse).
     const std::string inverse = result.rule.extra_params.value("inverse", std::string());
     line.dashed = !inverse.empty() && inverse != "analytic" && inverse != "time_reversal";
@@ -183,6 +185,7 @@ std::string loss_curves_svg(const std::vector<DirectResult>& results, const std:
   options.x_label = x_label;
   options.y_label = "loss";
   options.log_y = true;
+  options.log_x = log_x;
   return line_plot_svg(series, options);
 }
 

@@ -231,6 +231,11 @@ void RunContext::progress(const std::string& line) {
   if (show_progress_) show_progress_(line);
 }
 
+void RunContext::progress_event(const std::string& line) {
+  finish_progress();
+  if (show_event_) show_event_(line);
+}
+
 void RunContext::finish_progress() {
   if (end_progress_) end_progress_();
 }

@@ -66,6 +66,14 @@ void LearningSweep::add_metric_figure(RunContext& context,
                                       const std::string& y_label,
                                       const std::function<double(const TrainingRecord&)>& value,
                                       Progress progress, bool log_y) {
+  context.add_figure(metric_figure(groups, file, title, y_label, value, progress, log_y));
+}
+
+RunContext::Figure LearningSweep::metric_figure(
+    const std::vector<std::vector<const LearningResult*>>& groups, const std::string& file,
+    const std::string& title, const std::string& y_label,
+    const std::function<double(const TrainingRecord&)>& value, Progress progress, bool log_y,
+    std::optional<std::pair<double, double>> y_range) {
   std::vector<Series> series;
   bool several_seeds = false;
   for (const auto& group : groups) {
@@ -110,6 +118,7 @@ void LearningSweep::add_metric_figure(RunContext& context,
                                                    : "iteration";
   options.y_label = y_label;
   options.log_y = log_y;
+  options.y_range = y_range;
   // Rules that run for one time budget can end hundreds of iterations apart (HIG's step costs
   // what hundreds of Adam steps do): a log x axis keeps the shorter runs visible. Runs that
   // stopped or diverged (an end label) do not count.
@@ -128,7 +137,8 @@ void LearningSweep::add_metric_figure(RunContext& context,
                            format_value(shortest) + " to " + format_value(longest) + " " +
                            options.x_label + "s in the same budget."
                      : "");
-  context.add_figure({file, caption, line_plot_svg(series, options)});
+  return {file, caption, line_plot_svg(series, options),
+          groups.empty() ? std::string() : groups.front().front()->tag};
 }
 
 void LearningSweep::add_loss_figures(RunContext& context, const std::string& tag,
@@ -147,6 +157,52 @@ void LearningSweep::add_loss_figures(RunContext& context, const std::string& tag
                           " (" + tag + ")",
                       loss_label, test_loss, progress);
   }
+}
+
+std::vector<LearningSweep::RuleValue> LearningSweep::final_medians(
+    const std::string& tag, const std::function<double(const TrainingRecord&)>& value) const {
+  std::vector<RuleValue> out;
+  for (const auto& group : rule_groups(tag)) {
+    std::vector<double> finals;
+    for (const LearningResult* run : group) {
+      const double v = value(run->summary.history.back());
+      finals.push_back(std::isfinite(v) ? v : NAN);
+    }
+    out.push_back({rule_label(group.front()->id), median(finals)});
+  }
+  return out;
+}
+
+void LearningSweep::set_time_message(const std::string& tag, const std::string& file_tag,
+                                     const std::string& what) const {
+  const std::string sentence = lowest_value_sentence(
+      final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }), what);
+  context_.set_message("loss_vs_time_" + file_tag + ".svg",
+                       sentence.substr(0, sentence.size() - 1) + ", after the same budget.");
+}
+
+std::string lowest_value_sentence(const std::vector<LearningSweep::RuleValue>& values,
+                                  const std::string& what) {
+  std::vector<LearningSweep::RuleValue> finite;
+  for (const auto& v : values) {
+    if (std::isfinite(v.value)) finite.push_back(v);
+  }
+  std::sort(finite.begin(), finite.end(),
+            [](const auto& a, const auto& b) { return a.value < b.value; });
+  if (finite.empty()) return "No rule ended with a finite " + what + ".";
+  const auto& best = finite.front();
+  std::string out = best.label + "'s " + what;
+  if (finite.size() == 1) {
+    out += " is " + format_value(best.value);
+    for (const auto& v : values) {
+      if (!std::isfinite(v.value)) out += "; " + v.label + "'s is not finite";
+    }
+    return out + ".";
+  }
+  const auto& next = finite[1];
+  const std::string ratio = best.value > 0 ? format_value(next.value / best.value) : "∞";
+  return out + " is " + ratio + "× below " + next.label + "'s (" + format_value(best.value) +
+         " vs " + format_value(next.value) + ").";
 }
 
 void LearningSweep::add_tables() const {
@@ -180,7 +236,8 @@ void LearningSweep::add_tables() const {
       losses.header.push_back("seed " + std::to_string(seed));
       saturation.header.push_back("seed " + std::to_string(seed));
     }
-    losses.header.insert(losses.header.end(), {"median", "worst"});
+    losses.header.insert(losses.header.end(), {"median", "worst", "median / lowest"});
+    std::vector<double> medians;
     for (const std::string& id : ids) {
       std::vector<std::string> row = {rule_label(id)}, saturated = {rule_label(id)};
       std::vector<double> values;
@@ -199,12 +256,25 @@ void LearningSweep::add_tables() const {
           saturated.push_back(format_value(r->summary.history.back().extras["saturated_fraction"]));
         }
       }
-      row.push_back(format_value(median(values)));
+      medians.push_back(median(values));
+      row.push_back(format_value(medians.back()));
       row.push_back(values.empty() ? "–"
                                    : format_value(*std::max_element(values.begin(), values.end())));
       losses.rows.push_back(std::move(row));
       saturation.rows.push_back(std::move(saturated));
     }
+    // The winner: the lowest finite median, and every other rule's median as a multiple of it.
+    double lowest = INFINITY;
+    for (const double m : medians) {
+      if (std::isfinite(m)) lowest = std::min(lowest, m);
+    }
+    for (std::size_t k = 0; k < losses.rows.size(); ++k) {
+      losses.rows[k].push_back(!std::isfinite(medians[k]) ? "–"
+                               : medians[k] == lowest     ? "best"
+                                                          : "×" + format_value(medians[k] / lowest));
+    }
+    losses.title += "; the last column marks the lowest median (best) and gives the others as "
+                    "multiples of it";
     context_.add_table(std::move(losses));
     if (has_saturation) context_.add_table(std::move(saturation));
   }

@@ -1,6 +1,7 @@
 #include "physgrad/run/learning_runs.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <new>
 
@@ -17,6 +18,54 @@ namespace {
 
 // Evaluations by time in a run limited by --time alone: this many over the budget.
 constexpr double kEvaluationsOverTime = 40;
+
+// What a run limited by --time takes in wall time, evaluations included, as a multiple of its
+// budget: the range measured over the learning experiments' default runs.
+constexpr double kWallPerBudgetLow = 1.2, kWallPerBudgetHigh = 1.55;
+
+double steady_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+// "45 s", "3 min 20 s", "1 h 5 min".
+std::string duration_text(double seconds) {
+  const auto s = static_cast<long long>(std::llround(std::max(0.0, seconds)));
+  if (s < 60) return std::to_string(s) + " s";
+  if (s < 3600) return std::to_string(s / 60) + " min " + std::to_string(s % 60) + " s";
+  return std::to_string(s / 3600) + " h " + std::to_string(s % 3600 / 60) + " min";
+}
+
+// How much of a run is done, 0 to 1, by the limits it has (the furthest of them).
+double run_fraction(const TrainerOptions& options, const TrainingRecord& r) {
+  double f = 0;
+  if (options.time_budget_seconds) f = std::max(f, r.train_seconds / *options.time_budget_seconds);
+  if (options.max_iterations) {
+    f = std::max(f, static_cast<double>(r.iteration) / static_cast<double>(*options.max_iterations));
+  }
+  if (options.max_epochs) f = std::max(f, r.epoch / static_cast<double>(*options.max_epochs));
+  return std::clamp(f, 0.0, 1.0);
+}
+
+// "run 7/15" (or "run 7" while the count is not known).
+std::string run_number(const RunContext::RunPlan& plan) {
+  return "run " + std::to_string(plan.finished + 1) +
+         (plan.runs > 0 ? "/" + std::to_string(plan.runs) : "");
+}
+
+// "12 s elapsed, about 3 min 40 s left": the time left extrapolates the wall time per run so far
+// (evaluations included) over the runs still to come; `fraction` is the current run's part done.
+std::string time_left(const RunContext::RunPlan& plan, double fraction) {
+  const double elapsed = steady_seconds() - plan.started;
+  const double done = static_cast<double>(plan.finished) + fraction;
+  std::string out = duration_text(elapsed) + " elapsed";
+  if (plan.runs > 0 && done > 0.02) {
+    out += ", about " +
+           duration_text(elapsed / done * std::max(0.0, static_cast<double>(plan.runs) - done)) +
+           " left";
+  }
+  return out;
+}
 
 // Refuses the history of a run read from a checkpoint unless this experiment could have written
 // it: no more iterations than the run's limit (and than 2⁵³), every test loss finite when the
@@ -56,7 +105,35 @@ void check_saved_history(const RunKey& key, const TrainingSummary& summary, cons
 
 LearningSweep::LearningSweep(const Settings& settings, RunContext& context,
                              std::map<std::string, RuleDefaults> defaults)
-    : settings_(settings), context_(context), defaults_(std::move(defaults)) {}
+    : settings_(settings), context_(context), defaults_(std::move(defaults)) {
+  // The first sweep of the experiment plans its runs: seeds × every list setting (the rules and
+  // sweeps such as ξ or λ); without --optimizers the experiment gives its rule count.
+  RunContext::RunPlan& plan = context_.run_plan();
+  if (plan.started >= 0) return;
+  plan.started = steady_seconds();
+  if (settings_.has("optimizers")) plan_runs(settings_.texts("optimizers").size());
+}
+
+void LearningSweep::plan_runs(std::size_t rules) {
+  RunContext::RunPlan& plan = context_.run_plan();
+  if (plan.runs > 0) return;
+  long long runs = settings_.has("seeds") ? settings_.integer("seeds") : 1;
+  for (const auto& [name, value] : settings_.json().items()) {
+    if (value.is_array() && name != "optimizers") runs *= static_cast<long long>(value.size());
+  }
+  plan.runs = runs * static_cast<long long>(rules);
+  std::string line = context_.experiment_name() + ": " + std::to_string(plan.runs) +
+                     (plan.runs == 1 ? " run" : " runs") + " (rules × settings × seeds)";
+  if (settings_.has("time")) {
+    const double budget = settings_.real("time") * static_cast<double>(plan.runs);
+    line += ", " + format_value(settings_.real("time")) +
+            " s of training each: about " + duration_text(kWallPerBudgetLow * budget) + " to " +
+            duration_text(kWallPerBudgetHigh * budget) + " with the evaluations";
+  } else {
+    line += "; the time left shows once training starts";
+  }
+  plan.announcement = line;
+}
 
 const LearningResult& LearningSweep::run(const std::string& id, const std::string& tag,
                                          const nlohmann::json& params, Mlp& network,
@@ -96,14 +173,33 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
       observe(network, record);
     };
   }
+  RunContext::RunPlan& plan = context_.run_plan();
+  const std::string name = context_.experiment_name() + ": " + run_number(plan) + ", ";
+  const std::string budget =
+      options.time_budget_seconds ? " of " + format_value(*options.time_budget_seconds) : "";
+  bool trained_now = false;  // a run taken whole from the checkpoint reports nothing
   options.on_progress = [&](const TrainingRecord& r) {
-    context_.progress(context_.experiment_name() + ": " + result.label + " seed " +
-                      std::to_string(result.seed) + ", iteration " +
-                      std::to_string(r.iteration) + ", test loss " + format_value(r.test_loss));
+    trained_now = true;
+    if (!plan.announcement.empty()) {
+      context_.progress_event(plan.announcement);
+      plan.announcement.clear();
+    }
+    context_.progress(name + result.label + " seed " + std::to_string(result.seed) +
+                      ", iteration " + std::to_string(r.iteration) + ", test loss " +
+                      format_value(r.test_loss) + " · " + format_value(r.train_seconds) +
+                      budget + " s · " + time_left(plan, run_fraction(options, r)));
   };
   result.summary = train_or_resume(RunKey{context_.next_learning_run(), id, tag, result.seed},
                                    network, *update, problem, train_set, test_set, options);
-  context_.finish_progress();
+  ++plan.finished;
+  const TrainingRecord& last = result.summary.history.back();
+  if (trained_now) {
+    context_.progress_event(name + result.label + " seed " + std::to_string(result.seed) +
+                            " finished: " + std::to_string(result.summary.iterations) +
+                            " iterations in " + format_value(result.summary.train_seconds) +
+                            " s of training, test loss " + format_value(last.test_loss) + " · " +
+                            time_left(plan, 0));
+  }
   context_.add_network({{"label", result.label},
                         {"seed", result.seed},
                         {"widths", network.widths()},

@@ -53,6 +53,15 @@ std::string format_number(const nlohmann::json& value) {
 std::string report_page_html(const Experiment& experiment, const Settings& settings,
                              const RunContext& context, const std::string& command_line) {
   std::vector<HtmlSection> sections;
+  // The message figure first, in a section of its own, with its sentence under it.
+  HtmlSection message{"", "", {}, {}}, figures{"Figures", "", {}, {}};
+  for (const RunContext::Figure& figure : context.figures()) {
+    const bool is_message = figure.file == context.message_figure();
+    (is_message ? message : figures)
+        .figures.push_back({figure.caption, figure.svg, figure.file,
+                            is_message ? context.message() : std::string(), figure.row});
+  }
+  if (!message.figures.empty()) sections.push_back(std::move(message));
   HtmlSection results{"Results",
                       is_learning(context)
                           ? "Losses in these tables are measured on the test set (samples not "
@@ -67,11 +76,7 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
   for (const std::string& note : context.notes()) results.text += note + "\n\n";
   sections.push_back(std::move(results));
 
-  HtmlSection figures{"Figures", "", {}, {}};
-  for (const RunContext::Figure& figure : context.figures()) {
-    figures.figures.push_back({figure.caption, figure.svg, figure.file});
-  }
-  sections.push_back(std::move(figures));
+  if (!figures.figures.empty()) sections.push_back(std::move(figures));
   sections.push_back({"Every run", "metrics.csv in this folder has every evaluation of every run.",
                       {runs_table(context)}, {}});
   sections.push_back({"Settings", "Command: " + command_line + "\n\n" + settings.json().dump(),

@@ -89,7 +89,7 @@ RunOutcome run_in(const Experiment& experiment, const Settings& settings,
     context.set_stop_flag(&stop_flag());
     context.set_checkpoint(&checkpoint);
     context.set_communicator(communicator);
-    if (writer) context.set_progress(hooks.progress, hooks.progress_end);
+    if (writer) context.set_progress(hooks.progress, hooks.progress_end, hooks.progress_event);
     experiment.run(settings, context);
     outcome.finished = true;
     outcome.summary = summary_document(experiment, context);

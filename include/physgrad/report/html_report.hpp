@@ -1,6 +1,7 @@
 // html_report — one self-contained HTML5 page of sections with text, captioned tables and inline
 // SVG figures; no external resources and no script. Readable down to phone widths: wide tables
-// scroll in their own box and figures scale to the page. Every text goes through xml_escape and
+// scroll in their own box, and figures scale to the page down to the width at which their
+// smallest text is 11 px, below which they scroll in their own box too. Every text goes through xml_escape and
 // every link through local_href.
 #pragma once
 
@@ -23,6 +24,10 @@ struct HtmlFigure {
   std::string caption;
   std::string svg;  // an SVG document, embedded as is
   std::string id{};  // the figure element's id (an anchor), e.g. its file name; empty: none
+  std::string message{};  // the point the figure makes, in one sentence, shown above the caption
+  // Consecutive figures of one row key share a row (e.g. one setting's landscape beside its loss
+  // plot), wrapping only when the page is too narrow; a new key starts a new row.
+  std::string row{};
 };
 
 struct HtmlSection {

@@ -35,6 +35,9 @@ struct LinePlotOptions {
   int width = 640, height = 420;
   // The x axis spans exactly this range (e.g. [0, T]); unset: the data's, widened to nice values.
   std::optional<std::pair<double, double>> x_range{};
+  // The y axis is fitted to this range (widened to nice values) in place of the data's, e.g. to
+  // share one axis between figures side by side; unset: the data's.
+  std::optional<std::pair<double, double>> y_range{};
 };
 
 // Non-finite points are skipped and break the line. On a log y axis a value ≤ 0 is drawn on the

@@ -44,6 +44,14 @@ Axis fixed_axis(double lo, double hi, bool log, double p0, double p1);
 // "0.25", "1e-06", "2e+05": the shortest label for a tick at v among ticks `step` apart.
 std::string tick_label(double v, double step);
 
+// The plot frame layout every figure uses: the width of an axis' widest tick label, and the
+// room left of a plot box (the y tick labels, and the rotated y axis label when there is one),
+// above it (the title when there is one) and below it (x tick labels and the x axis label).
+double widest_label(const Axis& axis);
+double left_margin(const Axis& ay, bool has_y_label);
+double top_margin(bool has_title);
+inline constexpr double kBottomMargin = 52;
+
 // Light grid lines at the labelled ticks inside the box.
 std::string grid_lines(const svg::Box& box, const Axis& ax, const Axis& ay);
 

@@ -38,6 +38,14 @@ std::string band_path(const std::vector<double>& x, const std::vector<double>& l
                       const std::vector<double>& high, const Scale& sx, const Scale& sy,
                       const Box& bounds);
 
+// How many of the earlier series `pieces` retraces (0: none). Two series coincide when they
+// have as many points and each lies within half a pixel of the other's.
+int retraces(const std::vector<Polyline>& pieces,
+             const std::vector<std::vector<Polyline>>& earlier);
+// The stroke-dasharray of the k-th dash pattern: k = 0 the usual dashes of a dashed series,
+// k ≥ 1 the patterns of series that retrace k earlier ones ("2 3", "9 3 2 3", …).
+std::string dash_pattern(int k);
+
 // The box grown by a few pixels: geometry is cut to it, so that every coordinate stays inside
 // the figure, and a clip path trims it to the box.
 Box bounds_of(const Box& b);

@@ -13,7 +13,7 @@ struct LegendEntry {
   std::string label;  // entries with an empty label are not shown
   std::string color;  // any SVG colour
   bool line = true;   // a line swatch (else only the dot or symbol)
-  bool dashed = false;
+  std::string dashes{};  // the line's stroke-dasharray; empty: solid
   bool dot = false;   // a dot on the swatch (markers at data points)
   bool band = false;  // a shaded patch behind the swatch (a min–max band)
 };

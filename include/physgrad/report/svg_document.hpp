@@ -43,6 +43,10 @@ std::string dot(const Point& p);
 // The document's opening tag (width × height, viewBox from 0) with a white background; close
 // it with "</svg>\n".
 std::string open(int width, int height);
+// Documents of open() placed side by side, tops aligned, `gap` pixels apart, as one document.
+// Throws Error for a text that is not such a document.
+std::string side_by_side(const std::vector<std::string>& documents, int gap = 12);
+
 // `content` clipped to the box. The clip path's id derives from what it clips, so figures
 // embedded side by side in one HTML page do not pick up each other's clip paths.
 std::string clipped(const Box& b, const std::string& content);

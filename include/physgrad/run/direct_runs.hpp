@@ -69,11 +69,13 @@ std::string iterations_cell(const DirectResult& result);
 std::string step_size_text(const RuleSetup& rule);
 
 // Loss (log y) of several runs against the iteration, or against x_of(run, iterate) (a NaN
-// ends that run's curve); a diverged run is marked at its end and does not set the axis range,
-// PG through a numerical local inverse is dashed.
+// ends that run's curve; the loss is drawn as steps, held until the next iterate, since the
+// work between two iterates changes no iterate); a diverged run is marked at its end and does
+// not set the axis range, PG through a numerical local inverse is dashed.
 std::string loss_curves_svg(const std::vector<DirectResult>& results, const std::string& title,
                             const std::string& x_label = "iteration",
-                            const std::function<double(std::size_t, std::size_t)>& x_of = {});
+                            const std::function<double(std::size_t, std::size_t)>& x_of = {},
+                            bool log_x = false);
 
 // Samples f on an n×n grid over [x_min, x_max]×[y_min, y_max].
 Grid2D sample_grid(const std::function<double(double, double)>& f, double x_min, double x_max,

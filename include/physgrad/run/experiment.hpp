@@ -96,6 +96,8 @@ class RunContext {
     std::string file;  // e.g. "loss.svg"
     std::string caption;
     std::string svg;
+    // Consecutive figures of one row (e.g. one setting's) share a row of the report.
+    std::string row{};
   };
   struct Table {
     std::string title;
@@ -111,12 +113,31 @@ class RunContext {
   void add_figure(Figure figure) { figures_.push_back(std::move(figure)); }
   void add_table(Table table) { tables_.push_back(std::move(table)); }
   void add_note(std::string text) { notes_.push_back(std::move(text)); }
+  // The experiment's point: the figure that shows it (a file of add_figure) and one sentence
+  // with the ratio it measures. report.html shows this figure first, the sentence under it.
+  void set_message(std::string figure_file, std::string sentence) {
+    message_figure_ = std::move(figure_file);
+    message_ = std::move(sentence);
+  }
+  const std::string& message_figure() const { return message_figure_; }
+  const std::string& message() const { return message_; }
   // A trained network {"label", "seed", "widths", "parameters"} for networks.json.
   void add_network(nlohmann::json network) { networks_.push_back(std::move(network)); }
   // A progress line, handed to the function set_progress() gave (none: the run is silent).
   void progress(const std::string& line);
   // The progress lines of one sweep have ended.
   void finish_progress();
+  // A line that stays (a run started or finished), handed to set_progress()'s `event`.
+  void progress_event(const std::string& line);
+  // The learning runs of the whole experiment, however many sweeps make them: how many are
+  // planned (0: not known yet), how many finished, and when the first started (steady-clock
+  // seconds; negative before).
+  struct RunPlan {
+    long long runs = 0, finished = 0;
+    double started = -1;
+    std::string announcement;  // the start line, printed when the first run starts training
+  };
+  RunPlan& run_plan() { return run_plan_; }
 
   const std::vector<nlohmann::json>& metrics() const { return metrics_; }
   const std::vector<nlohmann::json>& runs() const { return runs_; }
@@ -124,10 +145,13 @@ class RunContext {
   const std::vector<Table>& tables() const { return tables_; }
   const std::vector<std::string>& notes() const { return notes_; }
   const std::vector<nlohmann::json>& networks() const { return networks_; }
-  // Where progress lines go: `show` gets each line, `end` is told when a sweep's lines end.
-  void set_progress(std::function<void(const std::string&)> show, std::function<void()> end) {
+  // Where progress lines go: `show` gets each line, `end` is told when a sweep's lines end,
+  // `event` gets the lines that stay (none of them: the run is silent).
+  void set_progress(std::function<void(const std::string&)> show, std::function<void()> end,
+                    std::function<void(const std::string&)> event) {
     show_progress_ = std::move(show);
     end_progress_ = std::move(end);
+    show_event_ = std::move(event);
   }
   void set_experiment_name(std::string name) { experiment_name_ = std::move(name); }
   const std::string& experiment_name() const { return experiment_name_; }
@@ -155,6 +179,7 @@ class RunContext {
   std::vector<Figure> figures_;
   std::vector<Table> tables_;
   std::vector<std::string> notes_;
+  std::string message_figure_, message_;
   std::vector<nlohmann::json> networks_;
   std::string experiment_name_;
   const std::atomic<bool>* stop_ = nullptr;
@@ -163,6 +188,8 @@ class RunContext {
   std::shared_ptr<Communicator> communicator_;
   std::function<void(const std::string&)> show_progress_;
   std::function<void()> end_progress_;
+  std::function<void(const std::string&)> show_event_;
+  RunPlan run_plan_;
 };
 
 class Experiment {

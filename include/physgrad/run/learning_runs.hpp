@@ -47,6 +47,10 @@ class LearningSweep {
   LearningSweep(const Settings& settings, RunContext& context,
                 std::map<std::string, RuleDefaults> defaults);
 
+  // The number of rules the experiment runs when --optimizers is not given (it chose them):
+  // the run count the progress lines plan with. The first call counts.
+  void plan_runs(std::size_t rules);
+
   // Trains `network` with rule `id` and records it; `params` (e.g. {"lambda", "seed"}) are
   // added to the summary entry and to every metrics row.
   const LearningResult& run(const std::string& id, const std::string& tag,
@@ -71,10 +75,29 @@ class LearningSweep {
                                 const std::string& y_label,
                                 const std::function<double(const TrainingRecord&)>& value,
                                 Progress progress = Progress::kTime, bool log_y = true);
+  // That figure, not added; with `y_range`, its y axis is fitted to that range (figures side by
+  // side sharing one axis).
+  static RunContext::Figure metric_figure(
+      const std::vector<std::vector<const LearningResult*>>& groups, const std::string& file,
+      const std::string& title, const std::string& y_label,
+      const std::function<double(const TrainingRecord&)>& value, Progress progress, bool log_y,
+      std::optional<std::pair<double, double>> y_range = std::nullopt);
   // Test loss vs iteration (or epoch) and vs training time of every rule's runs for `tag`.
   void add_loss_figures(RunContext& context, const std::string& tag, const std::string& file_tag,
                         bool by_epoch = false,
                         const std::string& loss_label = "mean test loss") const;
+  // Per rule for `tag`, in the order they ran: its label and the median over its seeds of
+  // `value` at the last evaluation.
+  struct RuleValue {
+    std::string label;
+    double value;
+  };
+  std::vector<RuleValue> final_medians(
+      const std::string& tag, const std::function<double(const TrainingRecord&)>& value) const;
+  // Makes the test loss vs training time figure of `tag` (add_loss_figures) the message: which
+  // rule's median final `what` is lowest within the same budget, and by how much.
+  void set_time_message(const std::string& tag, const std::string& file_tag,
+                        const std::string& what = "final test loss") const;
   // Per setting: final test loss per seed with median and worst; the saturated-neuron
   // fraction when recorded; the time split per step of every rule.
   void add_tables() const;
@@ -92,5 +115,11 @@ class LearningSweep {
   std::map<std::string, RuleDefaults> defaults_;
   std::deque<LearningResult> results_;  // stable addresses
 };
+
+// One sentence naming the rule with the lowest finite value and the ratio to the next:
+// "HIG's <what> is 191× below Adam's (0.000596 vs 0.114)" (no second finite value: "HIG's
+// <what> is 0.000596; Adam's is not finite").
+std::string lowest_value_sentence(const std::vector<LearningSweep::RuleValue>& values,
+                                  const std::string& what);
 
 }  // namespace physgrad::experiments

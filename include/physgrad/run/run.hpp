@@ -20,6 +20,8 @@ struct RunHooks {
   // Each progress line as it comes (often), and the end of a sweep's lines; none: silent.
   std::function<void(const std::string&)> progress;
   std::function<void()> progress_end;
+  // A progress line that stays: a run started or finished.
+  std::function<void(const std::string&)> progress_event;
   // A notice to the user: "warning: the checkpoint was written with …", "DIR has no checkpoint; …".
   std::function<void(const std::string&)> log;
   // The command recorded in config.json (Run::resume keeps the recorded one).
