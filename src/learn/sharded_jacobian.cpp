@@ -40,7 +40,7 @@ Vector ShardedJacobian::apply_transpose(const Vector& c) const {
                             shard_.gather_columns({gx}, network_->output_dim(), batch_).front());
 }
 
-StackedJacobian::Normal ShardedJacobian::normal(const Vector& g) const {
+JacobianOperator::Normal ShardedJacobian::normal(const Vector& g) const {
   const Index params = cols();
   if (!sums_normal_equations(batch_, outputs(), network_->output_dim(), params)) {
     return whole().normal(g);
