@@ -12,7 +12,7 @@
 #include <cmath>
 #include <vector>
 
-#include "physgrad/linalg/power_pinv.hpp"
+#include "physgrad/inversion/power_pinv.hpp"
 #include "physgrad/threads.hpp"
 #include "physgrad/train/trainer.hpp"
 #include "physgrad/run/registry.hpp"

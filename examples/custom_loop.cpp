@@ -7,10 +7,7 @@
 #include <vector>
 
 #include "pendulum.hpp"
-#include "physgrad/catalogue.hpp"
-#include "physgrad/loss/loss.hpp"
-#include "physgrad/nn/mlp.hpp"
-#include "physgrad/train/step.hpp"
+#include "physgrad/physgrad.hpp"
 
 int main() {
   using physgrad::Index;

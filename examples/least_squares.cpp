@@ -3,11 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "physgrad/autodiff/dual.hpp"
-#include "physgrad/catalogue.hpp"
-#include "physgrad/loss/loss.hpp"
-#include "physgrad/optim/minimize.hpp"
-#include "physgrad/optim/objective.hpp"
+#include "physgrad/physgrad.hpp"
 
 using physgrad::Index;
 using physgrad::Vector;

@@ -5,11 +5,7 @@
 #include <cstdio>
 #include <string>
 
-#include "physgrad/autodiff/dual.hpp"
-#include "physgrad/catalogue.hpp"
-#include "physgrad/loss/loss.hpp"
-#include "physgrad/optim/minimize.hpp"
-#include "physgrad/optim/objective.hpp"
+#include "physgrad/physgrad.hpp"
 
 using physgrad::Index;
 using physgrad::Vector;

@@ -8,9 +8,7 @@
 #include <sstream>
 #include <string>
 
-#include "physgrad/error.hpp"
-#include "physgrad/physics/simulator.hpp"
-#include "physgrad/train/dataset.hpp"
+#include "physgrad/physgrad.hpp"
 
 namespace example {
 

@@ -4,12 +4,7 @@
 #include <cstdio>
 
 #include "pendulum.hpp"
-#include "physgrad/autodiff/dual.hpp"
-#include "physgrad/autodiff/finite_difference.hpp"
-#include "physgrad/catalogue.hpp"
-#include "physgrad/loss/loss.hpp"
-#include "physgrad/nn/mlp.hpp"
-#include "physgrad/train/trainer.hpp"
+#include "physgrad/physgrad.hpp"
 
 namespace {
 

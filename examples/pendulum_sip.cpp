@@ -3,13 +3,7 @@
 #include <cstdio>
 
 #include "pendulum.hpp"
-#include "physgrad/autodiff/finite_difference.hpp"
-#include "physgrad/catalogue.hpp"
-#include "physgrad/linalg/power_pinv.hpp"
-#include "physgrad/loss/loss.hpp"
-#include "physgrad/nn/mlp.hpp"
-#include "physgrad/optim/local_inverse.hpp"
-#include "physgrad/train/trainer.hpp"
+#include "physgrad/physgrad.hpp"
 
 namespace {
 
@@ -44,7 +38,7 @@ int main() {
   const Vector u0 = Vector::Zero(config.steps), s0{{0.3, -0.2}}, y{{-0.4, 0.5}};
   const Vector own = pendulum.inverse(y, u0, s0);
   const physgrad::LocalInverseResult library = physgrad::local_inverse(
-      pendulum, y, u0, s0, {.method = physgrad::InverseMethod::kGaussNewton});
+      pendulum, y, u0, s0, {.method = physgrad::InverseMethod::kInverseGradient});
   std::printf("local inverse: residual %.1e, |u - u0| = %.3f, library gn inverse differs by %.1e\n",
               physgrad::inverse_residual(pendulum, y, u0, s0), (own - u0).norm(),
               (own - library.x).norm());

@@ -4,10 +4,7 @@
 #include <cstdio>
 
 #include "pendulum.hpp"
-#include "physgrad/autodiff/finite_difference.hpp"
-#include "physgrad/catalogue.hpp"
-#include "physgrad/loss/loss.hpp"
-#include "physgrad/train/trainer.hpp"
+#include "physgrad/physgrad.hpp"
 #include "residual_network.hpp"
 
 namespace {

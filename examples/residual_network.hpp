@@ -10,9 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "physgrad/error.hpp"
-#include "physgrad/nn/dense_layer_gram.hpp"
-#include "physgrad/nn/network.hpp"
+#include "physgrad/physgrad.hpp"
 
 namespace example {
 

@@ -35,7 +35,7 @@ class Comparison final : public Experiment {
     return {
         real_list_option("start", "3,3", "starting point x₀ (two values)").coordinates(),
         text_list_option("pg-inverse", "analytic,lbfgs", "local inverses PG runs with, one run each")
-            .one_of({"analytic", "lbfgs", "gn"}),
+            .one_of({"analytic", "lbfgs", "ig"}),
     };
   }
   std::vector<std::string> optimizer_choices() const override {

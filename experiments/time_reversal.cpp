@@ -63,14 +63,14 @@ constexpr double kCoordinateBytes = 170;
 
 // Samples in the widest simulator call of the selected rules on a state of `dim` values:
 // Newton's Hessian differences 2·dim VJPs, a Jacobian takes dim (gn, lm, ig, PG through the
-// Gauss-Newton inverse), every other rule one sample at a time.
+// inverse-gradient inverse), every other rule one sample at a time.
 double widest_batch(const Settings& settings, double dim) {
   double widest = 1;
   const std::vector<std::string> inverses = settings.texts("pg-inverse");
-  const bool pg_gn = std::find(inverses.begin(), inverses.end(), "gn") != inverses.end();
+  const bool pg_ig = std::find(inverses.begin(), inverses.end(), "ig") != inverses.end();
   for (const std::string& id : settings.texts("optimizers")) {
     if (id == "newton") widest = std::max(widest, 2 * dim);
-    if (id == "gn" || id == "lm" || id == "ig" || (id == "pg" && pg_gn)) {
+    if (id == "gn" || id == "lm" || id == "ig" || (id == "pg" && pg_ig)) {
       widest = std::max(widest, dim);
     }
   }
@@ -122,8 +122,8 @@ class TimeReversal final : public Experiment {
   std::vector<OptionSpec> options() const override {
     return {
         text_list_option("problems", "fpu,oscillators", "the simulations").one_of({"fpu", "oscillators"}),
-        text_list_option("pg-inverse", "time_reversal,lbfgs,gn", "local inverses PG runs with, one run each")
-            .one_of({"time_reversal", "lbfgs", "gn"}),
+        text_list_option("pg-inverse", "time_reversal,lbfgs,ig", "local inverses PG runs with, one run each")
+            .one_of({"time_reversal", "lbfgs", "ig"}),
         integer_option("masses", "8",
                        "masses N of the FPU chain (N·Nt at most 10⁹: a simulator pass of the "
                        "chain then takes about 30 s; checked against memory with the "

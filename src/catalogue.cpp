@@ -4,6 +4,7 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/learn/adam.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad {
 
@@ -48,12 +49,6 @@ void apply(Options& o, const RuleSettings& s) {
   if constexpr (requires { o.adam; }) apply(o.adam, s);  // sip's Adam on the proxy loss
 }
 
-std::string join(const std::vector<std::string>& items) {
-  std::string out;
-  for (const std::string& item : items) out += (out.empty() ? "" : ", ") + item;
-  return out;
-}
-
 // Thrown when a factory gets the options of a rule of the other kind.
 Error wrong_kind(const RuleOptions& options, Kind wanted) {
   std::vector<std::string> ids;
@@ -61,7 +56,7 @@ Error wrong_kind(const RuleOptions& options, Kind wanted) {
     if (rule.defaults.index() == options.index()) ids.push_back(rule.id);
   }
   return Error(std::string(wanted == Kind::kDirect ? "make_optimizer" : "make_learning_update") +
-               ": the options of " + join(ids) + " make no " +
+               ": the options of " + comma_list(ids) + " make no " +
                (wanted == Kind::kDirect ? "direct" : "learning") + " rule");
 }
 
@@ -114,8 +109,8 @@ const RuleInfo& find_rule(Kind kind, const std::string& id) {
   for (const RuleInfo& rule : rule_catalogue()) {
     if (rule.kind == kind && rule.id == id) return rule;
   }
-  throw Error("unknown " + std::string(kind == Kind::kDirect ? "optimizer" : "learning update") +
-              " '" + id + "' (known: " + join(rule_ids(kind)) + ")");
+  throw unknown_name_error(kind == Kind::kDirect ? "optimizer" : "learning update", id,
+                           rule_ids(kind));
 }
 
 RuleOptions with_settings(RuleOptions options, const RuleSettings& settings) {

@@ -146,6 +146,17 @@ std::string in_quotes(std::string_view value) {
   return text;
 }
 
+std::string report_number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
+std::string report_row(std::string_view name, std::string_view value) {
+  return "  " + std::string(name) + std::string(name.size() < 24 ? 24 - name.size() : 1, ' ') +
+         std::string(value) + "\n";
+}
+
 std::string comma_list(const std::vector<std::string>& items) {
   std::string list;
   for (const std::string& item : items) list += (list.empty() ? "" : ", ") + item;

@@ -125,7 +125,7 @@ std::vector<RuleCase> least_squares_cases() {
           {"lm", {}, 200, 1e-8},
           {"ig", {}, 50, 1e-10},
           {"pg", {.inverse = InverseMethod::kLbfgs}, 50, 1e-6},
-          {"pg", {.inverse = InverseMethod::kGaussNewton}, 50, 1e-8}};
+          {"pg", {.inverse = InverseMethod::kInverseGradient}, 50, 1e-8}};
 }
 
 void expect_feasible(const MinimizeSummary& s, const Vector& lower, const Vector& upper,
@@ -231,12 +231,12 @@ TEST(XScale, FirstOrderStepsAreScaledAndSecondOrderOnesAreNot) {
   const Vector x0{{0.48, 0.84}};
   const Domain scaled(2, {}, {}, Vector{{1.0, 0.01}});
   const auto gd = make_optimizer("gd", {.lr = 1.0});
-  EXPECT_LT((x0 + gd->step(objective, x0, scaled).dx).norm(), 1e-15);
-  EXPECT_GT((x0 + gd->step(objective, x0).dx).norm(), 1e3);
+  EXPECT_LT((x0 + gd->step(objective, x0, scaled).delta).norm(), 1e-15);
+  EXPECT_GT((x0 + gd->step(objective, x0).delta).norm(), 1e3);
   // Newton, Gauss-Newton and IG are invariant to a rescaling of x (no truncation here).
   for (const std::string id : {"newton", "gn", "ig"}) {
     const auto rule = make_optimizer(id, {.lr = 0.5});
-    EXPECT_LT((rule->step(objective, x0, scaled).dx - rule->step(objective, x0).dx).norm(), 1e-14)
+    EXPECT_LT((rule->step(objective, x0, scaled).delta - rule->step(objective, x0).delta).norm(), 1e-14)
         << id;
   }
 }

@@ -401,7 +401,7 @@ TEST(SimulatorCounts, EveryCallIsCountedByKindPerIterationAndInTotal) {
         std::pair{"newton", RuleSettings{}}, std::pair{"lbfgs", RuleSettings{}},
         std::pair{"pg", RuleSettings{.inverse = InverseMethod::kAnalytic}},
         std::pair{"pg", RuleSettings{.inverse = InverseMethod::kTimeReversal}},
-        std::pair{"pg", RuleSettings{.inverse = InverseMethod::kGaussNewton}},
+        std::pair{"pg", RuleSettings{.inverse = InverseMethod::kInverseGradient}},
         std::pair{"pg", RuleSettings{.lr = 0.5, .inverse = InverseMethod::kLbfgs}}}) {
     const Counted physics;
     const Objective objective(physics, loss, Vector{{1.0, 2.0}});
@@ -467,7 +467,7 @@ class SlowSine final : public Simulator {
 };
 
 // pg's local inverse runs until its iteration limit (no relative or stall test).
-const RuleSettings kLongInverse{.inverse = InverseMethod::kGaussNewton,
+const RuleSettings kLongInverse{.inverse = InverseMethod::kInverseGradient,
                                 .inverse_relative_tolerance = 0.0,
                                 .inverse_function_tolerance = 0.0};
 

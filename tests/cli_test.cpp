@@ -132,13 +132,13 @@ TEST_F(Cli, BadConfigFileIsOneLineExitTwoAndWritesNothing) {
 
 TEST_F(Cli, FlagsOverrideTheConfigFile) {
   const std::string config =
-      write_config("c.json", R"({"iters": 3, "lr": 0.05, "pg-inverse": ["gn"], "threads": null})");
+      write_config("c.json", R"({"iters": 3, "lr": 0.05, "pg-inverse": ["ig"], "threads": null})");
   const Outcome outcome = run("run comparison --config " + config + " --iters 2 --out result");
   ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
   const auto settings = nlohmann::json::parse(read_file(dir_ / "result" / "config.json"))["settings"];
   EXPECT_EQ(settings["iters"], 2);
   EXPECT_EQ(settings["lr"], 0.05);
-  EXPECT_EQ(settings["pg-inverse"], nlohmann::json::array({"gn"}));
+  EXPECT_EQ(settings["pg-inverse"], nlohmann::json::array({"ig"}));
   EXPECT_TRUE(settings["threads"].is_null());
   const auto summary = nlohmann::json::parse(read_file(dir_ / "result" / "summary.json"));
   for (const auto& entry : summary["runs"]) EXPECT_EQ(entry["iterations"], 2) << entry["label"];

@@ -71,8 +71,8 @@ TEST(ConfigFile, ResolvesToTheSameSettingsAsTheSameValuesGivenAsFlags) {
            "iters": 50.0, "lr": "0.30000000000000004"})",
        {{"tol-mode", "absolute"}, {"alpha", "1,10,100"}, {"start", "0.5,-0.25"}, {"tol", "1e-8"},
         {"iters", "50"}, {"lr", "0.30000000000000004"}}},
-      {"comparison", R"({"pg-inverse": ["gn"], "threads": 2, "out": "x", "start": [-3, 1e-3]})",
-       {{"pg-inverse", "gn"}, {"threads", "2"}, {"out", "x"}, {"start", "-3,0.001"}}},
+      {"comparison", R"({"pg-inverse": ["ig"], "threads": 2, "out": "x", "start": [-3, 1e-3]})",
+       {{"pg-inverse", "ig"}, {"threads", "2"}, {"out", "x"}, {"start", "-3,0.001"}}},
   };
   for (const auto& [name, text, flags] : cases) {
     EXPECT_EQ(resolve_json(name, text).json(),
@@ -154,8 +154,8 @@ TEST(ConfigFile, EveryBadValueIsOneErrorWithAnExactMessage) {
       {"scaled-toy", R"({"alpha": [1, 0]})", "--alpha: must be > 0, got '0'"},
       {"scaled-toy", R"({"tol-mode": "absolute-ish"})",
        "--tol-mode: unknown value 'absolute-ish' (known: relative, absolute)"},
-      {"comparison", R"({"pg-inverse": ["gn", "magic"]})",
-       "--pg-inverse: unknown value 'magic' (known: analytic, lbfgs, gn)"},
+      {"comparison", R"({"pg-inverse": ["ig", "magic"]})",
+       "--pg-inverse: unknown value 'magic' (known: analytic, lbfgs, ig)"},
       {"comparison", R"({"lr": "nan"})", "--lr: 'nan'" + not_a_number},
       {"comparison", R"({"lr": "-inf"})", "--lr: '-inf'" + not_a_number},
       {"scaled-toy", R"({"alpha": "1,NaN"})", "--alpha: 'NaN'" + not_a_number},
@@ -176,7 +176,7 @@ TEST(ConfigFile, EveryBadValueIsOneErrorWithAnExactMessage) {
       {"scaled-toy", R"({"alpha": []})", "--alpha: needs at least one value"},
       {"comparison", R"({"optimizers": ""})", "--optimizers: needs at least one value"},
       {"comparison", R"({"optimizers": ["gd", "adam", "gd"]})", "--optimizers: 'gd' is listed twice"},
-      {"comparison", R"({"pg-inverse": "gn, gn"})", "--pg-inverse: 'gn' is listed twice"},
+      {"comparison", R"({"pg-inverse": "ig, ig"})", "--pg-inverse: 'ig' is listed twice"},
       // Checks across options.
       {"comparison", R"({"start": [1, 2, 3]})", "--start: needs exactly 2 values, got 3"},
       // Saved run configs.

@@ -24,9 +24,9 @@ const std::map<std::string, int>& ranks() {
   static const std::map<std::string, int> table = {
       {"core", 0},  // error, types, memory, threads, stop, text (top-level headers)
       {"io", 1},
-      {"linalg", 2},     {"inversion", 2},
+      {"linalg", 2},
       {"physics", 3},    {"loss", 3},     {"nn", 3}, {"parallel", 3}, {"autodiff", 3},
-      {"optim", 4},
+      {"optim", 4},      {"inversion", 4},  // one layer: the numerical local inverse minimizes
       {"learn", 5},
       {"catalogue", 6},  {"rules", 6},
       {"train", 7},

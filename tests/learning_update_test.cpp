@@ -76,7 +76,7 @@ TEST(Catalogue, SettingsReachEveryOptionTheRulesReport) {
                               .c2 = 0.5,
                               .initial_damping = 0.01,
                               .min_damping = 1e-12,
-                              .inverse = InverseMethod::kGaussNewton,
+                              .inverse = InverseMethod::kInverseGradient,
                               .inverse_tolerance = 1e-7,
                               .inverse_iterations = 17,
                               .inverse_relative_tolerance = 1e-3,
@@ -88,7 +88,7 @@ TEST(Catalogue, SettingsReachEveryOptionTheRulesReport) {
       {"beta1", 0.8},       {"beta2", 0.95},               {"epsilon", 1e-5},
       {"rcond", 1e-4},      {"kappa", 0.25},               {"backend", "normal"},
       {"memory", 4},        {"c1", 1e-3},                  {"c2", 0.5},
-      {"initial_damping", 0.01}, {"min_damping", 1e-12},   {"inverse", "gn"},
+      {"initial_damping", 0.01}, {"min_damping", 1e-12},   {"inverse", "ig"},
       {"inverse_tolerance", 1e-7}, {"inverse_iterations", 17},
       {"inverse_relative_tolerance", 1e-3}, {"inverse_function_tolerance", 1e-9},
       {"inverse_rcond", 1e-8},      {"y_step", 0.75}};

@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "physgrad/error.hpp"
-#include "physgrad/optim/local_inverse.hpp"
+#include "physgrad/inversion/local_inverse.hpp"
 #include "physgrad/physics/comparison_toy.hpp"
 #include "physgrad/physics/heat_diffusion.hpp"
 #include "test_problems.hpp"
@@ -35,7 +35,7 @@ TEST(LocalInverse, AnUnreachableTargetEndsAtTheStallInsteadOfTheIterationBudget)
   // P(x) = (x, x) cannot reach y = (1, −1): the best preimage is x = 0 with residual √2.
   const testing::LinearSimulator physics((Matrix(2, 1) << 1, 1).finished());
   const Vector y{{1.0, -1.0}};
-  for (const InverseMethod method : {InverseMethod::kLbfgs, InverseMethod::kGaussNewton}) {
+  for (const InverseMethod method : {InverseMethod::kLbfgs, InverseMethod::kInverseGradient}) {
     const LocalInverseResult r =
         local_inverse(physics, y, Vector{{3.0}}, {}, {.method = method, .max_iterations = 200});
     EXPECT_FALSE(r.converged) << to_string(method);
@@ -51,7 +51,7 @@ TEST(LocalInverse, GaussNewtonResolvesIllConditionedDiffusionWithItsDefaultCutof
   Vector x_true(32);
   for (Index i = 0; i < 32; ++i) x_true(i) = std::sin(0.7 * static_cast<double>(i * i));
   const Vector y = physics.forward(x_true);
-  LocalInverseOptions options{.method = InverseMethod::kGaussNewton};
+  LocalInverseOptions options{.method = InverseMethod::kInverseGradient};
   const LocalInverseResult resolved = local_inverse(physics, y, Vector::Zero(32), {}, options);
   EXPECT_TRUE(resolved.converged);
   EXPECT_LE(resolved.iterations, 2);
@@ -70,7 +70,7 @@ TEST(LocalInverse, NumericalInversesStayInTheBoxAndClosedFormsAreProjected) {
   const ComparisonToy physics;
   const Domain box(2, Vector{{-10.0, -10.0}}, Vector{{10.0, 1.0}}, {});
   for (const InverseMethod method :
-       {InverseMethod::kLbfgs, InverseMethod::kGaussNewton, InverseMethod::kAnalytic}) {
+       {InverseMethod::kLbfgs, InverseMethod::kInverseGradient, InverseMethod::kAnalytic}) {
     const LocalInverseResult r =
         local_inverse(physics, Vector{{2.0, 2.0}}, Vector{{0.5, 0.5}}, {}, {.method = method}, box);
     EXPECT_NEAR(r.x(0), 2.0, 1e-8) << to_string(method);
@@ -92,13 +92,23 @@ TEST(LocalInverse, OutOfRangeOptionsAndMissingCapabilitiesAreErrors) {
   };
   EXPECT_EQ(message({.method = InverseMethod::kLbfgs, .relative_tolerance = 1.5}),
             "local inverse: relative_tolerance must be in [0, 1), got 1.5");
-  EXPECT_EQ(message({.method = InverseMethod::kGaussNewton, .rcond = -1}),
+  EXPECT_EQ(message({.method = InverseMethod::kInverseGradient, .rcond = -1}),
             "local inverse: rcond must be in [0, 1), got -1");
   EXPECT_EQ(message({.method = InverseMethod::kLbfgs, .max_iterations = 0}),
             "local inverse: max_iterations must be ≥ 1, got 0");
   EXPECT_EQ(message({.method = InverseMethod::kTimeReversal}),
-            "simulator 'comparison_toy' has no time reversal; use a numerical inverse (lbfgs or gn)");
+            "simulator 'comparison_toy' has no time reversal; use a numerical inverse (lbfgs or ig)");
   EXPECT_THROW(parse_inverse_method("reverse"), Error);
+  // "gn" names Gauss-Newton only; the inverse that runs inverse-gradient steps is "ig".
+  EXPECT_EQ(parse_inverse_method("ig"), InverseMethod::kInverseGradient);
+  EXPECT_EQ(to_string(InverseMethod::kInverseGradient), "ig");
+  try {
+    parse_inverse_method("gn");
+    ADD_FAILURE() << "gn was taken for an inverse method";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(),
+                 "unknown inverse method 'gn' (known: auto, analytic, time_reversal, lbfgs, ig)");
+  }
 }
 
 }  // namespace

@@ -23,7 +23,7 @@
 #include "physgrad/autodiff/finite_difference.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
-#include "physgrad/linalg/power_pinv.hpp"
+#include "physgrad/inversion/power_pinv.hpp"
 #include "physgrad/nn/mlp.hpp"
 #include "physgrad/optim/minimize.hpp"
 #include "physgrad/physics/checked_simulator.hpp"
@@ -85,7 +85,7 @@ struct Plan {
 
 constexpr InverseMethod kInverseMethods[] = {InverseMethod::kAuto, InverseMethod::kAnalytic,
                                              InverseMethod::kTimeReversal, InverseMethod::kLbfgs,
-                                             InverseMethod::kGaussNewton};
+                                             InverseMethod::kInverseGradient};
 
 // Spoils the results of one method as planned.
 class Liar {

@@ -135,7 +135,7 @@ TEST(NumericalGuard, NothingEscapesTrainingAndFailuresNameRuleIterationAndPlace)
     if (id != "sip") rules.push_back({id, testing::test_settings(id)});
   }
   for (const InverseMethod method :
-       {InverseMethod::kAnalytic, InverseMethod::kLbfgs, InverseMethod::kGaussNewton}) {
+       {InverseMethod::kAnalytic, InverseMethod::kLbfgs, InverseMethod::kInverseGradient}) {
     rules.push_back({"sip", {.inverse = method}});
   }
   int failures = 0;

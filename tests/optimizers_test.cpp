@@ -39,7 +39,7 @@ TEST(GradientDescent, StepIsMinusLrTimesGradient) {
   LeastSquares p;
   GradientDescent gd({0.05});
   const Vector x{{0.3, -0.2, 1.0}};
-  EXPECT_TRUE(gd.step(p.objective, x).dx.isApprox(-0.05 * p.objective.gradient(x)));
+  EXPECT_TRUE(gd.step(p.objective, x).delta.isApprox(-0.05 * p.objective.gradient(x)));
   EXPECT_THROW(GradientDescent({-1.0}), Error);
   EXPECT_THROW(GradientDescent({std::nan("")}), Error);
 }
@@ -49,8 +49,8 @@ TEST(Momentum, AccumulatesVelocityAndConverges) {
   Momentum momentum({0.01, 0.5});
   const Vector x{{0.3, -0.2, 1.0}};
   const Vector g = p.objective.gradient(x);
-  EXPECT_TRUE(momentum.step(p.objective, x).dx.isApprox(-0.01 * g));
-  EXPECT_TRUE(momentum.step(p.objective, x).dx.isApprox(-0.01 * (0.5 * g + g)));
+  EXPECT_TRUE(momentum.step(p.objective, x).delta.isApprox(-0.01 * g));
+  EXPECT_TRUE(momentum.step(p.objective, x).delta.isApprox(-0.01 * (0.5 * g + g)));
   MinimizeOptions options;
   options.max_iterations = 2000;
   const MinimizeSummary s = minimize(momentum, p.objective, Vector::Zero(3), options);
@@ -63,7 +63,7 @@ TEST(Adam, FirstStepHasLengthLrPerComponentAndConverges) {
   Adam adam({0.1});
   const Vector x{{0.3, -0.2, 1.0}};
   const Vector g = p.objective.gradient(x);
-  const Vector dx = adam.step(p.objective, x).dx;
+  const Vector dx = adam.step(p.objective, x).delta;
   for (Index i = 0; i < 3; ++i) EXPECT_NEAR(dx(i), -0.1 * (g(i) > 0 ? 1 : -1), 1e-8);
   MinimizeOptions options;
   options.max_iterations = 3000;
@@ -75,7 +75,7 @@ TEST(Newton, OneFullStepSolvesAQuadratic) {
   LeastSquares p;
   Newton newton({1.0});
   const Vector x{{5.0, -3.0, 2.0}};
-  EXPECT_LT((x + newton.step(p.objective, x).dx - p.solution()).norm(), 1e-12);
+  EXPECT_LT((x + newton.step(p.objective, x).delta - p.solution()).norm(), 1e-12);
 }
 
 TEST(Newton, ConvergesOnRosenbrockWithTheExactHessian) {
@@ -95,21 +95,21 @@ TEST(GaussNewton, OneFullStepIsTheLeastSquaresSolution) {
   LeastSquares p;
   GaussNewton gn({1.0});
   const Vector x{{5.0, -3.0, 2.0}};
-  EXPECT_LT((x + gn.step(p.objective, x).dx - p.solution()).norm(), 1e-10);
+  EXPECT_LT((x + gn.step(p.objective, x).delta - p.solution()).norm(), 1e-10);
 }
 
 TEST(InverseGradient, FullStepIsTheLeastSquaresSolutionAndMinimumNormWhenUnderdetermined) {
   LeastSquares p;
   InverseGradient ig({1.0});
   const Vector x{{5.0, -3.0, 2.0}};
-  EXPECT_LT((x + ig.step(p.objective, x).dx - p.solution()).norm(), 1e-10);
+  EXPECT_LT((x + ig.step(p.objective, x).delta - p.solution()).norm(), 1e-10);
 
   // Two outputs, three inputs: the step is the minimum-norm solution of J Δx = Δy.
   const Matrix a = (Matrix(2, 3) << 1, 2, 0, 0, 1, 3).finished();
   const testing::LinearSimulator wide(a);
   const L2Loss loss;
   const Objective objective(wide, loss, Vector{{1.0, -1.0}});
-  const Vector dx = ig.step(objective, Vector::Zero(3)).dx;
+  const Vector dx = ig.step(objective, Vector::Zero(3)).delta;
   EXPECT_LT((a * dx - Vector{{1.0, -1.0}}).norm(), 1e-12);
   EXPECT_LT((dx - a.transpose() * (a * a.transpose()).ldlt().solve(Vector{{1.0, -1.0}})).norm(),
             1e-12);
@@ -138,7 +138,7 @@ TEST(PhysicalGradient, AnalyticStepLandsOnTheScaledTarget) {
   PhysicalGradient pg({0.25, {InverseMethod::kAnalytic}});
   const Vector x{{0.2, 0.3}};
   const Vector y = physics.forward(x);
-  const Vector y_new = physics.forward(x + pg.step(objective, x).dx);
+  const Vector y_new = physics.forward(x + pg.step(objective, x).delta);
   EXPECT_LT((y_new - (y + 0.25 * (objective.target() - y))).norm(), 1e-12);
 }
 
@@ -148,10 +148,10 @@ TEST(PhysicalGradient, NumericalInversesMatchTheAnalyticOne) {
   const Objective objective(physics, loss, Vector::Zero(2));
   const Vector x{{3.0, 3.0}};
   PhysicalGradient analytic({0.3, {InverseMethod::kAnalytic}});
-  const Vector expected = analytic.step(objective, x).dx;
-  for (const InverseMethod method : {InverseMethod::kLbfgs, InverseMethod::kGaussNewton}) {
+  const Vector expected = analytic.step(objective, x).delta;
+  for (const InverseMethod method : {InverseMethod::kLbfgs, InverseMethod::kInverseGradient}) {
     PhysicalGradient numerical({0.3, {method}});
-    EXPECT_LT((numerical.step(objective, x).dx - expected).norm(), 1e-7) << to_string(method);
+    EXPECT_LT((numerical.step(objective, x).delta - expected).norm(), 1e-7) << to_string(method);
   }
 }
 

@@ -9,10 +9,11 @@
 #include <numeric>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "physgrad/error.hpp"
-#include "physgrad/linalg/power_pinv.hpp"
+#include "physgrad/inversion/power_pinv.hpp"
 
 namespace physgrad {
 namespace {
@@ -288,6 +289,61 @@ TEST(PowerPinvValidation, RejectsBadInputAndNamesBackends) {
   EXPECT_EQ(to_string(PinvBackend::kGram), "gram");
   expect_error([] { parse_pinv_backend("cholesky"); },
                "'cholesky' (known: auto, svd, gram, normal)");
+}
+
+// An operator that says which of its forms the inversion asked for.
+class CountingJacobian final : public JacobianOperator {
+  // form(), noted as asked for under `name` (defined first: its return type is deduced).
+  template <typename Form>
+  auto asked(const char* name, const Form& form) const {
+    calls.emplace_back(name);
+    return form();
+  }
+
+ public:
+  explicit CountingJacobian(const Matrix& j) : dense_(j) {}
+  Index rows() const override { return dense_.rows(); }
+  Index cols() const override { return dense_.cols(); }
+  Matrix gram() const override { return asked("gram", [&] { return dense_.gram(); }); }
+  Vector apply_transpose(const Vector& c) const override {
+    return asked("apply_transpose", [&] { return dense_.apply_transpose(c); });
+  }
+  Matrix materialize() const override {
+    return asked("materialize", [&] { return dense_.materialize(); });
+  }
+  Normal normal(const Vector& g) const override {
+    return asked("normal", [&] { return dense_.normal(g); });
+  }
+  mutable std::vector<std::string> calls;
+
+ private:
+  DenseJacobian dense_;
+};
+
+TEST(PowerPinv, EachPathAsksTheOperatorForItsOneFormAndAgreesWithTheMatrix) {
+  const Matrix j = random_matrix(6, 9, 11);
+  const Vector g = random_matrix(6, 1, 12).col(0);
+  const std::vector<std::pair<PinvBackend, std::vector<std::string>>> paths = {
+      {PinvBackend::kGram, {"gram", "apply_transpose"}},
+      {PinvBackend::kNormal, {"normal"}},
+      {PinvBackend::kSvd, {"materialize"}}};
+  for (const auto& [backend, forms] : paths) {
+    const PowerPinvOptions options{0.5, 1e-6, backend};
+    CountingJacobian counted(j);
+    PowerPinvInfo info;
+    PowerPinvTiming timing;
+    const Vector result = power_pinv_apply(counted, g, options, &info, &timing);
+    EXPECT_EQ(counted.calls, forms) << to_string(backend);
+    EXPECT_EQ(info.backend, backend);
+    EXPECT_EQ(info.rank, 6);
+    EXPECT_GE(timing.forming_seconds, 0.0);
+    EXPECT_LT((result - power_pinv_apply(j, g, options)).norm(), 1e-12 * result.norm())
+        << to_string(backend);
+  }
+  // kAuto on a wide J at this cutoff: the Gram path.
+  CountingJacobian wide(j);
+  power_pinv_apply(wide, g, {0.5, 1e-6});
+  EXPECT_EQ(wide.calls, (std::vector<std::string>{"gram", "apply_transpose"}));
 }
 
 }  // namespace

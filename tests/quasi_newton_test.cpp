@@ -298,8 +298,8 @@ void check_restart(Optimizer& optimizer) {
   const Step step = optimizer.step(objective, x);
   ASSERT_EQ(step.status, Step::Status::kOk) << step.message;
   EXPECT_NE(step.message.find("restarted"), std::string::npos) << step.message;
-  EXPECT_EQ(step.dx(0), step.dx(1));  // stayed on the diagonal
-  EXPECT_LT(step.dx(0), 0.0);
+  EXPECT_EQ(step.delta(0), step.delta(1));  // stayed on the diagonal
+  EXPECT_LT(step.delta(0), 0.0);
   // The gradient at x, a failed search of all-NaN trials, then one accepted trial along −∇L.
   EXPECT_EQ(step.evaluations, 1 + LineSearchOptions{}.max_evaluations + 1);
 
@@ -339,7 +339,7 @@ void check_gradient_cache(Optimizer& optimizer) {
   ASSERT_FALSE(points.empty());
   EXPECT_EQ(points.front(), x0);
 
-  const Vector x1 = x0 + step.dx;
+  const Vector x1 = x0 + step.delta;
   points = gradient_evaluations(x1, step);
   for (const Vector& p : points) EXPECT_NE(p, x1);
 

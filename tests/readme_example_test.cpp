@@ -1,10 +1,7 @@
 // The library example of README.md, kept compiling and true.
 #include <gtest/gtest.h>
 
-#include "physgrad/catalogue.hpp"
-#include "physgrad/loss/loss.hpp"
-#include "physgrad/optim/minimize.hpp"
-#include "physgrad/physics/diagonal_scale.hpp"
+#include "physgrad/physgrad.hpp"
 
 TEST(ReadmeExample, PhysicalGradientSolvesTheScaledToy) {
   physgrad::DiagonalScale physics(physgrad::Vector{{1.0, 100.0}});  // P(x) = (x₁, 100 x₂)

@@ -179,7 +179,7 @@ TEST(SipUpdate, TimeReversalGivesTheStepOfTheNumericalInverse) {
   const Vector reversal =
       make_learning_update("sip", {.inverse = InverseMethod::kTimeReversal})->step(state).delta;
   const Vector numerical =
-      make_learning_update("sip", {.inverse = InverseMethod::kGaussNewton})->step(state).delta;
+      make_learning_update("sip", {.inverse = InverseMethod::kInverseGradient})->step(state).delta;
   EXPECT_LT((reversal - numerical).cwiseAbs().maxCoeff(), 1e-6);
 }
 

@@ -87,7 +87,7 @@ TEST(TrainStep, TheGuardHalvesOrUndoesTheStepThatBrokeTheBatch) {
   ASSERT_TRUE(train_step(other, *sgd, {&physics, &loss}, data, sgd_state).applied());
   const Vector broken = other.parameters();
   const StepReport undone = train_step(other, *sgd, {&physics, &loss}, data, sgd_state);
-  EXPECT_EQ(undone.failure, StepFailure::kLoss);
+  EXPECT_EQ(undone.failure, StepReport::Failure::kLoss);
   EXPECT_TRUE(undone.undone);
   EXPECT_TRUE(std::isnan(undone.loss));
   EXPECT_EQ(other.parameters(), Vector::Zero(2));

@@ -9,6 +9,7 @@
 #include "learning_fixture.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
+#include "physgrad/text.hpp"
 #include "test_problems.hpp"
 
 namespace physgrad {
@@ -42,6 +43,38 @@ TEST(Trainer, EveryRuleLowersTheLossAndRunsAreDeterministic) {
     EXPECT_EQ(sa.history[3].iteration, 15) << id;
     EXPECT_TRUE(std::isnan(sa.history.back().test_loss)) << id;
   }
+}
+
+TEST(Trainer, TheSummarySaysWhatRanAndReportsItLikeMinimize) {
+  NetworkThroughPhysics s(10);
+  const auto update = make_learning_update("hig");
+  const TrainingSummary summary = train(s.network, *update, s.problem, s.data, nullptr, limits(6));
+  EXPECT_EQ(summary.update, "hig");
+  EXPECT_EQ(summary.params, update->params());
+  EXPECT_EQ(summary.parameters, s.network.num_parameters());
+  EXPECT_EQ(summary.samples, 10);
+  EXPECT_EQ(summary.batch_size, 4);
+  ASSERT_EQ(summary.limits.size(), 1u);
+  EXPECT_EQ(summary.limits[0].first, "max_iterations");
+  // Two epochs of batches of 4, 4 and 2 samples: each sample once forward, through the m VJPs
+  // of the stacked Jacobian and through the one VJP of Jᵀc on the Gram path.
+  const long long m = s.physics.output_dim();
+  EXPECT_EQ(summary.counts.forward, 20);
+  EXPECT_EQ(summary.counts.vjp, 20 * (m + 1));
+  EXPECT_EQ(summary.counts.passes, summary.counts.forward + summary.counts.vjp);
+  EXPECT_EQ(brief_report(summary),
+            "hig: 6 iterations (2.4 epochs), " + std::to_string(summary.counts.passes) +
+                " simulator passes, train loss " + report_number(summary.history.front().train_loss) +
+                " → " + report_number(summary.history.back().train_loss) + ", max_iterations");
+  const std::string full = full_report(summary);
+  for (const std::string part :
+       {"physgrad training report", "  parameters", "  kappa                   0.5",
+        "  max_iterations          6", "  iterations              6", "  step halvings           0",
+        "\nTermination: max_iterations\n"}) {
+    EXPECT_NE(full.find(part), std::string::npos) << part << "\n" << full;
+  }
+  // A checkpoint keeps the counts.
+  EXPECT_EQ(training_summary_from_json(training_summary_to_json(summary)).counts, summary.counts);
 }
 
 TEST(Trainer, StopsAfterEpochsAndEvaluatesOncePerEpochByDefault) {
@@ -157,9 +190,9 @@ class NanStep final : public LearningUpdate {
   std::string id() const override { return "nan-step"; }
   nlohmann::json params() const override { return nlohmann::json::object(); }
   UpdateNeed need() const override { return UpdateNeed::kGradient; }
-  UpdateStep step(const BatchState& batch) override {
+  Step step(const BatchState& batch) override {
     const Vector delta = -0.1 * batch.gradient;
-    return UpdateStep(++steps_ == 4 ? Vector::Constant(delta.size(), NAN) : delta);
+    return {++steps_ == 4 ? Vector::Constant(delta.size(), NAN) : delta};
   }
   double learning_rate() const override { return 0.1; }
   void set_learning_rate(double) override {}

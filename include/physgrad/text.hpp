@@ -61,6 +61,11 @@ std::string in_quotes(std::string_view value);
 // "a, b, c".
 std::string comma_list(const std::vector<std::string>& items);
 
+// A number in a report: printf's %.6g ("0.001", "1.5e+03").
+std::string report_number(double value);
+// One line of a multi-line report: "  NAME", padded to 26 columns (at least one space), VALUE.
+std::string report_row(std::string_view name, std::string_view value);
+
 // Error "unknown WHAT 'NAME' (known: a, b, c)", e.g. unknown_name_error("experiment", "x",
 // {"scaled-toy", …}); unknown_name_text() is its message, for one with a prefix.
 std::string unknown_name_text(std::string_view what, std::string_view name,

@@ -34,7 +34,7 @@ def minimize(sim, x0, rule="lm", *, target=None, loss_weight=1.0, bounds=None, x
     The tolerances and budgets are those of the C++ MinimizeOptions (0 = off). callback(iteration,
     loss, x) after every iteration; returning True stops the run. rule_options: lr, beta, beta1,
     beta2, epsilon, rcond, memory, c1, c2, initial_damping, min_damping, inverse ("auto",
-    "analytic", "time_reversal", "lbfgs", "gn"), inverse_tolerance, inverse_iterations,
+    "analytic", "time_reversal", "lbfgs", "ig"), inverse_tolerance, inverse_iterations,
     inverse_relative_tolerance, inverse_function_tolerance, inverse_rcond.
     """
     lower, upper = _bounds(bounds)
@@ -49,7 +49,7 @@ def local_inverse(sim, y, x0, method="auto", *, tolerance=1e-10, max_iterations=
                   relative_tolerance=1e-8, function_tolerance=1e-6, rcond=1e-10, bounds=None):
     """The solution of sim.forward(x) = y nearest x0: {"x", "residual", "iterations",
     "evaluations", "counts", "converged"}. method: "auto", "analytic" (sim.inverse),
-    "time_reversal" (sim.time_reversal, anchored at x0), "lbfgs" or "gn"."""
+    "time_reversal" (sim.time_reversal, anchored at x0), "lbfgs" or "ig" (inverse-gradient steps)."""
     lower, upper = _bounds(bounds)
     return _physgrad._local_inverse(sim, y, x0, method, float(tolerance), int(max_iterations),
                                     float(relative_tolerance), float(function_tolerance),

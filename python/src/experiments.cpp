@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "bindings.hpp"
-#include "experiment_list.hpp"
+#include "physgrad/run/registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/io/csv.hpp"
 #include "python_simulator.hpp"

@@ -13,7 +13,7 @@
 #include "physgrad/learn/mapped_jacobian.hpp"
 #include "physgrad/train/step.hpp"
 #include "python_simulator.hpp"
-#include "reference_case.hpp"
+#include "physgrad/run/registry.hpp"
 
 namespace physgrad::python {
 
@@ -60,7 +60,7 @@ py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradie
   state.batch_size = batch;
   state.jacobian = mapped;
   state.loss_gradient_y = g;
-  UpdateStep step;
+  Step step;
   {
     py::gil_scoped_release released;
     step = update.step(state);
@@ -96,14 +96,14 @@ double time_jacobian_step(const py::array_t<double, py::array::c_style>& jacobia
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / repeats;
 }
 
-// A reference case's first batch (experiments/reference_case.hpp): the stacked Jacobian as
+// A reference case's first batch (run/registry.hpp): the stacked Jacobian as
 // (B, m, P) and ∂(mean L)/∂y as (B, m), both sample-major, θ, and the first step of rule `rule`
 // with the case's options computed by the library twice: "delta" from the network's own stacked
 // Jacobian (J Jᵀ from the layer factors, as train() steps), "delta_formed" from the formed J
 // returned here (J Jᵀ by dsyrk on it, as a step on a given Jacobian computes it).
 py::dict reference_step(const std::string& name, Index batch, const std::string& rule) {
-  const experiments::ReferenceCase c = experiments::reference_case(name, batch);
-  const std::unique_ptr<LearningUpdate> update = experiments::make_reference_update(c, rule);
+  const experiments::ReferenceCase c = experiments::registry().reference(name, batch);
+  const std::unique_ptr<LearningUpdate> update = c.update(rule);
   if (update->need() != UpdateNeed::kStackedJacobian) {
     throw Error("reference_step: rule '" + rule + "' does not step on the stacked Jacobian");
   }
@@ -127,7 +127,7 @@ py::dict reference_step(const std::string& name, Index batch, const std::string&
   formed.batch_size = b;
   formed.jacobian = std::make_shared<MappedJacobian>(jacobian.data(), b, m, p);
   formed.loss_gradient_y = Eigen::Map<const Vector>(gy.data(), b * m);
-  const Vector delta_formed = experiments::make_reference_update(c, rule)->step(formed).delta;
+  const Vector delta_formed = c.update(rule)->step(formed).delta;
   py::dict out;
   out["delta_formed"] = to_numpy(delta_formed);
   out["jacobian"] = jacobian;

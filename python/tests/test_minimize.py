@@ -159,7 +159,7 @@ def test_local_inverse_by_every_method(scaled_toy):
     y = np.array([0.3, -1.2])
     for sim, method in [(scaled_toy(4.0), "analytic"), (Leapfrogless(), "time_reversal"),
                         (scaled_toy(4.0, analytic=False), "lbfgs"),
-                        (scaled_toy(4.0, analytic=False), "gn")]:
+                        (scaled_toy(4.0, analytic=False), "ig")]:
         result = physgrad.local_inverse(sim, y, [0.0, 0.0], method)
         assert result["converged"], method
         np.testing.assert_allclose(sim.forward(result["x"]), y, atol=1e-8, err_msg=method)

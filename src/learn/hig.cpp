@@ -25,10 +25,10 @@ void HigUpdate::set_learning_rate(double lr) {
   options_.lr = lr;
 }
 
-UpdateStep HigUpdate::step(const BatchState& batch) {
+Step HigUpdate::step(const BatchState& batch) {
   if (batch.jacobian == nullptr) throw Error(id() + ": the batch has no stacked Jacobian");
-  JacobianTiming timing;
-  UpdateStep step;
+  PowerPinvTiming timing;
+  Step step;
   step.delta = -options_.lr * power_pinv_apply(*batch.jacobian, batch.loss_gradient_y,
                                                {options_.kappa, options_.rcond, options_.backend},
                                                &info_, &timing);

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "physgrad/error.hpp"
+#include "physgrad/inversion/power_pinv.hpp"
 #include "physgrad/parallel/distributed_eigen.hpp"
 
 namespace physgrad {
@@ -49,7 +50,7 @@ Vector ShardedJacobian::apply_transpose(const Vector& c) const {
 std::optional<Vector> ShardedJacobian::shared_gram_apply(const Vector& g,
                                                          const PowerPinvOptions& options,
                                                          PowerPinvInfo* info,
-                                                         JacobianTiming* timing) const {
+                                                         PowerPinvTiming* timing) const {
   DistributedEigensolver* solver =
       shard_.active() ? shard_.communicator()->eigensolver() : nullptr;
   const Index n = rows(), threshold = distributed_gram_rows();
@@ -85,7 +86,7 @@ std::optional<Vector> ShardedJacobian::shared_gram_apply(const Vector& g,
   return result;
 }
 
-StackedJacobian::Normal ShardedJacobian::normal(const Vector& g) const {
+JacobianOperator::Normal ShardedJacobian::normal(const Vector& g) const {
   const Index params = cols();
   if (!sums_normal_equations(batch_, outputs(), network_->output_dim(), params)) {
     return whole().normal(g);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "physgrad/error.hpp"
+#include "physgrad/inversion/y_step.hpp"
 #include "physgrad/optim/optimizer.hpp"
 
 namespace physgrad {
@@ -20,7 +21,7 @@ nlohmann::json SipUpdate::params() const {
   return params;
 }
 
-UpdateStep SipUpdate::step(const BatchState& batch) {
+Step SipUpdate::step(const BatchState& batch) {
   if (batch.physics == nullptr || batch.loss_function == nullptr || !batch.backprop) {
     throw Error("sip: the batch lacks the network outputs and backprop it needs");
   }
@@ -29,21 +30,21 @@ UpdateStep SipUpdate::step(const BatchState& batch) {
   // The mean is over the whole mini-batch, which in a data-parallel run (batch_size) spans
   // more samples than this process's columns.
   const auto divisor = static_cast<double>(std::max(batch.batch_size, count));
-  UpdateStep step;
+  Step step;
   Matrix cotangent(batch.x.rows(), count);
   for (Index i = 0; i < count; ++i) {
     const Vector y = batch.y.col(i), target = batch.targets.col(i), x = batch.x.col(i);
     const Vector context = batch.context.size() == 0 ? Vector() : Vector(batch.context.col(i));
-    const Vector y_target = y + options_.y_step * batch.loss_function->newton_step(y, target);
+    const Vector y_target = y + y_step(*batch.loss_function, y, target, options_.y_step);
     Vector x_tilde;
     try {
       x_tilde = local_inverse(*batch.physics, y_target, x, context, options_.inverse).x;
     } catch (const NumericalError& e) {
       x_tilde = Vector::Constant(x.size(), NAN);
-      if (step.problem.empty()) step.problem = e.what();
+      if (step.message.empty()) step.message = e.what();
     }
-    if (!all_finite(x_tilde) && step.problem.empty()) {
-      step.problem = "the local inverse (" + to_string(options_.inverse.method) +
+    if (!all_finite(x_tilde) && step.message.empty()) {
+      step.message = "the local inverse (" + to_string(options_.inverse.method) +
                      ") gave no finite preimage";
     }
     cotangent.col(i) = (x - x_tilde) / divisor;
@@ -55,7 +56,7 @@ UpdateStep SipUpdate::step(const BatchState& batch) {
   const Vector gradient = batch.backprop(cotangent);
   if (!all_finite(gradient)) {
     step.delta = Vector::Constant(gradient.size(), NAN);
-    if (step.problem.empty()) step.problem = "the proxy gradient is not finite";
+    if (step.message.empty()) step.message = "the proxy gradient is not finite";
     return step;
   }
   step.delta = adam_.update(gradient);

@@ -1,9 +1,6 @@
 #include "physgrad/learn/stacked_jacobian.hpp"
 
-#include <cblas.h>
-
 #include <algorithm>
-#include <chrono>
 #include <exception>
 #include <string>
 #include <thread>
@@ -14,17 +11,6 @@
 namespace physgrad {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-// work(), with its duration added to `seconds`.
-template <typename Work>
-auto timed(double& seconds, const Work& work) {
-  const auto start = Clock::now();
-  auto result = work();
-  seconds += std::chrono::duration<double>(Clock::now() - start).count();
-  return result;
-}
 
 // Runs work(t, threads) for t = 0 … threads − 1, t > 0 on threads of their own; the first
 // exception any of them threw is rethrown after all have ended.
@@ -127,46 +113,9 @@ Matrix LocalJacobian::materialize() const {
   return j;
 }
 
-StackedJacobian::Normal LocalJacobian::normal(const Vector& g) const {
+JacobianOperator::Normal LocalJacobian::normal(const Vector& g) const {
   const Matrix j = materialize();
-  const auto blas = [](Index n) { return static_cast<blasint>(n); };
-  Normal out{Matrix::Zero(cols(), cols()), Vector(j.transpose() * g)};
-  if (j.size() != 0) {
-    cblas_dsyrk(CblasColMajor, CblasLower, CblasTrans, blas(cols()), blas(rows()), 1.0, j.data(),
-                blas(rows()), 0.0, out.matrix.data(), blas(cols()));
-  }
-  return out;
-}
-
-Vector power_pinv_apply(const StackedJacobian& j, const Vector& g, const PowerPinvOptions& options,
-                        PowerPinvInfo* info, JacobianTiming* timing) {
-  JacobianTiming local;
-  JacobianTiming& time = timing != nullptr ? *timing : local;
-  switch (resolve_pinv_backend(j.rows(), j.cols(), options)) {
-    case PinvBackend::kGram: {
-      if (std::optional<Vector> shared = j.shared_gram_apply(g, options, info, &time)) {
-        return std::move(*shared);
-      }
-      Matrix gram = timed(time.forming_seconds, [&] { return j.gram(); });
-      return timed(time.inversion_seconds, [&] {
-        return power_pinv_apply_gram(
-            std::move(gram), g, [&j](const Vector& c) { return j.apply_transpose(c); }, options,
-            info);
-      });
-    }
-    case PinvBackend::kNormal: {
-      StackedJacobian::Normal normal = timed(time.forming_seconds, [&] { return j.normal(g); });
-      return timed(time.inversion_seconds, [&] {
-        return power_pinv_apply_normal(std::move(normal.matrix), normal.rhs, options, info);
-      });
-    }
-    default: {
-      const Matrix formed = timed(time.forming_seconds, [&] { return j.materialize(); });
-      PowerPinvOptions svd = options;
-      svd.backend = PinvBackend::kSvd;
-      return timed(time.inversion_seconds, [&] { return power_pinv_apply(formed, g, svd, info); });
-    }
-  }
+  return DenseJacobian(j).normal(g);
 }
 
 }  // namespace physgrad

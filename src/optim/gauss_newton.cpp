@@ -1,6 +1,6 @@
 #include "physgrad/optim/gauss_newton.hpp"
 
-#include "physgrad/linalg/power_pinv.hpp"
+#include "physgrad/inversion/power_pinv.hpp"
 
 namespace physgrad {
 

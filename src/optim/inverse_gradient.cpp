@@ -1,10 +1,9 @@
 #include "physgrad/optim/inverse_gradient.hpp"
 
-namespace physgrad {
+#include "physgrad/inversion/power_pinv.hpp"
+#include "physgrad/inversion/y_step.hpp"
 
-Vector y_step(const Objective& objective, const Vector& y, double lr) {
-  return lr * objective.loss().newton_step(y, objective.target());
-}
+namespace physgrad {
 
 InverseGradient::InverseGradient(Options options) : options_(options) {
   require_positive("ig: lr", options_.lr);
@@ -13,7 +12,7 @@ InverseGradient::InverseGradient(Options options) : options_(options) {
 
 Step InverseGradient::propose(const Objective& objective, const Vector& x, const Domain& domain) {
   const Vector y = objective.output(x);
-  const Vector dy = y_step(objective, y, options_.lr);
+  const Vector dy = y_step(objective.loss(), y, objective.target(), options_.lr);
   const Matrix j = objective.jacobian(x);
   // Held variables (Domain::free_variables, by the gradient Jᵀ ∂L/∂y) keep their value; the
   // others move by Δz_F = (J[:, F] D_F)⁺ Δy, Δx_F = D_F Δz_F.

@@ -2,10 +2,10 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <sstream>
 
 #include "physgrad/error.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad {
 
@@ -41,11 +41,7 @@ bool converged(Termination termination) {
 
 namespace {
 
-std::string number(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", value);
-  return text;
-}
+std::string number(double value) { return report_number(value); }
 
 void check_options(const MinimizeOptions& options) {
   if (options.max_iterations < 1) {
@@ -238,9 +234,9 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
       step = optimizer.step(problem, summary.x, domain);
       summary.step_seconds += since(step_start);
       summary.evaluations += step.evaluations;
-      if (step.status == Step::Status::kOk && all_finite(step.dx)) {
+      if (step.status == Step::Status::kOk && all_finite(step.delta)) {
         // The rule keeps x + Δx in the box; the projection only removes rounding in the sum.
-        x_next = domain.project(summary.x + step.dx);
+        x_next = domain.project(summary.x + step.delta);
         if (x_next != summary.x) loss_next = evaluate(x_next);
       }
     } catch (const NumericalError& e) {
@@ -263,11 +259,11 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
       ++summary.rejected_steps;
       stop = record(0.0);
       // A trial too short to matter ends the run like an accepted one (the loss did not move).
-      done = !stop && step.dx.size() == summary.x.size() &&
-             rules.after_step(summary.loss, summary.loss, summary.x, step.dx, summary, false);
+      done = !stop && step.delta.size() == summary.x.size() &&
+             rules.after_step(summary.loss, summary.loss, summary.x, step.delta, summary, false);
       continue;
     }
-    if (!all_finite(step.dx)) {
+    if (!all_finite(step.delta)) {
       end_on(Termination::kNumericalFailure, where + "non-finite step");
       break;
     }
@@ -319,9 +315,8 @@ std::string brief_report(const MinimizeSummary& s) {
 
 std::string full_report(const MinimizeSummary& s) {
   std::ostringstream out;
-  const auto row = [&out](const std::string& name, const std::string& value) {
-    out << "  " << name << std::string(name.size() < 24 ? 24 - name.size() : 1, ' ') << value
-        << "\n";
+  const auto row = [&out](std::string_view name, const std::string& value) {
+    out << report_row(name, value);
   };
   out << "physgrad minimize report\n\n";
   out << "Problem\n";

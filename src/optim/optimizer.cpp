@@ -18,11 +18,11 @@ Step Optimizer::step(const Objective& objective, const Vector& x, const Domain& 
   // The rule sees the simulator only through a CheckedSimulator (minimize() hands one over).
   const Step step = propose(CheckedObjective(objective).objective(), x, domain);
   // An accepted step moves every variable; a rejected trial or a failure may leave dx empty.
-  const bool fits = step.dx.size() == x.size() ||
-                    (step.status != Step::Status::kOk && step.dx.size() == 0);
+  const bool fits = step.delta.size() == x.size() ||
+                    (step.status != Step::Status::kOk && step.delta.size() == 0);
   if (!fits) {
     std::ostringstream msg;
-    msg << "optimizer '" << rule << "': step returned " << step.dx.size()
+    msg << "optimizer '" << rule << "': step returned " << step.delta.size()
         << " entries, expected " << x.size();
     throw Error(msg.str());
   }

@@ -1,6 +1,6 @@
 #include "physgrad/optim/physical_gradient.hpp"
 
-#include "physgrad/optim/inverse_gradient.hpp"
+#include "physgrad/inversion/y_step.hpp"
 
 namespace physgrad {
 
@@ -17,7 +17,7 @@ nlohmann::json PhysicalGradient::params() const {
 Step PhysicalGradient::propose(const Objective& objective, const Vector& x,
                                const Domain& domain) {
   const Vector y = objective.output(x);
-  const Vector y_target = y + y_step(objective, y, options_.lr);
+  const Vector y_target = y + y_step(objective.loss(), y, objective.target(), options_.lr);
   const LocalInverseResult inverse = local_inverse(objective.simulator(), y_target, x,
                                                    objective.context(), options_.inverse, domain);
   return {inverse.x - x, Step::Status::kOk, {}, 1 + inverse.evaluations};

@@ -72,7 +72,7 @@ Step QuasiNewton::propose(const Objective& objective, const Vector& x, const Dom
     if (!free[static_cast<std::size_t>(i)]) gz(i) = 0;
   }
   if ((gz.array() == 0).all()) {  // stationary (on the box): a zero step ends the run
-    out.dx = Vector::Zero(n);
+    out.delta = Vector::Zero(n);
     return out;
   }
 
@@ -103,13 +103,13 @@ Step QuasiNewton::propose(const Objective& objective, const Vector& x, const Dom
   }
 
   const Vector moved = result.step * scale.cwiseProduct(pz);
-  out.dx = domain.feasible_step(x, moved);
-  const Vector sz = out.dx.cwiseQuotient(scale);
+  out.delta = domain.feasible_step(x, moved);
+  const Vector sz = out.delta.cwiseQuotient(scale);
   const Vector yz = scale.cwiseProduct(result.gradient - g_);
   if (yz.dot(sz) > kCurvatureTolerance * sz.norm() * yz.norm()) add_pair(sz, yz);
   // The point the caller moves to, with its value and gradient when the line search evaluated
   // exactly there (a step cut to the box may differ in the last bits: evaluated afresh).
-  x_ = domain.project(x + out.dx);
+  x_ = domain.project(x + out.delta);
   if (x_ == x + moved) {
     value_ = result.value;
     g_ = std::move(result.gradient);

@@ -21,14 +21,27 @@ Index checked_dim(const Simulator& inner, Index value, const char* what, Index l
 
 }  // namespace
 
+const std::array<std::pair<const char*, long long SimulatorCounts::*>, 7>&
+SimulatorCounts::fields() {
+  static constexpr std::array<std::pair<const char*, long long SimulatorCounts::*>, 7> kFields{{
+      {"forward", &SimulatorCounts::forward},
+      {"vjp", &SimulatorCounts::vjp},
+      {"jacobians", &SimulatorCounts::jacobians},
+      {"hessians", &SimulatorCounts::hessians},
+      {"reversals", &SimulatorCounts::reversals},
+      {"inverses", &SimulatorCounts::inverses},
+      {"passes", &SimulatorCounts::passes},
+  }};
+  return kFields;
+}
+
+SimulatorCounts& SimulatorCounts::operator+=(const SimulatorCounts& other) {
+  for (const auto& [name, field] : fields()) this->*field += other.*field;
+  return *this;
+}
+
 SimulatorCounts& SimulatorCounts::operator-=(const SimulatorCounts& other) {
-  forward -= other.forward;
-  vjp -= other.vjp;
-  jacobians -= other.jacobians;
-  hessians -= other.hessians;
-  reversals -= other.reversals;
-  inverses -= other.inverses;
-  passes -= other.passes;
+  for (const auto& [name, field] : fields()) this->*field -= other.*field;
   return *this;
 }
 

@@ -195,19 +195,19 @@ BatchState evaluate_batch(const Network& network, const LearningProblem& problem
   return state;
 }
 
-std::string to_string(StepFailure failure) {
+std::string to_string(StepReport::Failure failure) {
   switch (failure) {
-    case StepFailure::kNone: return "";
-    case StepFailure::kLoss: return "loss";
-    case StepFailure::kGradient: return "gradient";
-    case StepFailure::kLossGradient: return "loss gradient";
-    case StepFailure::kUpdate: return "update";
+    case StepReport::Failure::kNone: return "";
+    case StepReport::Failure::kLoss: return "loss";
+    case StepReport::Failure::kGradient: return "gradient";
+    case StepReport::Failure::kLossGradient: return "loss gradient";
+    case StepReport::Failure::kUpdate: return "update";
   }
   return "unknown";
 }
 
 StepReport train_step(Network& network, LearningUpdate& update, const LearningProblem& problem,
-                      const Dataset& batch, StepState& state, const StepOptions& options) {
+                      const Dataset& batch, StepState& state) {
   // The rule and evaluate_batch() see the network and the simulator only through the checked
   // models; θ is updated on `network` itself.
   const CheckedModels models(network, problem);
@@ -217,7 +217,7 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
   const auto start = Clock::now();
   const SimulatorCounts counts_at_start = models.physics().counts();
   StepReport report;
-  UpdateStep step;
+  Step step;
   // Halving moves θ before the next evaluation; an exception there (a StopRequested from the
   // simulator, say) puts θ and the step back, so the step leaves no trace but the cache.
   Vector whole_last_step;
@@ -225,15 +225,15 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
     for (;;) {
       BatchTiming timing;
       const BatchState evaluated = evaluate_batch(models.network(), models.problem(), batch,
-                                                  update.need(), *state.cache, options.shard,
+                                                  update.need(), *state.cache, state.shard,
                                                   &timing);
       report.forward_seconds += timing.forward;
       report.derivative_seconds += timing.derivatives;
       report.loss = evaluated.loss;
-      report.failure = !std::isfinite(evaluated.loss)           ? StepFailure::kLoss
-                       : !all_finite(evaluated.gradient)        ? StepFailure::kGradient
-                       : !all_finite(evaluated.loss_gradient_y) ? StepFailure::kLossGradient
-                                                                : StepFailure::kNone;
+      report.failure = !std::isfinite(evaluated.loss)           ? StepReport::Failure::kLoss
+                       : !all_finite(evaluated.gradient)        ? StepReport::Failure::kGradient
+                       : !all_finite(evaluated.loss_gradient_y) ? StepReport::Failure::kLossGradient
+                                                                : StepReport::Failure::kNone;
       if (report.applied()) {
         const auto update_start = Clock::now();
         try {
@@ -244,12 +244,12 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
                         std::to_string(models.network().num_parameters()));
           }
           if (!all_finite(step.delta)) {
-            report.failure = StepFailure::kUpdate;
-            report.detail = step.problem;
+            report.failure = StepReport::Failure::kUpdate;
+            report.detail = step.message;
           }
         } catch (const NumericalError& e) {
           step = {};
-          report.failure = StepFailure::kUpdate;
+          report.failure = StepReport::Failure::kUpdate;
           report.detail = e.what();
         }
         report.inversion_seconds += step.inversion_seconds;
@@ -260,7 +260,7 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
       if (report.applied()) break;
       // The batch at θ is broken. If θ came from a step that can be halved, try half of it.
       if (!state.last_step_halvable || state.last_step.size() == 0 ||
-          report.halvings == options.max_step_halvings) {
+          report.halvings == state.max_step_halvings) {
         break;
       }
       if (report.halvings == 0) whole_last_step = state.last_step;
@@ -282,7 +282,7 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
     // step already broke θ: it is undone, back to the θ whose batch was finite.
     report.loss = NAN;
     report.undone = state.last_step.size() != 0 &&
-                    (report.failure != StepFailure::kUpdate || report.halvings > 0);
+                    (report.failure != StepReport::Failure::kUpdate || report.halvings > 0);
     if (report.undone) {
       network.set_parameters(state.before_last_step);
       state.last_step.resize(0);

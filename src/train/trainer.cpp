@@ -29,6 +29,13 @@ constexpr NameTable<TrainingTermination, 5> kTerminationNames{{
     {TrainingTermination::kInterrupted, "interrupted"},
 }};
 
+// Iterations · batch size / samples.
+double epochs(const TrainingSummary& s) {
+  return s.samples > 0 ? static_cast<double>(s.iterations) * static_cast<double>(s.batch_size) /
+                             static_cast<double>(s.samples)
+                       : 0.0;
+}
+
 void check_options(const TrainerOptions& options) {
   const auto at_least_one = [](const char* name, const std::optional<long long>& value) {
     if (value && *value < 1) {
@@ -72,8 +79,10 @@ class TrainingRun {
         test_set_(test_set),
         options_(options),
         n_(train_set.size()),
-        batch_size_(std::min(options.batch_size, train_set.size())),
-        step_options_{Shard(options.communicator), options.max_step_halvings} {}
+        batch_size_(std::min(options.batch_size, train_set.size())) {
+    step_state_.shard = Shard(options.communicator);
+    step_state_.max_step_halvings = options.max_step_halvings;
+  }
 
   TrainingSummary run();
 
@@ -93,6 +102,8 @@ class TrainingRun {
   void stop_for_numbers(const std::string& message);
   bool checkpoint_due() const;
   void checkpoint();
+  // Sets what ran in the summary: the rule, its settings, the problem's size and the limits.
+  void describe_run();
   // Saves a checkpoint and ends with kInterrupted and `message`.
   TrainingSummary interrupted(std::string message);
   bool ended() const { return summary_.termination.has_value(); }
@@ -105,7 +116,6 @@ class TrainingRun {
   const TrainerOptions& options_;
   const Index n_;
   const Index batch_size_;
-  const StepOptions step_options_;
 
   TrainingSummary summary_;
   StepState step_state_;
@@ -120,13 +130,11 @@ class TrainingRun {
 TrainingSummary TrainingRun::run() {
   // Ranks stop together at an iteration boundary (requests()); none may leave a step alone.
   std::optional<DeferStopPolls> ranks_stop_together;
-  if (step_options_.shard.active()) ranks_stop_together.emplace();
+  if (step_state_.shard.active()) ranks_stop_together.emplace();
   update_.reset();
-  if (options_.resume != nullptr) {
-    restore(*options_.resume);
-  } else {
-    evaluate();
-  }
+  if (options_.resume != nullptr) restore(*options_.resume);
+  describe_run();
+  if (options_.resume == nullptr) evaluate();
   last_checkpoint_iteration_ = summary_.iterations;
   while (!ended()) {
     if (batch_start_ == 0 && options_.max_epochs && epoch_ >= *options_.max_epochs) {
@@ -217,12 +225,11 @@ void TrainingRun::restore(const TrainerState& state) {
 bool TrainingRun::evaluate() {
   TrainingRecord record;
   record.iteration = summary_.iterations;
-  record.epoch =
-      static_cast<double>(summary_.iterations * batch_size_) / static_cast<double>(n_);
+  record.epoch = epochs(summary_);
   record.train_seconds = summary_.train_seconds;
-  record.train_loss = mean_loss(network_, problem_, train_set_, step_options_.shard);
+  record.train_loss = mean_loss(network_, problem_, train_set_, step_state_.shard);
   record.test_loss =
-      test_set_ ? mean_loss(network_, problem_, *test_set_, step_options_.shard) : NAN;
+      test_set_ ? mean_loss(network_, problem_, *test_set_, step_state_.shard) : NAN;
   const char* bad = !std::isfinite(record.train_loss)                          ? "train"
                     : test_set_ != nullptr && !std::isfinite(record.test_loss) ? "test"
                                                                                : nullptr;
@@ -251,11 +258,12 @@ bool TrainingRun::evaluate() {
 // data-parallel run sees the same combined numbers and takes the same branches.
 bool TrainingRun::step(const std::vector<Index>& batch) {
   const StepReport report = train_step(network_, update_, problem_, train_set_.select(batch),
-                                       step_state_, step_options_);
+                                       step_state_);
   summary_.forward_seconds += report.forward_seconds;
   summary_.derivative_seconds += report.derivative_seconds;
   summary_.inversion_seconds += report.inversion_seconds;
   summary_.step_halvings += report.halvings;
+  summary_.counts += report.counts;
   evaluated_ = evaluated_ && !report.applied() && !report.undone && report.halvings == 0;
   if (!report.applied()) {
     stop_for_numbers(update_.id() + ": " + describe_failure(report, summary_.iterations));
@@ -289,7 +297,7 @@ TrainingRun::Requests TrainingRun::requests() const {
           ? 1.0
           : 0.0,
       evaluation_due ? 1.0 : 0.0};
-  step_options_.shard.sum(flags, 3);
+  step_state_.shard.sum(flags, 3);
   return {flags[0] > 0, flags[1] > 0, flags[2] > 0};
 }
 
@@ -298,6 +306,21 @@ bool TrainingRun::checkpoint_due() const {
   return (options_.checkpoint_every && summary_.iterations % *options_.checkpoint_every == 0) ||
          (options_.checkpoint_seconds &&
           seconds_since(last_checkpoint_time_) >= *options_.checkpoint_seconds);
+}
+
+void TrainingRun::describe_run() {
+  summary_.update = update_.id();
+  summary_.params = update_.params();
+  summary_.parameters = network_.num_parameters();
+  summary_.samples = n_;
+  summary_.batch_size = batch_size_;
+  summary_.limits.clear();
+  const auto limit = [this](const char* name, const auto& value) {
+    if (value) summary_.limits.emplace_back(name, static_cast<double>(*value));
+  };
+  limit("max_iterations", options_.max_iterations);
+  limit("max_epochs", options_.max_epochs);
+  limit("time_budget_seconds", options_.time_budget_seconds);
 }
 
 void TrainingRun::checkpoint() {
@@ -326,6 +349,61 @@ std::string to_string(TrainingTermination termination) {
 
 TrainingTermination parse_training_termination(const std::string& text) {
   return value_named(kTerminationNames, text, "training termination");
+}
+
+std::string brief_report(const TrainingSummary& s) {
+  const double initial = s.history.empty() ? NAN : s.history.front().train_loss;
+  const double final_loss = s.history.empty() ? NAN : s.history.back().train_loss;
+  return s.update + ": " + std::to_string(s.iterations) + " iterations (" +
+         report_number(epochs(s)) + " epochs), " + std::to_string(s.counts.passes) +
+         " simulator passes, train loss " + report_number(initial) + " → " +
+         report_number(final_loss) + ", " +
+         (s.termination ? to_string(*s.termination) : std::string("in progress"));
+}
+
+std::string full_report(const TrainingSummary& s) {
+  std::string out = "physgrad training report\n\nProblem\n";
+  out += report_row("parameters", std::to_string(s.parameters));
+  out += report_row("training samples", std::to_string(s.samples));
+  out += report_row("batch size", std::to_string(s.batch_size));
+  out += "\nRule\n";
+  out += report_row("update", s.update);
+  for (const auto& [name, value] : s.params.items()) {
+    out += report_row(name, value.is_string() ? value.get<std::string>() : value.dump());
+  }
+  out += "\nLimits\n";
+  for (const auto& [name, value] : s.limits) out += report_row(name, report_number(value));
+  if (!s.history.empty()) {
+    const TrainingRecord& first = s.history.front();
+    const TrainingRecord& last = s.history.back();
+    out += "\nLoss (train, test)\n";
+    const auto losses = [](const TrainingRecord& r) {
+      return report_number(r.train_loss) + ", " + report_number(r.test_loss);
+    };
+    out += report_row("initial", losses(first));
+    out += report_row("final (iteration " + std::to_string(last.iteration) + ")", losses(last));
+    out += report_row("change (train)", report_number(first.train_loss - last.train_loss));
+  }
+  out += "\nWork\n";
+  out += report_row("iterations", std::to_string(s.iterations));
+  out += report_row("epochs", report_number(epochs(s)));
+  out += report_row("evaluations", std::to_string(s.history.size()));
+  out += report_row("step halvings", std::to_string(s.step_halvings));
+  out += report_row("simulator passes", std::to_string(s.counts.passes));
+  for (const auto& [name, field] : SimulatorCounts::fields()) {
+    if (field == &SimulatorCounts::passes) continue;
+    out += report_row("  " + std::string(name), std::to_string(s.counts.*field));
+  }
+  out += "\nTime (seconds)\n";
+  out += report_row("network + physics", report_number(s.forward_seconds));
+  out += report_row("derivatives", report_number(s.derivative_seconds));
+  out += report_row("inversion", report_number(s.inversion_seconds));
+  out += report_row("rest of the update", report_number(s.update_seconds));
+  out += report_row("training", report_number(s.train_seconds));
+  out += "\nTermination: " +
+         (s.termination ? to_string(*s.termination) : std::string("in progress")) +
+         (s.message.empty() ? "" : " (" + s.message + ")") + "\n";
+  return out;
 }
 
 TrainingSummary train(Network& network, LearningUpdate& update, const LearningProblem& problem,

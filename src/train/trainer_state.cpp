@@ -30,6 +30,21 @@ TrainingRecord record_from_json(const nlohmann::json& document) {
   return r;
 }
 
+nlohmann::json counts_to_json(const SimulatorCounts& counts) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [name, field] : SimulatorCounts::fields()) out[name] = counts.*field;
+  return out;
+}
+
+SimulatorCounts counts_from_json(const nlohmann::json& document) {
+  if (!document.is_object()) throw Error("checkpoint field 'counts': expected an object");
+  SimulatorCounts counts;
+  for (const auto& [name, field] : SimulatorCounts::fields()) {
+    counts.*field = integer_from_json(document, name);  // ≥ 0
+  }
+  return counts;
+}
+
 }  // namespace
 
 nlohmann::json training_summary_to_json(const TrainingSummary& s) {
@@ -45,7 +60,8 @@ nlohmann::json training_summary_to_json(const TrainingSummary& s) {
           {"derivative_seconds", s.derivative_seconds},
           {"inversion_seconds", s.inversion_seconds},
           {"update_seconds", s.update_seconds},
-          {"step_halvings", s.step_halvings}};
+          {"step_halvings", s.step_halvings},
+          {"counts", counts_to_json(s.counts)}};
 }
 
 TrainingSummary training_summary_from_json(const nlohmann::json& document) {
@@ -78,6 +94,8 @@ TrainingSummary training_summary_from_json(const nlohmann::json& document) {
     }
   }
   summary.step_halvings = integer_from_json(document, "step_halvings");
+  // Absent from files of earlier versions: the work of the steps before is then not known.
+  if (document.contains("counts")) summary.counts = counts_from_json(document.at("counts"));
   if (!document.contains("history") || !document.at("history").is_array() ||
       document.at("history").empty()) {
     throw Error("checkpoint field 'history': expected a non-empty array of records");

@@ -2,11 +2,7 @@
 // a pseudo-inverse through LAPACK, so every link dependency is needed.
 #include <cstdio>
 
-#include "physgrad/catalogue.hpp"
-#include "physgrad/linalg/power_pinv.hpp"
-#include "physgrad/loss/loss.hpp"
-#include "physgrad/optim/minimize.hpp"
-#include "physgrad/physics/diagonal_scale.hpp"
+#include "physgrad/physgrad.hpp"  // the front door: every installed header it names must exist
 
 int main() {
   const physgrad::DiagonalScale physics(physgrad::Vector{{1.0, 100.0}});

@@ -7,7 +7,7 @@
 #include <random>
 #include <vector>
 
-#include "physgrad/linalg/power_pinv.hpp"
+#include "physgrad/inversion/power_pinv.hpp"
 #include "physgrad/parallel/communicator.hpp"
 #include "physgrad/parallel/distributed_eigen.hpp"
 #include "physgrad/parallel/mpi_communicator.hpp"

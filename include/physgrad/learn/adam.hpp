@@ -15,7 +15,7 @@ class AdamUpdate final : public LearningUpdate {
   nlohmann::json params() const override { return state_.params(); }
   UpdateNeed need() const override { return UpdateNeed::kGradient; }
   void reset() override { state_.reset(); }
-  UpdateStep step(const BatchState& batch) override { return UpdateStep(state_.update(batch.gradient)); }
+  Step step(const BatchState& batch) override { return {state_.update(batch.gradient)}; }
   double learning_rate() const override { return state_.options().lr; }
   void set_learning_rate(double lr) override { state_.set_learning_rate(lr); }
   nlohmann::json state() const override { return state_.state(); }

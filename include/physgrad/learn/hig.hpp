@@ -3,13 +3,13 @@
 #pragma once
 
 #include "physgrad/learn/learning_update.hpp"
-#include "physgrad/linalg/power_pinv.hpp"
+#include "physgrad/inversion/power_pinv.hpp"
 
 namespace physgrad {
 
 // J = U Σ Vᵀ, J^{−κ} = V Σ^{−κ} Uᵀ over σᵢ > rcond·σ_max (the others contribute nothing), as in
 // the HIG paper's code (experiments.md 1.11). The path (Gram, normal, SVD) follows J's shape
-// (linalg/power_pinv.hpp); on the Gram path J Jᵀ comes from the network's layer factors.
+// (inversion/power_pinv.hpp); on the Gram path J Jᵀ comes from the network's layer factors.
 struct HigOptions {
   double lr = 1.0;      // η > 0
   double kappa = 0.5;   // ½: HIG; 1: Gauss-Newton (id "gn")
@@ -25,7 +25,7 @@ class HigUpdate final : public LearningUpdate {
   std::string id() const override { return options_.kappa == 1.0 ? "gn" : "hig"; }
   nlohmann::json params() const override;
   UpdateNeed need() const override { return UpdateNeed::kStackedJacobian; }
-  UpdateStep step(const BatchState& batch) override;
+  Step step(const BatchState& batch) override;
   double learning_rate() const override { return options_.lr; }
   void set_learning_rate(double lr) override;
   bool steps_can_be_halved() const override { return true; }

@@ -10,6 +10,7 @@
 
 #include "physgrad/learn/stacked_jacobian.hpp"
 #include "physgrad/loss/loss.hpp"
+#include "physgrad/optim/optimizer.hpp"
 #include "physgrad/physics/simulator.hpp"
 
 namespace physgrad {
@@ -39,16 +40,6 @@ struct BatchState {
   std::function<Vector(const Matrix&)> backprop;  // cotangent at x (n × B) ↦ ∇θ
 };
 
-struct UpdateStep {
-  UpdateStep() = default;
-  explicit UpdateStep(Vector step) : delta(std::move(step)) {}
-
-  Vector delta;                   // Δθ
-  double inversion_seconds = 0;   // time spent in the (pseudo-)inversion, if any
-  double jacobian_seconds = 0;    // time spent forming J or J Jᵀ, if any
-  std::string problem;            // why delta is not finite, when the rule knows
-};
-
 class LearningUpdate {
  public:
   virtual ~LearningUpdate() = default;
@@ -60,7 +51,8 @@ class LearningUpdate {
   virtual void reset() {}
   // Δθ for the batch. Numerical trouble may surface as a non-finite Δθ or a NumericalError;
   // train_step() turns both into a stopped run, never into a changed θ.
-  virtual UpdateStep step(const BatchState& batch) = 0;
+  // Step::status stays kOk; Step::message says why delta is not finite, when the rule knows.
+  virtual Step step(const BatchState& batch) = 0;
   // The step size η, readable and settable between steps (a schedule in one's own loop).
   virtual double learning_rate() const = 0;
   virtual void set_learning_rate(double lr) = 0;

@@ -17,7 +17,7 @@ class SgdUpdate final : public LearningUpdate {
   std::string id() const override { return "sgd"; }
   nlohmann::json params() const override { return {{"lr", options_.lr}}; }
   UpdateNeed need() const override { return UpdateNeed::kGradient; }
-  UpdateStep step(const BatchState& batch) override { return UpdateStep(-options_.lr * batch.gradient); }
+  Step step(const BatchState& batch) override { return {-options_.lr * batch.gradient}; }
   double learning_rate() const override { return options_.lr; }
   void set_learning_rate(double lr) override;
 

@@ -43,7 +43,7 @@ class ShardedJacobian final : public StackedJacobian {
   Normal normal(const Vector& g) const override;
   std::optional<Vector> shared_gram_apply(const Vector& g, const PowerPinvOptions& options,
                                           PowerPinvInfo* info,
-                                          JacobianTiming* timing) const override;
+                                          PowerPinvTiming* timing) const override;
 
  private:
   // The one-process Jacobian of the whole batch from every rank's cotangents (gathered once).

@@ -4,7 +4,7 @@
 
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/optim/adam.hpp"
-#include "physgrad/optim/local_inverse.hpp"
+#include "physgrad/inversion/local_inverse.hpp"
 
 namespace physgrad {
 
@@ -16,7 +16,7 @@ struct SipOptions {
 
 // The proxy gradient is the cotangent (xᵢ − x̃ᵢ)/B backpropagated through the network. A sample
 // whose local inverse fails (non-finite, or a NumericalError) gets a NaN cotangent, so the
-// whole step is non-finite on every rank and UpdateStep::problem says which sample and why.
+// whole step is non-finite on every rank and Step::message says which sample and why.
 class SipUpdate final : public LearningUpdate {
  public:
   using Options = SipOptions;
@@ -25,7 +25,7 @@ class SipUpdate final : public LearningUpdate {
   nlohmann::json params() const override;
   UpdateNeed need() const override { return UpdateNeed::kNetworkOutputs; }
   void reset() override { adam_.reset(); }
-  UpdateStep step(const BatchState& batch) override;
+  Step step(const BatchState& batch) override;
   double learning_rate() const override { return adam_.options().lr; }
   void set_learning_rate(double lr) override { adam_.set_learning_rate(lr); }
   nlohmann::json state() const override { return adam_.state(); }

@@ -1,50 +1,23 @@
 // StackedJacobian — J = ∂y_ik/∂θ of network + physics over a mini-batch (row k·B + i for sample i,
-// output k) in the forms the Jacobian rules use: J Jᵀ, Jᵀc, J, or JᵀJ with Jᵀg; and J^{−κ}g.
+// output k) as a JacobianOperator (inversion/jacobian_operator.hpp): J Jᵀ, Jᵀc, J, JᵀJ with Jᵀg.
 #pragma once
 
-#include <optional>
 #include <vector>
 
-#include "physgrad/linalg/power_pinv.hpp"
+#include "physgrad/inversion/jacobian_operator.hpp"
 #include "physgrad/nn/network.hpp"
 #include "physgrad/physics/simulator.hpp"
 
 namespace physgrad {
 
-struct JacobianTiming;
-
 // An update rule sees only this interface, so the same rule runs on one process (LocalJacobian)
-// and on the ranks of a data-parallel run (ShardedJacobian, sharded_jacobian.hpp).
-class StackedJacobian {
+// and on the ranks of a data-parallel run (ShardedJacobian, sharded_jacobian.hpp); the inversion
+// (inversion/power_pinv.hpp) asks it for the one form its path needs.
+class StackedJacobian : public JacobianOperator {
  public:
-  virtual ~StackedJacobian() = default;
-
   virtual Index batch() const = 0;    // B
   virtual Index outputs() const = 0;  // m, the physics outputs per sample
-  virtual Index cols() const = 0;     // |θ|
-  Index rows() const { return batch() * outputs(); }
-
-  // J Jᵀ (rows × rows).
-  virtual Matrix gram() const = 0;
-  // Jᵀ c for c in row space.
-  virtual Vector apply_transpose(const Vector& c) const = 0;
-  // J itself (rows × cols).
-  virtual Matrix materialize() const = 0;
-  // Jᵀ J (cols × cols; its lower triangle is what counts) and Jᵀ g.
-  struct Normal {
-    Matrix matrix;
-    Vector rhs;
-  };
-  virtual Normal normal(const Vector& g) const = 0;
-  // J^{−κ} g on the Gram path when the ranks of a data-parallel run solve it together, each
-  // forming and holding some columns of J Jᵀ (ShardedJacobian from distributed_gram_rows() rows
-  // on, parallel/distributed_eigen.hpp); nothing when this process solves it alone from gram().
-  virtual std::optional<Vector> shared_gram_apply(const Vector& /*g*/,
-                                                  const PowerPinvOptions& /*options*/,
-                                                  PowerPinvInfo* /*info*/,
-                                                  JacobianTiming* /*timing*/) const {
-    return std::nullopt;
-  }
+  Index rows() const final { return batch() * outputs(); }
 };
 
 // J of one process's batch. For a dense network J Jᵀ comes from the layer factors (the
@@ -88,17 +61,5 @@ class LocalJacobian final : public StackedJacobian {
 // not depend on the thread count.
 std::vector<Matrix> output_cotangents(const Simulator& physics, const Matrix& x,
                                       const Matrix& context);
-
-// Where the time of a power_pinv_apply() on a stacked Jacobian went.
-struct JacobianTiming {
-  double forming_seconds = 0;    // J Jᵀ, J, or Jᵀ J
-  double inversion_seconds = 0;  // the factorization and the products around it
-};
-
-// J^{−κ} g (power_pinv.hpp) on the path resolve_pinv_backend() picks for J's shape: the Gram
-// path from gram() and apply_transpose(), the normal path from normal(), the SVD of
-// materialize(). Throws NumericalError when what it forms is not finite.
-Vector power_pinv_apply(const StackedJacobian& j, const Vector& g, const PowerPinvOptions& options,
-                        PowerPinvInfo* info = nullptr, JacobianTiming* timing = nullptr);
 
 }  // namespace physgrad

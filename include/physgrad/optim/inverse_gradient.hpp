@@ -1,8 +1,7 @@
 // Inverse gradient (IG): Δx = J⁺ Δy with J = ∂P/∂x and Δy = η·(Newton step of L in y)
-// (for L2: Δy = η(y* − y)); J⁺ is the truncated pseudo-inverse (σᵢ ≤ rcond·σ_max dropped).
+// (inversion/y_step.hpp); J⁺ is the truncated pseudo-inverse (inversion/power_pinv.hpp, κ = 1).
 #pragma once
 
-#include "physgrad/linalg/power_pinv.hpp"
 #include "physgrad/optim/optimizer.hpp"
 
 namespace physgrad {
@@ -23,8 +22,5 @@ class InverseGradient final : public Optimizer {
   Step propose(const Objective& objective, const Vector& x, const Domain& domain) override;
   Options options_;
 };
-
-// Δy = η·(Newton step of the loss in y) at y = P(x): the y-space target of IG, PG and SIP.
-Vector y_step(const Objective& objective, const Vector& y, double lr);
 
 }  // namespace physgrad

@@ -4,24 +4,32 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 
 #include "physgrad/optim/domain.hpp"
 #include "physgrad/optim/objective.hpp"
 
 namespace physgrad {
 
+// What a rule proposes, a direct rule (Optimizer) for x or a learning rule (LearningUpdate,
+// learn/learning_update.hpp) for the network weights θ.
 struct Step {
   enum class Status {
-    kOk,        // dx is the proposed update; x + dx lies in the domain's box
+    kOk,        // delta is the proposed update; for a direct rule x + delta lies in the box
     kRejected,  // a trial was tried and rejected (trust region); x stays, the iteration counts;
-                // dx is the rejected trial (minimize() tests its length, as Ceres does), or
+                // delta is the rejected trial (minimize() tests its length, as Ceres does), or
                 // empty when the trial's loss was not finite (no length to test)
     kFailed,    // the rule cannot continue (e.g. no acceptable step length)
   };
-  Vector dx;
+  Step(Vector step = {}, Status how = Status::kOk, std::string why = {}, int spent = 0)
+      : delta(std::move(step)), status(how), message(std::move(why)), evaluations(spent) {}
+
+  Vector delta;          // Δx or Δθ
   Status status = Status::kOk;
-  std::string message;  // why, when failed
-  int evaluations = 0;  // objective evaluations the step spent (value or value+gradient)
+  std::string message;   // why, when failed or (a learning rule) when delta is not finite
+  int evaluations = 0;   // objective evaluations the step spent (value or value+gradient)
+  double jacobian_seconds = 0;   // time spent forming J, J Jᵀ or JᵀJ, if any
+  double inversion_seconds = 0;  // time spent in the (pseudo-)inversion, if any
 };
 
 class Optimizer {
@@ -37,7 +45,7 @@ class Optimizer {
   // sum: minimize() clamps the new iterate). The default domain is unbounded with unit scale.
   // The rule sees the objective's simulator through a CheckedSimulator (the one minimize() puts
   // around it, or one of its own). Throws Error when x or the domain has another dimension than
-  // the objective, or the rule returns a dx of another size (an empty dx is allowed for a
+  // the objective, or the rule returns a delta of another size (an empty delta is allowed for a
   // rejected trial or a failure).
   Step step(const Objective& objective, const Vector& x, const Domain& domain = {});
 

@@ -2,10 +2,12 @@
 // every returned value checked, the work counted (passes = forward + VJP + m·J + 2n·H + R + P⁻¹).
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "physgrad/error.hpp"
@@ -27,6 +29,9 @@ struct SimulatorCounts {
   // inverse counts as one pass.
   long long passes = 0;
 
+  // Every count with its name ("forward", "vjp", …, "passes"), for sums and files.
+  static const std::array<std::pair<const char*, long long SimulatorCounts::*>, 7>& fields();
+  SimulatorCounts& operator+=(const SimulatorCounts& other);
   SimulatorCounts& operator-=(const SimulatorCounts& other);
   friend SimulatorCounts operator-(SimulatorCounts a, const SimulatorCounts& b) { return a -= b; }
   bool operator==(const SimulatorCounts&) const = default;

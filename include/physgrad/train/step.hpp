@@ -52,28 +52,26 @@ BatchState evaluate_batch(const Network& network, const LearningProblem& problem
                           const Dataset& batch, UpdateNeed need, NetworkCache& cache,
                           const Shard& shard = {}, BatchTiming* timing = nullptr);
 
-// What train_step() keeps between calls on one network: the guard's memory of the last applied
-// step and the forward cache. Start with a default one; a checkpoint stores the two vectors.
+// What train_step() keeps between calls on one network: its settings, the guard's memory of the
+// last applied step and the forward cache. Start with a default one (or one with the shard and
+// limit set); a checkpoint stores the two vectors.
 struct StepState {
+  Shard shard;  // data-parallel: the ranks that share each batch; default: this process alone
+  // When the batch at θ is not finite and θ came from a step that can be halved (gn, hig),
+  // that step is retried at half its length up to this many times.
+  int max_step_halvings = 10;
+
   Vector last_step;         // the last applied Δθ (empty before the first, or after an undo)
   Vector before_last_step;  // θ before it
   bool last_step_halvable = false;  // made by a rule whose steps can be halved
   std::unique_ptr<NetworkCache> cache;
 };
 
-struct StepOptions {
-  Shard shard;  // data-parallel: the ranks that share each batch; default: this process alone
-  // When the batch at θ is not finite and θ came from a step that can be halved (gn, hig),
-  // that step is retried at half its length up to this many times.
-  int max_step_halvings = 10;
-};
-
-// Where a step failed; kNone when Δθ was applied.
-enum class StepFailure { kNone, kLoss, kGradient, kLossGradient, kUpdate };
-std::string to_string(StepFailure failure);  // "", "loss", "gradient", "loss gradient", "update"
-
+// What one train_step() did.
 struct StepReport {
-  StepFailure failure = StepFailure::kNone;
+  // Where the step failed; kNone when Δθ was applied.
+  enum class Failure { kNone, kLoss, kGradient, kLossGradient, kUpdate };
+  Failure failure = Failure::kNone;
   std::string detail;   // what the rule or the numerics said (a NumericalError's message)
   bool undone = false;  // the previous step broke θ and was taken back
   int halvings = 0;     // times the previous step was halved before this batch
@@ -84,8 +82,10 @@ struct StepReport {
   double total_seconds = 0;
   SimulatorCounts counts;  // the simulator's work in this step (local inverses included)
 
-  bool applied() const { return failure == StepFailure::kNone; }
+  bool applied() const { return failure == Failure::kNone; }
 };
+// "", "loss", "gradient", "loss gradient", "update".
+std::string to_string(StepReport::Failure failure);
 
 // One update θ ← θ + Δθ on `batch` (the whole mini-batch, also in a data-parallel run),
 // torch.optim-style: call it in your own loop with any schedule, and switch rules between calls.
@@ -100,7 +100,7 @@ struct StepReport {
 // θ and `state` as they were before the call, and so the state of the library's rules, which
 // change it only after their last simulator call: the step can be made again.
 StepReport train_step(Network& network, LearningUpdate& update, const LearningProblem& problem,
-                      const Dataset& batch, StepState& state, const StepOptions& options = {});
+                      const Dataset& batch, StepState& state);
 
 // "non-finite update at iteration 4 (detail); the step was not applied", with `iteration` the
 // number of updates made before this step.

@@ -2,9 +2,9 @@
 // singular values σᵢ > rcond·σ_max of J = U Σ Vᵀ; the others contribute nothing (κ = 1: J⁺ g).
 #pragma once
 
-#include <functional>
 #include <string>
 
+#include "physgrad/inversion/jacobian_operator.hpp"
 #include "physgrad/types.hpp"
 
 namespace physgrad {
@@ -20,7 +20,8 @@ namespace physgrad {
 enum class PinvBackend { kAuto, kSvd, kGram, kNormal };
 
 std::string to_string(PinvBackend backend);  // "auto", "svd", "gram", "normal"
-PinvBackend parse_pinv_backend(const std::string& name);  // throws Error on an unknown name
+// Throws unknown_name_error (text.hpp) on an unknown name.
+PinvBackend parse_pinv_backend(const std::string& name);
 
 // Smallest relative cutoff the Gram and normal paths use. Forming Σ² and its eigensolve leave
 // an absolute error of a few ε·σ_max² on every eigenvalue σᵢ², so σᵢ below √ε·σ_max ≈ 1.5e-8·σ_max
@@ -43,27 +44,27 @@ struct PowerPinvInfo {
   double rcond_used = 0;                     // the cutoff applied (rcond, or the Gram floor)
 };
 
+// Where the time of a call went.
+struct PowerPinvTiming {
+  double forming_seconds = 0;    // J Jᵀ, J, or Jᵀ J (and Jᵀg) from the operator
+  double inversion_seconds = 0;  // the factorization and the products around it
+};
+
 // The path `options.backend` stands for on an r × c matrix: kAuto resolved as described above.
 PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions& options);
 
-// J^{−κ} g for J with rows() == g.size(); an empty J gives the zero vector of size cols().
-// Throws Error on mismatched sizes, rcond outside [0, 1) or non-finite κ, and NumericalError on
-// non-finite entries of J or g or a LAPACK routine that fails to converge.
+// J^{−κ} g for g of J.rows() entries, on the path resolve_pinv_backend() picks: the Gram path
+// from J.gram() and J.apply_transpose(), the normal path from J.normal(g), the SVD of
+// J.materialize(). An empty J gives the zero vector of J.cols() entries. Throws Error on
+// mismatched sizes, rcond outside [0, 1) or non-finite κ, and NumericalError on non-finite
+// entries of g or of what the operator forms, or a LAPACK routine that fails to converge.
+Vector power_pinv_apply(const JacobianOperator& j, const Vector& g,
+                        const PowerPinvOptions& options = {}, PowerPinvInfo* info = nullptr,
+                        PowerPinvTiming* timing = nullptr);
+
+// The same for a formed matrix (DenseJacobian), which must be finite (NumericalError otherwise).
 Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions& options = {},
                         PowerPinvInfo* info = nullptr);
-
-// J^{−κ} g from the Gram matrix G = J Jᵀ (lower triangle read) and a routine c ↦ Jᵀ c, for
-// callers that form G without forming J (e.g. a network's factored per-sample Jacobian): the
-// kGram path with its cutoff floor, result Jᵀ U Σ^{−1−κ} Uᵀ g. Throws like power_pinv_apply.
-Vector power_pinv_apply_gram(Matrix gram, const Vector& g,
-                             const std::function<Vector(const Vector&)>& apply_transpose,
-                             const PowerPinvOptions& options = {}, PowerPinvInfo* info = nullptr);
-
-// J^{−κ} g from the normal matrix A = Jᵀ J (lower triangle read) and b = Jᵀ g, for callers that
-// sum A and b over row blocks of J (the ranks of a data-parallel run): the kNormal path with its
-// cutoff floor, result V Σ^{−1−κ} Vᵀ b. Throws like power_pinv_apply.
-Vector power_pinv_apply_normal(Matrix normal, const Vector& jt_g,
-                               const PowerPinvOptions& options = {}, PowerPinvInfo* info = nullptr);
 
 // Truncated pseudo-inverse of a symmetric positive semi-definite matrix applied to g:
 // A⁺ g over the eigenvalues λᵢ > rcond·λ_max (the normal-equation solve of Gauss-Newton).

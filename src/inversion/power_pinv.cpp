@@ -1,24 +1,23 @@
-#include "physgrad/linalg/power_pinv.hpp"
-
-#include <functional>
+#include "physgrad/inversion/power_pinv.hpp"
 
 #include <cblas.h>
 #include <lapacke.h>
 
 #include <algorithm>
-#include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <sstream>
 #include <utility>
 
 #include "physgrad/error.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad {
 
 namespace {
 
-constexpr std::array<std::pair<PinvBackend, const char*>, 4> kBackendNames{{
+constexpr NameTable<PinvBackend, 4> kBackendNames{{
     {PinvBackend::kAuto, "auto"},
     {PinvBackend::kSvd, "svd"},
     {PinvBackend::kGram, "gram"},
@@ -58,13 +57,12 @@ void check_lapack(lapack_int status, const char* routine) {
   }
 }
 
-// Thin SVD J = U Σ Vᵀ by divide and conquer (dgesdd), then V Σ^{−κ} Uᵀ g over the kept σ, which
-// are the leading ones (dgesdd sorts σ descending).
-Vector svd_apply(const Matrix& j, const Vector& g, double kappa, PowerPinvInfo& info) {
-  const lapack_int m = lapack_dim(j.rows());
-  const lapack_int n = lapack_dim(j.cols());
+// Thin SVD J = U Σ Vᵀ by divide and conquer (dgesdd, which overwrites `a` = J), then V Σ^{−κ} Uᵀ g
+// over the kept σ, which are the leading ones (dgesdd sorts σ descending).
+Vector svd_apply(Matrix& a, const Vector& g, double kappa, PowerPinvInfo& info) {
+  const lapack_int m = lapack_dim(a.rows());
+  const lapack_int n = lapack_dim(a.cols());
   const lapack_int k = std::min(m, n);
-  Matrix a = j;  // dgesdd overwrites its input
   Matrix u(m, k);
   Matrix vt(k, n);
   Vector sigma(k);
@@ -99,13 +97,15 @@ Vector eigen_apply(Matrix& w, const Vector& x, double kappa, PowerPinvInfo& info
   return w.rightCols(info.rank) * c;
 }
 
-// J Jᵀ (gram = true) or Jᵀ J by dsyrk, lower triangle.
-Matrix squared(const Matrix& j, bool gram) {
-  const lapack_int n = lapack_dim(gram ? j.rows() : j.cols());
-  const lapack_int k = lapack_dim(gram ? j.cols() : j.rows());
-  Matrix w(n, n);
-  cblas_dsyrk(CblasColMajor, CblasLower, gram ? CblasNoTrans : CblasTrans, n, k, 1.0, j.data(),
-              lapack_dim(j.rows()), 0.0, w.data(), n);
+// A Aᵀ (gram = true) or Aᵀ A by dsyrk: the lower triangle, the upper left zero.
+Matrix squared(const Matrix& a, bool gram) {
+  const lapack_int n = lapack_dim(gram ? a.rows() : a.cols());
+  const lapack_int k = lapack_dim(gram ? a.cols() : a.rows());
+  Matrix w = Matrix::Zero(n, n);
+  if (a.size() != 0) {
+    cblas_dsyrk(CblasColMajor, CblasLower, gram ? CblasNoTrans : CblasTrans, n, k, 1.0, a.data(),
+                lapack_dim(a.rows()), 0.0, w.data(), n);
+  }
   return w;
 }
 
@@ -117,24 +117,35 @@ void check_kappa(double kappa) {
   }
 }
 
+// work(), with its duration added to `seconds`.
+template <typename Work>
+auto timed(double& seconds, const Work& work) {
+  const auto start = std::chrono::steady_clock::now();
+  auto result = work();
+  seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+void check_square(const Matrix& w, const char* form) {
+  if (w.rows() != w.cols()) {
+    throw Error(std::string("power_pinv_apply: the operator's ") + form + " is " +
+                std::to_string(w.rows()) + "×" + std::to_string(w.cols()) + ", not square");
+  }
+}
+
 }  // namespace
 
 std::string to_string(PinvBackend backend) {
-  for (const auto& [value, name] : kBackendNames) {
-    if (value == backend) return name;
+  const std::string_view name = name_of(kBackendNames, backend);
+  if (name.empty()) {
+    throw Error("to_string: invalid PinvBackend value " +
+                std::to_string(static_cast<int>(backend)));
   }
-  throw Error("to_string: invalid PinvBackend value " +
-              std::to_string(static_cast<int>(backend)));
+  return std::string(name);
 }
 
 PinvBackend parse_pinv_backend(const std::string& name) {
-  std::string known;
-  for (const auto& [value, candidate] : kBackendNames) {
-    if (name == candidate) return value;
-    known += known.empty() ? "" : ", ";
-    known += candidate;
-  }
-  throw Error(std::string("unknown pinv backend '") + name + "' (known: " + known + ")");
+  return value_named(kBackendNames, name, "pinv backend");
 }
 
 PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions& options) {
@@ -144,66 +155,65 @@ PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions&
                                        : PinvBackend::kNormal;
 }
 
+Matrix DenseJacobian::gram() const { return squared(*j_, true); }
+
+Vector DenseJacobian::apply_transpose(const Vector& c) const { return j_->transpose() * c; }
+
+JacobianOperator::Normal DenseJacobian::normal(const Vector& g) const {
+  return {squared(*j_, false), j_->transpose() * g};
+}
+
+// The one path choice: every path of J^{−κ} g starts here.
+Vector power_pinv_apply(const JacobianOperator& j, const Vector& g,
+                        const PowerPinvOptions& options, PowerPinvInfo* info,
+                        PowerPinvTiming* timing) {
+  if (j.rows() != g.size()) {
+    throw Error("power_pinv_apply: J has " + std::to_string(j.rows()) +
+                " rows but the vector has " + std::to_string(g.size()) + " entries");
+  }
+  if (!all_finite(g)) throw NumericalError("power_pinv_apply: non-finite entry in the vector");
+  check_rcond(options.rcond);
+  check_kappa(options.kappa);
+  PowerPinvInfo local_info;
+  PowerPinvInfo& out = info != nullptr ? *info : local_info;
+  PowerPinvTiming local_timing;
+  PowerPinvTiming& time = timing != nullptr ? *timing : local_timing;
+  out = {};
+  out.backend = resolve_pinv_backend(j.rows(), j.cols(), options);
+  out.rcond_used =
+      out.backend == PinvBackend::kSvd ? options.rcond : std::max(options.rcond, kMinGramRcond);
+  if (j.rows() == 0 || j.cols() == 0) return Vector::Zero(j.cols());
+
+  switch (out.backend) {
+    case PinvBackend::kGram: {
+      if (std::optional<Vector> shared = j.shared_gram_apply(g, options, info, &time)) {
+        return std::move(*shared);
+      }
+      Matrix gram = timed(time.forming_seconds, [&] { return j.gram(); });
+      check_square(gram, "J Jᵀ");
+      return timed(time.inversion_seconds, [&] {
+        return j.apply_transpose(eigen_apply(gram, g, options.kappa, out));
+      });
+    }
+    case PinvBackend::kNormal: {
+      JacobianOperator::Normal normal = timed(time.forming_seconds, [&] { return j.normal(g); });
+      check_square(normal.matrix, "JᵀJ");
+      return timed(time.inversion_seconds,
+                   [&] { return eigen_apply(normal.matrix, normal.rhs, options.kappa, out); });
+    }
+    default: {
+      Matrix formed = timed(time.forming_seconds, [&] { return j.materialize(); });
+      check_operands(formed, g, "power_pinv_apply");
+      return timed(time.inversion_seconds,
+                   [&] { return svd_apply(formed, g, options.kappa, out); });
+    }
+  }
+}
+
 Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions& options,
                         PowerPinvInfo* info) {
   check_operands(j, g, "power_pinv_apply");
-  check_rcond(options.rcond);
-  check_kappa(options.kappa);
-  const PinvBackend backend = resolve_pinv_backend(j.rows(), j.cols(), options);
-  if (backend == PinvBackend::kGram && j.size() != 0) {
-    return power_pinv_apply_gram(
-        squared(j, true), g, [&j](const Vector& c) { return Vector(j.transpose() * c); }, options,
-        info);
-  }
-
-  PowerPinvInfo local;
-  PowerPinvInfo& out = info != nullptr ? *info : local;
-  out = {};
-  out.backend = backend;
-  out.rcond_used =
-      out.backend == PinvBackend::kSvd ? options.rcond : std::max(options.rcond, kMinGramRcond);
-  if (j.size() == 0) return Vector::Zero(j.cols());
-
-  if (out.backend == PinvBackend::kNormal) {
-    Matrix w = squared(j, false);
-    return eigen_apply(w, j.transpose() * g, options.kappa, out);
-  }
-  return svd_apply(j, g, options.kappa, out);
-}
-
-namespace {
-
-// Checks the operands of a symmetric path (a square matrix of g's size) and starts its info.
-void start_symmetric(const Matrix& matrix, const Vector& g, const char* name,
-                     PinvBackend backend, const PowerPinvOptions& options, PowerPinvInfo& out) {
-  if (matrix.rows() != matrix.cols()) throw Error(std::string(name) + ": the matrix is not square");
-  check_operands(matrix, g, name);
-  check_rcond(options.rcond);
-  check_kappa(options.kappa);
-  out = {};
-  out.backend = backend;
-  out.rcond_used = std::max(options.rcond, kMinGramRcond);
-}
-
-}  // namespace
-
-Vector power_pinv_apply_gram(Matrix gram, const Vector& g,
-                             const std::function<Vector(const Vector&)>& apply_transpose,
-                             const PowerPinvOptions& options, PowerPinvInfo* info) {
-  PowerPinvInfo local;
-  PowerPinvInfo& out = info != nullptr ? *info : local;
-  start_symmetric(gram, g, "power_pinv_apply_gram", PinvBackend::kGram, options, out);
-  if (gram.size() == 0) return apply_transpose(Vector::Zero(0));
-  return apply_transpose(eigen_apply(gram, g, options.kappa, out));
-}
-
-Vector power_pinv_apply_normal(Matrix normal, const Vector& jt_g, const PowerPinvOptions& options,
-                               PowerPinvInfo* info) {
-  PowerPinvInfo local;
-  PowerPinvInfo& out = info != nullptr ? *info : local;
-  start_symmetric(normal, jt_g, "power_pinv_apply_normal", PinvBackend::kNormal, options, out);
-  if (normal.size() == 0) return Vector::Zero(0);
-  return eigen_apply(normal, jt_g, options.kappa, out);
+  return power_pinv_apply(DenseJacobian(j), g, options, info);
 }
 
 Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, double rcond) {

@@ -15,13 +15,14 @@ enum class InverseMethod {
   kAnalytic,      // the simulator's own inverse()
   kTimeReversal,  // the simulator's time_reversal(), anchored at x₀
   kLbfgs,         // L-BFGS with a strong-Wolfe line search
-  kGaussNewton,   // full Gauss-Newton steps (truncated pseudo-inverse of J)
+  kInverseGradient,  // full inverse-gradient steps Δx = J⁺(y − P(x)) (optim/inverse_gradient.hpp)
 };
 std::string to_string(InverseMethod method);
-// "auto", "analytic", "time_reversal", "lbfgs" or "gn"; throws Error naming the text otherwise.
+// "auto", "analytic", "time_reversal", "lbfgs" or "ig"; throws unknown_name_error (text.hpp)
+// otherwise.
 InverseMethod parse_inverse_method(const std::string& text);
 
-// The options of the numerical inverses (lbfgs, gn); the analytic and time-reversal inverses
+// The options of the numerical inverses (lbfgs, ig); the analytic and time-reversal inverses
 // have none. The member initialisers are the defaults (the rule catalogue's, for pg and sip).
 struct LocalInverseOptions {
   InverseMethod method = InverseMethod::kAuto;
@@ -35,7 +36,7 @@ struct LocalInverseOptions {
   // (the solve stalls: y is out of reach, or the rest of the misfit is below what rounding lets
   // the steps resolve), ≥ 0; 0 disables. Ceres' default.
   double function_tolerance = 1e-6;
-  // gn: singular values σ ≤ rcond·σ_max of J are dropped from its pseudo-inverse, in [0, 1).
+  // ig: singular values σ ≤ rcond·σ_max of J are dropped from its pseudo-inverse, in [0, 1).
   double rcond = 1e-10;
 };
 

@@ -1,4 +1,4 @@
-#include "physgrad/optim/local_inverse.hpp"
+#include "physgrad/inversion/local_inverse.hpp"
 
 #include <cmath>
 #include <memory>
@@ -11,14 +11,19 @@
 #include "physgrad/optim/lbfgs.hpp"
 #include "physgrad/optim/minimize.hpp"
 #include "physgrad/physics/checked_simulator.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad {
 
 namespace {
 
-constexpr InverseMethod kMethods[] = {InverseMethod::kAuto, InverseMethod::kAnalytic,
-                                      InverseMethod::kTimeReversal, InverseMethod::kLbfgs,
-                                      InverseMethod::kGaussNewton};
+constexpr NameTable<InverseMethod, 5> kMethodNames{{
+    {InverseMethod::kAuto, "auto"},
+    {InverseMethod::kAnalytic, "analytic"},
+    {InverseMethod::kTimeReversal, "time_reversal"},
+    {InverseMethod::kLbfgs, "lbfgs"},
+    {InverseMethod::kInverseGradient, "ig"},
+}};
 
 void check_options(const LocalInverseOptions& options) {
   require_positive("local inverse: tolerance", options.tolerance);
@@ -38,14 +43,14 @@ LocalInverseResult closed_form(const Simulator& simulator, InverseMethod method,
   if (method == InverseMethod::kAnalytic) {
     if (!simulator.has_inverse()) {
       throw Error("simulator '" + simulator.name() +
-                  "' has no analytic inverse; use a numerical one (lbfgs or gn)");
+                  "' has no analytic inverse; use a numerical one (lbfgs or ig)");
     }
     result.x = simulator.inverse(y, x0, context);
     result.evaluations = 2;
   } else {
     if (!simulator.has_time_reversal()) {
       throw Error("simulator '" + simulator.name() +
-                  "' has no time reversal; use a numerical inverse (lbfgs or gn)");
+                  "' has no time reversal; use a numerical inverse (lbfgs or ig)");
     }
     // x₀ + R(y) − R(P(x₀)): maps P(x₀) to x₀ exactly, so the reversal's own error (the
     // truncation error of a scheme that is not reversible) cancels to first order near x₀.
@@ -59,7 +64,7 @@ LocalInverseResult closed_form(const Simulator& simulator, InverseMethod method,
   return result;
 }
 
-// The minimizer of ½‖P(x) − y‖² from x₀ by L-BFGS or full Gauss-Newton steps.
+// The minimizer of ½‖P(x) − y‖² from x₀ by L-BFGS or full inverse-gradient steps.
 LocalInverseResult numerical(const Simulator& simulator, InverseMethod method, const Vector& y,
                              const Vector& x0, const Vector& context,
                              const LocalInverseOptions& options, const Domain& domain) {
@@ -76,7 +81,7 @@ LocalInverseResult numerical(const Simulator& simulator, InverseMethod method, c
   std::unique_ptr<Optimizer> solver;
   if (method == InverseMethod::kLbfgs) {
     solver = std::make_unique<Lbfgs>();
-  } else {  // Gauss-Newton for ½‖P(x) − y‖²: the full inverse-gradient step J⁺(y − P(x))
+  } else {  // the full inverse-gradient step J⁺(y − P(x)) on ½‖P(x) − y‖²
     solver = std::make_unique<InverseGradient>(InverseGradientOptions{1.0, options.rcond});
   }
   // ‖r‖ ≤ a ⟺ ½‖r‖² ≤ ½a², and ‖r‖ ≤ ρ‖r₀‖ ⟺ ½‖r‖² ≤ ρ²·½‖r₀‖².
@@ -108,23 +113,12 @@ LocalInverseResult numerical(const Simulator& simulator, InverseMethod method, c
 }  // namespace
 
 std::string to_string(InverseMethod method) {
-  switch (method) {
-    case InverseMethod::kAuto: return "auto";
-    case InverseMethod::kAnalytic: return "analytic";
-    case InverseMethod::kTimeReversal: return "time_reversal";
-    case InverseMethod::kLbfgs: return "lbfgs";
-    case InverseMethod::kGaussNewton: return "gn";
-  }
-  return "unknown";
+  const std::string_view name = name_of(kMethodNames, method);
+  return name.empty() ? "unknown" : std::string(name);
 }
 
 InverseMethod parse_inverse_method(const std::string& text) {
-  std::string known;
-  for (InverseMethod method : kMethods) {
-    if (text == to_string(method)) return method;
-    known += (known.empty() ? "" : ", ") + to_string(method);
-  }
-  throw Error("unknown inverse method '" + text + "' (known: " + known + ")");
+  return value_named(kMethodNames, text, "inverse method");
 }
 
 nlohmann::json local_inverse_params(const LocalInverseOptions& options) {
