@@ -1,5 +1,5 @@
 // heat-inverse: a fully connected network reconstructs the initial state x* of periodic heat
-// diffusion from the diffused field y* = P(x*) (experiments.md E6), trained on
+// diffusion from the diffused field y* = P(x*) (docs/reference_experiments.md), trained on
 // L = ½‖P(f(y*)) − y*‖². SIP (Adam on the proxy loss towards the regularised inverse
 // diffusion) recovers sharper states than Adam backpropagating through the diffusion.
 #include <algorithm>
@@ -49,9 +49,10 @@ std::vector<double> coverage(Index n, double lo, double hi) {
   return c;
 }
 
-// E6's hot boxes, scaled from 64 cells to n: 4–10 boxes with strength U(0, 1), centre
-// (u − ½)·0.8n + n/2 per axis, half size U(0, h)·n/64 per axis (h = 10 in 2-D as in E6, 5 in 1-D
-// so that widths stay below ~10 cells), centre clipped to keep the box inside the domain.
+// The published hot boxes (docs/reference_experiments.md), scaled from 64 cells to n: 4–10
+// boxes with strength U(0, 1), centre (u − ½)·0.8n + n/2 per axis, half size U(0, h)·n/64 per
+// axis (h = 10 in 2-D as published, 5 in 1-D so that widths stay below ~10 cells), centre
+// clipped to keep the box inside the domain.
 HeatData make_data(const HeatDiffusion& physics, Index count, std::uint64_t seed) {
   const Index n = physics.config().n;
   const int dims = physics.config().dims;
@@ -103,7 +104,7 @@ class HeatInverse final : public LearningExperiment {
         integer_option("dims", "1", "1: a line of n cells; 2: an n×n grid").at_least(1).at_most(2),
         integer_option("n", "", "cells per axis (default: 64 in 1-D, 16 in 2-D)").at_least(8),
         real_option("amount", "",
-                    "diffusion ν·t in cell units (default: 8·(n/64)², E6's 8 "
+                    "diffusion ν·t in cell units (default: 8·(n/64)², the published 8 "
                     "at 64 cells, the same blur relative to the domain)")
             .above(0),
         sample_count_option("train-size", "4096", "training samples", "16", bytes_each),
@@ -196,20 +197,21 @@ class HeatInverse final : public LearningExperiment {
     add_table(context, runs);
     sweep.add_tables();
     context.add_note(
-        "experiments.md E6 trains a U-net (~38k weights) on 2-D 64×64 fields with fresh batches "
-        "of 128: after 50 steps the x loss is SIP ~21 vs Adam ~30 (E6a), and the SIP paper's "
-        "trained networks reach a test L1 of SIP ~50 vs Adam ~125 (E6b). This run: " +
+        "The reference (docs/reference_experiments.md) trains a U-net (~38k weights) on 2-D "
+        "64×64 fields with fresh batches of 128: after 50 steps the x loss is SIP ~21 vs Adam "
+        "~30 (book), and the SIP paper's trained networks reach a test L1 of SIP ~50 vs Adam "
+        "~125 (paper). This run: " +
         tag + ", amount " + format_value(settings.real("amount")) + ", a " + std::to_string(size) +
         "-" + std::to_string(2 * size) + "-" + std::to_string(2 * size) + "-" +
         std::to_string(size) + " tanh network, a fixed training set and at most " +
         format_value(settings.real("time")) +
-        " s of training per rule, without E6's mean correction of the output. The absolute "
-        "losses scale with the number of cells, so compare the SIP/Adam ratios (E6a ~0.7, "
-        "E6b ~0.4), not the values.");
+        " s of training per rule, without the reference's mean correction of the output. The "
+        "absolute losses scale with the number of cells, so compare the SIP/Adam ratios "
+        "(book ~0.7, paper ~0.4), not the values.");
   }
 
  private:
-  // Adam and SIP: lr 1e-3 and batch 128 as in E6. HIG/GN (optional, slow: the Jacobian has
+  // Adam and SIP: lr 1e-3 and batch 128 as published. HIG/GN (optional, slow: the Jacobian has
   // B·n² rows and ~8n⁴ columns): batch 4, lr 1, τ 1e-6 as in the HIG paper. SGD (optional):
   // lr 0.1.
   inline static const std::map<std::string, RuleDefaults> kDefaults = {
@@ -311,11 +313,12 @@ class HeatInverse final : public LearningExperiment {
                             x_loss == lowest ? "best" : "×" + format_value(x_loss / lowest)});
     }
     context.add_table(std::move(table));
-    // experiments.md E6 (2-D U-net): x loss at step 49 (E6a) and trained test L1 (E6b).
+    // docs/reference_experiments.md (2-D U-net): x loss at step 49 (book), trained test L1 (paper).
     context.add_table({"Reference values of another setup, not of this run: a 2-D U-net on "
-                       "64×64 fields (experiments.md E6); compare the SIP/Adam ratios, not the "
-                       "values",
-                       {"rule", "E6a x loss at step 49 (2-D U-net)", "E6b trained x L1 (2-D U-net)"},
+                       "64×64 fields (docs/reference_experiments.md); compare the SIP/Adam "
+                       "ratios, not the values",
+                       {"rule", "book: x loss at step 49 (2-D U-net)",
+                        "paper: trained x L1 (2-D U-net)"},
                        {{"SIP", "~21", "~50"}, {"Adam", "~30", "~125"}, {"SGD", "–", "~119"},
                         {"SIP / Adam", "~0.7", "~0.4"}}});
   }

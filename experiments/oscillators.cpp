@@ -1,6 +1,6 @@
 // oscillators: a network maps a target state y* (= the initial state s₀) to the controls that
 // bring a chain of coupled oscillators back to it after time T; trained through the RK4
-// simulator with Adam, Gauss-Newton, HIG or SIP (experiments.md E10 book, E11 paper).
+// simulator with Adam, Gauss-Newton, HIG or SIP (docs/reference_experiments.md).
 #include <cmath>
 
 #include "registry.hpp"
@@ -25,7 +25,7 @@ Dataset make_states(Index n, Index dim, std::uint64_t seed) {
   return {states, states, states};
 }
 
-// The published settings of each configuration (experiments.md E10, E11).
+// The published settings of each configuration (docs/reference_experiments.md).
 struct Configuration {
   OscillatorConfig physics;
   Activation activation;
@@ -201,10 +201,11 @@ class Oscillators final : public LearningExperiment {
     add_trajectory_figures(context, config.physics, test_set.inputs.col(0), trained);
     sweep.add_tables();
     context.add_note(
-        "Reference (experiments.md): zero controls give a mean loss of 0.726 (book) and 0.796 "
-        "(paper) per state. Book notebook after ~100 s: HIG ~2e-8, Adam ~5e-5, SIP ~1e-4; the "
-        "paper's runs used 3600 s per method and stored no numbers. Budgets here are training "
-        "time per rule (--time), evaluations excluded; every rule starts from the same network.");
+        "Reference (docs/reference_experiments.md): zero controls give a mean loss of 0.726 "
+        "(book) and 0.796 (paper) per state. Book notebook after ~100 s: HIG ~2e-8, Adam ~5e-5, "
+        "SIP ~1e-4; the paper's runs used 3600 s per method and stored no numbers. Budgets here "
+        "are training time per rule (--time), evaluations excluded; every rule starts from the "
+        "same network.");
   }
 };
 

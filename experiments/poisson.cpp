@@ -1,6 +1,6 @@
 // poisson: a network predicts x from y* = ∇²x* on an 8×8 grid (zero boundary), trained through
-// the 5-point Laplacian: Adam vs HIG (experiments.md E13), SIP through the exact inverse on
-// request.
+// the 5-point Laplacian: Adam vs HIG (docs/reference_experiments.md), SIP through the exact
+// inverse on request.
 #include <cmath>
 
 #include "registry.hpp"
@@ -136,7 +136,7 @@ class PoissonExperiment final : public LearningExperiment {
     const Matrix y_test = physics.forward_batch(x_test, Matrix());
     const Dataset test_set{y_test, y_test, Matrix()};
     const auto observe = [&](const Mlp& network, TrainingRecord& record) {
-      // experiments.md E13's x_distance_l1: mean over samples of Σ|x − x*|.
+      // The published x_distance_l1: mean over samples of Σ|x − x*|.
       record.extras["x_l1"] =
           (network.forward(test_set.inputs) - x_test).cwiseAbs().sum() /
           static_cast<double>(x_test.cols());

@@ -1,6 +1,6 @@
 // quantum-dipole: a network maps a target superposition of the 2nd and 3rd eigenstates to the
 // 384 dipole controls that steer the ground state there (Crank-Nicolson Schrödinger solver,
-// fidelity loss 1 − |⟨ψ*|ψ(T)⟩|²): Adam vs HIG (experiments.md E12).
+// fidelity loss 1 − |⟨ψ*|ψ(T)⟩|²): Adam vs HIG (docs/reference_experiments.md).
 #include <algorithm>
 #include <cmath>
 
@@ -196,8 +196,9 @@ class QuantumDipoleExperiment final : public LearningExperiment {
     add_state_figures(context, config, test_set.inputs.col(0), test_set.context.col(0), trained);
     sweep.add_tables();
     context.add_note(
-        "Reference (experiments.md E12): with u = 0 the infidelity is exactly 1. The paper ran "
-        "5400 s per method (Adam B 256 lr 5e-4; HIG B 16 lr 0.5 τ 1e-5) and stored no numbers.");
+        "Reference (docs/reference_experiments.md): with u = 0 the infidelity is exactly 1. The "
+        "paper ran 5400 s per method (Adam B 256 lr 5e-4; HIG B 16 lr 0.5 τ 1e-5) and stored no "
+        "numbers.");
   }
 };
 

@@ -1,7 +1,7 @@
-// sin-rotation: the sine characterisation of the SIP paper (experiments.md E5). A 2-32-64-32-2
-// ReLU network maps targets y* to x through the rotated, ill-conditioned sine map
-// P = SinRotation(ξ, φ) with L = ½‖P(x) − y*‖². SIP (Adam on the proxy loss towards the exact
-// local inverse) keeps its accuracy as ξ grows; Adam and SGD on L lose it.
+// sin-rotation: the sine characterisation of the SIP paper (docs/reference_experiments.md).
+// A 2-32-64-32-2 ReLU network maps targets y* to x through the rotated, ill-conditioned sine
+// map P = SinRotation(ξ, φ) with L = ½‖P(x) − y*‖². SIP (Adam on the proxy loss towards the
+// exact local inverse) keeps its accuracy as ξ grows; Adam and SGD on L lose it.
 #include <algorithm>
 #include <cmath>
 
@@ -16,7 +16,7 @@
 namespace physgrad::experiments {
 namespace {
 
-// The landscape figure's target and view, as in the SIP paper's figure (E5).
+// The landscape figure's target and view, as in the SIP paper's figure.
 const Vector kTrackedTarget{{0.3, -0.5}};
 constexpr double kViewX = 1.2, kViewY = 0.6;
 const std::vector<Index> kWidths = {2, 32, 64, 32, 2};
@@ -180,15 +180,15 @@ class SinRotationExperiment final : public LearningExperiment {
     }
     context.add_table(std::move(table));
     context.add_note(
-        "experiments.md E5 (code form, φ = 45°, 600 s per method on a GPU): at ξ = 32 SIP "
-        "reaches an x-distance of ~1e-2 and Adam ~0.2–0.5, SGD ~1.5–2; at ξ = 1 all methods "
-        "end below ~2e-3 with Adam best. This run: " + form + " form, φ = " + format_value(phi) +
-        "°, at most " + format_value(settings.real("time")) + " s of training per run on the "
-        "CPU, so compare the ordering rather than the values. P reacts ξ² times more strongly "
-        "to x along the second rotated axis than along the first, so at large ξ a low loss can "
-        "go with a large x-distance. The SIP rule here is the book's (L2 proxy towards the "
-        "exact local inverse, η = 1); the SIP repository used an L1 proxy with a step-limited "
-        "Newton step (experiments.md 1.7, 1.8).");
+        "docs/reference_experiments.md (code form, φ = 45°, 600 s per method on a GPU): at "
+        "ξ = 32 SIP reaches an x-distance of ~1e-2 and Adam ~0.2–0.5, SGD ~1.5–2; at ξ = 1 all "
+        "methods end below ~2e-3 with Adam best. This run: " + form +
+        " form, φ = " + format_value(phi) + "°, at most " + format_value(settings.real("time")) +
+        " s of training per run on the CPU, so compare the ordering rather than the values. P "
+        "reacts ξ² times more strongly to x along the second rotated axis than along the first, "
+        "so at large ξ a low loss can go with a large x-distance. The SIP rule here is the "
+        "book's (L2 proxy towards the exact local inverse, η = 1); the SIP repository used an L1 "
+        "proxy with a step-limited Newton step.");
     context.add_note(
         "Step sizes: Adam and SIP 1e-3 as in the SIP repository. SGD keeps its 1/ξ² scaling (the "
         "stiff curvature of L grows with ξ²): the repository's 1e-2/ξ² diverges within 5 steps "
@@ -200,7 +200,8 @@ class SinRotationExperiment final : public LearningExperiment {
  private:
   static constexpr Index kBatch = 100;  // the SIP repository's batch
 
-  // SGD's rate depends on ξ (see the note in run()); the rest as in E5 or the HIG paper.
+  // SGD's rate depends on ξ (see the note in run()); the rest as published
+  // (docs/reference_experiments.md).
   static std::map<std::string, RuleDefaults> rule_defaults(double xi, const std::string& form) {
     const double sgd = (form == "code" ? 3e-3 : 0.1) / (xi * xi);
     return {{"sgd", {{.lr = sgd}, kBatch}},

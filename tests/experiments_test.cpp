@@ -79,7 +79,8 @@ TEST(ComparisonExperiment, PgEndsClosestToTheMinimumAndBothInversesAgree) {
     const std::vector<double> x = entry["final"]["x"];
     distance[entry["label"]] = std::hypot(x[0], x[1]);
   }
-  // experiments.md E2: distances GD 2.63, Newton 0.925, PG 0.51 after 10 steps.
+  // docs/reference_experiments.md (comparison): distances GD 2.63, Newton 0.925, PG 0.51 after
+  // 10 steps.
   EXPECT_NEAR(distance["GD"], 2.63, 0.005);
   EXPECT_NEAR(distance["Newton"], 0.925, 0.0005);
   EXPECT_NEAR(distance["PG (analytic inverse)"], 0.511, 0.0005);
@@ -89,7 +90,7 @@ TEST(ComparisonExperiment, PgEndsClosestToTheMinimumAndBothInversesAgree) {
   }
 }
 
-// experiments.md §4 check 10, shortened: on λ = 0.01 HIG ends far below Adam and Gauss-Newton.
+// docs/reference_experiments.md (HIG toy), shortened: on λ = 0.01 HIG ends far below Adam and GN.
 TEST(HigToyExperiment, HalfInverseGradientsBeatAdamAndGaussNewtonWhenIllConditioned) {
   const RunContext context =
       run_experiment("hig-toy", {{"lambda", "0.01"}, {"seeds", "2"}, {"iters", "2000"}, {"eval-every", "500"}});

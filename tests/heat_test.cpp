@@ -118,7 +118,8 @@ TEST(HeatDiffusion, InverseRecoversASmoothWellResolvedField) {
   }
 }
 
-// The reference's decision for one mode of |FFT| amplitude a (E6 step 4), transcribed.
+// The reference's decision for one mode of |FFT| amplitude a, transcribed
+// (docs/reference_experiments.md, heat-inverse).
 struct ModeDecision {
   double probability;
   double action;

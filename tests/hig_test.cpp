@@ -16,7 +16,8 @@ namespace {
 using testing::NetworkThroughPhysics;
 
 // −η V diag(σᵢ^{−κ} [σᵢ > τ σ_max]) Uᵀ g with J = U Σ Vᵀ, as written in the paper's code
-// (experiments.md 1.11), from a J and g computed here without the library's Jacobian code:
+// (docs/reference_experiments.md, published algorithms), from a J and g computed here without
+// the library's Jacobian code:
 // J by central differences of the stacked outputs, g = ∂(mean ½‖y − y*‖²)/∂y = (y − y*)/B.
 Vector paper_step(const NetworkThroughPhysics& s, double lr, double kappa, double tau) {
   const Matrix j = finite_difference_jacobian(

@@ -169,7 +169,7 @@ TEST(PhysicalGradient, AnalyticInverseOfASimulatorWithoutOneIsAClearError) {
 }
 
 TEST(LocalInverse, LbfgsFindsThePreimageOfTheComparisonNotebook) {
-  // experiments.md §4 check 2: y = (2, 2) from (3, 3) → (2, √2).
+  // docs/reference_experiments.md (comparison): y = (2, 2) from (3, 3) → (2, √2).
   const ComparisonToy physics;
   const LocalInverseResult r = local_inverse(physics, Vector{{2.0, 2.0}}, Vector{{3.0, 3.0}}, {},
                                              {InverseMethod::kLbfgs, 1e-12, 200});
@@ -178,7 +178,8 @@ TEST(LocalInverse, LbfgsFindsThePreimageOfTheComparisonNotebook) {
   EXPECT_NEAR(r.x(1), std::sqrt(2.0), 1e-9);
 }
 
-// experiments.md §4 check 1: the notebook's printed iterates (float32) after each of 10 steps.
+// docs/reference_experiments.md (comparison): the notebook's printed iterates (float32) after
+// each of 10 steps.
 constexpr double kGd[10][2] = {{2.94, 1.9200001},          {2.8812, 1.6368846},
                                {2.823576, 1.4614503},      {2.7671044, 1.3365935},
                                {2.7117622, 1.2410815},     {2.657527, 1.1646168},
@@ -222,7 +223,8 @@ TEST(ComparisonReference, GdNewtonAndPgReproduceTheNotebookIterates) {
   expect_matches_notebook("pg", 0.3, kPg, InverseMethod::kLbfgs, 1e-6);
 }
 
-// Design §6: on L = ½‖(x₁, αx₂)‖² the inverted rules follow the same trajectory for every α.
+// docs/reference_experiments.md (scaled toy): on L = ½‖(x₁, αx₂)‖² the inverted rules follow the
+// same trajectory for every α.
 TEST(ScaleInvariance, InvertedRulesAreIndependentOfAlphaAndGdIsNot) {
   const L2Loss loss;
   const Vector x0{{0.48, 0.84}};

@@ -64,7 +64,7 @@ TEST(Oscillators, FreeOscillatorEnergyDecaysAsTheRk4StabilityFunction) {
 }
 
 TEST(Oscillators, ZeroControlLossMatchesTheReference) {
-  // Mean per-sample Σ(s(T) − s₀)² over s₀ ~ U[0,1)⁴ with u = 0 (experiments.md §4, check 8).
+  // Mean per-sample Σ(s(T) − s₀)² over s₀ ~ U[0,1)⁴ with u = 0 (docs/reference_experiments.md).
   struct Case {
     OscillatorConfig config;
     double expected;

@@ -24,7 +24,8 @@ std::pair<nlohmann::json, nlohmann::json> first_and_last(const RunContext& conte
   return {rows.front(), rows.back()};
 }
 
-// experiments.md §4 check 11, shortened: at ξ = 32 SIP ends far nearer the exact solutions.
+// docs/reference_experiments.md (sin-rotation), shortened: at ξ = 32 SIP ends far nearer the
+// exact solutions.
 TEST(SinRotationExperiment, SipEndsNearerTheExactSolutionsThanAdamWhenIllConditioned) {
   const RunContext context = run_experiment("sin-rotation", {{"xi", "32"},
                                                   {"optimizers", "sip,adam"},
@@ -45,7 +46,8 @@ TEST(SinRotationExperiment, SipEndsNearerTheExactSolutionsThanAdamWhenIllConditi
   EXPECT_EQ(context.figures().size(), 4u);
 }
 
-// experiments.md §4 check 12, shortened: after the same iterations SIP reconstructs x* better.
+// docs/reference_experiments.md (heat-inverse), shortened: after the same iterations SIP
+// reconstructs x* better.
 TEST(HeatExperiment, SipReconstructsTheInitialStateBetterThanAdam) {
   const RunContext context = run_experiment("heat-inverse", {{"iters", "300"},
                                                   {"time", "1e6"},

@@ -1,5 +1,6 @@
 // physgrad — the library in one include: every public header of the core library (the drawing of
-// report/, the experiment framework run/ and the MPI communicator are libraries of their own).
+// report/, the experiment framework run/, the MPI communicator and the ScaLAPACK eigensolver are
+// libraries of their own).
 #pragma once
 
 // A test reads this list against include/physgrad/ (tests/front_door_test.cpp).
@@ -39,6 +40,7 @@
 #include "physgrad/nn/network.hpp"
 
 #include "physgrad/parallel/communicator.hpp"
+#include "physgrad/parallel/distributed_eigen.hpp"
 #include "physgrad/parallel/shard.hpp"
 
 #include "physgrad/autodiff/dual.hpp"
@@ -69,6 +71,7 @@
 #include "physgrad/learn/adam.hpp"
 #include "physgrad/learn/hig.hpp"
 #include "physgrad/learn/learning_update.hpp"
+#include "physgrad/learn/mapped_jacobian.hpp"
 #include "physgrad/learn/sgd.hpp"
 #include "physgrad/learn/sharded_jacobian.hpp"
 #include "physgrad/learn/sip.hpp"

@@ -5,13 +5,13 @@ solves P(x) = y near a guess; physgrad.torch holds the learning rules as torch o
 """
 
 from ._physgrad import (Error, MinimizeResult, NumericalError, direct_rules, experiments,
-                        jacobian_step, learning_rules, open_metrics, open_summary,
-                        reference_step)
+                        jacobian_step, learning_rules, open_metrics, open_summary, reference_step,
+                        resume_experiment, run_experiment)
 from . import _physgrad
 
 __all__ = ["Error", "NumericalError", "MinimizeResult", "minimize", "local_inverse",
            "direct_rules", "learning_rules", "jacobian_step", "reference_step", "experiments",
-           "open_metrics", "open_summary"]
+           "open_metrics", "open_summary", "run_experiment", "resume_experiment"]
 
 
 def _bounds(bounds):

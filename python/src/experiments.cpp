@@ -8,9 +8,10 @@
 #include <sstream>
 
 #include "bindings.hpp"
-#include "physgrad/run/registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/io/csv.hpp"
+#include "physgrad/run/registry.hpp"
+#include "physgrad/run/run.hpp"
 #include "python_simulator.hpp"
 
 namespace physgrad::python {
@@ -57,6 +58,56 @@ py::object open_summary(const std::string& folder) {
   return py::module_::import("json").attr("loads")(text);
 }
 
+// An option's value as the command line would give it: a list joins its items with commas.
+std::string option_text(const py::handle& value) {
+  if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
+    std::string text;
+    for (const py::handle item : value) text += (text.empty() ? "" : ",") + option_text(item);
+    return text;
+  }
+  return py::str(value).cast<std::string>();
+}
+
+// What a run returns to Python: where it is, whether it finished, and its summary.json as a dict.
+py::dict outcome_dict(const experiments::RunOutcome& outcome) {
+  py::dict out;
+  out["folder"] = outcome.folder.string();
+  out["finished"] = outcome.finished;
+  out["report"] = outcome.report.string();
+  out["stopped"] = outcome.stopped;
+  out["summary"] = outcome.summary.is_null()
+                       ? py::object(py::none())
+                       : py::module_::import("json").attr("loads")(outcome.summary.dump());
+  return out;
+}
+
+// Runs experiment `name` with `options` (option name → value, as `physgrad run NAME --NAME VALUE`)
+// into the run folder `out` (empty: --out, or a new runs/NAME-<timestamp>) through the library's
+// run lifecycle (run/run.hpp), without progress output.
+py::dict run_experiment(const std::string& name, const py::dict& options, const std::string& out) {
+  const experiments::Experiment& experiment = experiments::registry().find(name);
+  std::vector<std::pair<std::string, std::string>> given;
+  for (const auto& [key, value] : options) {
+    given.emplace_back(py::str(key).cast<std::string>(), option_text(value));
+  }
+  const experiments::Settings settings = experiments::resolve_settings(experiment, given);
+  experiments::RunOutcome outcome;
+  {
+    py::gil_scoped_release released;
+    outcome = experiments::Run::start(experiment, settings, out);
+  }
+  return outcome_dict(outcome);
+}
+
+py::dict resume_experiment(const std::string& folder) {
+  experiments::RunOutcome outcome;
+  {
+    py::gil_scoped_release released;
+    outcome = experiments::Run::resume(folder);
+  }
+  return outcome_dict(outcome);
+}
+
 }  // namespace
 
 void bind_experiments(py::module_& m) {
@@ -76,6 +127,13 @@ void bind_experiments(py::module_& m) {
         "A run folder's metrics.csv as {column: array} (a text column as a list).");
   m.def("open_summary", &open_summary, py::arg("folder"),
         "A run folder's summary.json as a dict.");
+  m.def("run_experiment", &run_experiment, py::arg("name"), py::arg("options") = py::dict(),
+        py::arg("out") = "",
+        "Runs experiment NAME with options {name: value} (as `physgrad run NAME --name value`; a "
+        "list is joined by commas) into the run folder `out`; returns {folder, finished, report, "
+        "stopped, summary}.");
+  m.def("resume_experiment", &resume_experiment, py::arg("folder"),
+        "Continues the unfinished run in `folder` (as `physgrad resume FOLDER`).");
 }
 
 }  // namespace physgrad::python

@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "physgrad/error.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
 #include "physgrad/parallel/communicator.hpp"
 #include "physgrad/parallel/distributed_eigen.hpp"
@@ -35,6 +36,22 @@ Matrix known_spectrum(Index n, double smallest, Index zeros, std::mt19937& rando
 
 }  // namespace
 
+// J Jᵀ given as a matrix, Jᵀ the identity: power_pinv_apply's Gram path then returns
+// U Σ^{−1−κ} Uᵀ g, the part the ranks compute together.
+class GivenGram final : public physgrad::JacobianOperator {
+ public:
+  explicit GivenGram(const Matrix& gram) : gram_(gram) {}
+  Index rows() const override { return gram_.rows(); }
+  Index cols() const override { return gram_.rows(); }
+  Matrix gram() const override { return gram_; }
+  Vector apply_transpose(const Vector& c) const override { return c; }
+  Matrix materialize() const override { throw physgrad::Error("GivenGram: no J"); }
+  Normal normal(const Vector&) const override { throw physgrad::Error("GivenGram: no J"); }
+
+ private:
+  const Matrix& gram_;
+};
+
 int main(int argc, char** argv) {
   const auto communicator = physgrad::mpi_world_communicator(&argc, &argv);
   physgrad::DistributedEigensolver* solver = communicator->eigensolver();
@@ -57,9 +74,8 @@ int main(int argc, char** argv) {
     std::normal_distribution<double> normal;
     for (Index i = 0; i < c.n; ++i) g(i) = normal(random);
     physgrad::PowerPinvInfo reference_info;
-    const Vector reference = physgrad::power_pinv_apply_gram(
-        a, g, [](const Vector& x) { return x; }, {c.kappa, c.rcond, physgrad::PinvBackend::kGram},
-        &reference_info);
+    const Vector reference = physgrad::power_pinv_apply(
+        GivenGram(a), g, {c.kappa, c.rcond, physgrad::PinvBackend::kGram}, &reference_info);
     const std::vector<Index> columns =
         physgrad::block_cyclic_columns(c.n, solver->block(), solver->rank(), solver->size());
     Matrix local(c.n, static_cast<Index>(columns.size()));

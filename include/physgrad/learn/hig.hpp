@@ -8,8 +8,8 @@
 namespace physgrad {
 
 // J = U Σ Vᵀ, J^{−κ} = V Σ^{−κ} Uᵀ over σᵢ > rcond·σ_max (the others contribute nothing), as in
-// the HIG paper's code (experiments.md 1.11). The path (Gram, normal, SVD) follows J's shape
-// (inversion/power_pinv.hpp); on the Gram path J Jᵀ comes from the network's layer factors.
+// the HIG paper's code (docs/reference_experiments.md). The path (Gram, normal, SVD) follows J's
+// shape (inversion/power_pinv.hpp); on the Gram path J Jᵀ comes from the network's layer factors.
 struct HigOptions {
   double lr = 1.0;      // η > 0
   double kappa = 0.5;   // ½: HIG; 1: Gauss-Newton (id "gn")
