@@ -174,21 +174,14 @@ class HeatInverse final : public LearningExperiment {
     std::vector<const LearningResult*> runs;
     for (const auto& entry : trained) runs.push_back(entry.first);
     sweep.add_loss_figures(context, tag, std::to_string(dims) + "d");
-    LearningSweep::add_metric_figure(
-        context, sweep.rule_groups(tag), "x_loss_vs_time_" + std::to_string(dims) + "d.svg",
-        "Reconstruction error ½‖x − x*‖² vs time (" + tag + ")", "mean x loss on the test set",
-        [](const TrainingRecord& r) { return r.extras["x_loss"].get<double>(); });
-    context.set_message(
-        "x_loss_vs_time_" + std::to_string(dims) + "d.svg",
-        lowest_value_sentence(sweep.final_medians(tag,
-                                                  [](const TrainingRecord& r) {
-                                                    return r.extras["x_loss"].get<double>();
-                                                  }),
-                              "final reconstruction error ½‖x − x*‖² on the test set") +
-            " Lowest y loss (what the rules train on): " +
-            lowest_value_sentence(
-                sweep.final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }),
-                "final y loss"));
+    const std::string x_loss_file = "x_loss_vs_time_" + std::to_string(dims) + "d.svg";
+    const auto x_loss = [](const TrainingRecord& r) { return r.extras["x_loss"].get<double>(); };
+    LearningSweep::add_metric_figure(context, sweep.rule_groups(tag), x_loss_file,
+                                     "Reconstruction error ½‖x − x*‖² vs time (" + tag + ")",
+                                     "mean x loss on the test set", x_loss);
+    sweep.set_metric_message(tag, x_loss_file, x_loss,
+                             "final reconstruction error ½‖x − x*‖² on the test set",
+                             "Lowest y loss (what the rules train on)", "final y loss");
     if (dims == 1) {
       add_line_reconstructions(context, test, trained);
     } else {

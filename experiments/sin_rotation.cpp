@@ -127,25 +127,20 @@ class SinRotationExperiment final : public LearningExperiment {
       }
       const std::vector<const LearningResult*> runs = sweep.first_seed_runs(tag);
       sweep.add_loss_figures(context, tag, "xi_" + format_value(xi));
+      const std::string distance_file = "x_distance_vs_time_xi_" + format_value(xi) + ".svg";
+      const auto distance = [](const TrainingRecord& r) {
+        return r.extras["x_distance"].get<double>();
+      };
       LearningSweep::add_metric_figure(
-          context, sweep.rule_groups(tag), "x_distance_vs_time_xi_" + format_value(xi) + ".svg",
+          context, sweep.rule_groups(tag), distance_file,
           "x-distance to the nearest exact solution vs time (" + tag + ")",
-          "mean |f(y*) − x_closest| on the test set",
-          [](const TrainingRecord& r) { return r.extras["x_distance"].get<double>(); });
+          "mean |f(y*) − x_closest| on the test set", distance);
       // The message: at the stiffest ξ, how much closer to an exact solution the best rule lands.
       if (xi == *std::max_element(xis.begin(), xis.end())) {
-        context.set_message(
-            "x_distance_vs_time_xi_" + format_value(xi) + ".svg",
-            "At ξ = " + format_value(xi) + ", " +
-                lowest_value_sentence(
-                    sweep.final_medians(tag, [](const TrainingRecord& r) {
-                      return r.extras["x_distance"].get<double>();
-                    }),
-                    "final x-distance to the nearest exact solution") +
-                " Lowest test loss: " +
-                lowest_value_sentence(
-                    sweep.final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }),
-                    "final test loss"));
+        sweep.set_metric_message(tag, distance_file, distance,
+                                 "final x-distance to the nearest exact solution",
+                                 "Lowest test loss", "final test loss",
+                                 "At ξ = " + format_value(xi) + ", ");
       }
       if (xi == 1.0) add_landscape(context, phi, form, runs);
       sweep.add_tables();

@@ -181,6 +181,19 @@ void LearningSweep::set_time_message(const std::string& tag, const std::string& 
                        sentence.substr(0, sentence.size() - 1) + ", after the same budget.");
 }
 
+void LearningSweep::set_metric_message(const std::string& tag, const std::string& file,
+                                       const std::function<double(const TrainingRecord&)>& metric,
+                                       const std::string& what_metric,
+                                       const std::string& loss_lead, const std::string& what_loss,
+                                       const std::string& prefix) const {
+  context_.set_message(
+      file, prefix + lowest_value_sentence(final_medians(tag, metric), what_metric) + " " +
+                loss_lead + ": " +
+                lowest_value_sentence(
+                    final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }),
+                    what_loss));
+}
+
 std::string lowest_value_sentence(const std::vector<LearningSweep::RuleValue>& values,
                                   const std::string& what) {
   std::vector<LearningSweep::RuleValue> finite;

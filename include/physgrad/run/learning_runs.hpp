@@ -98,6 +98,13 @@ class LearningSweep {
   // rule's median final `what` is lowest within the same budget, and by how much.
   void set_time_message(const std::string& tag, const std::string& file_tag,
                         const std::string& what = "final test loss") const;
+  // Makes figure `file` the message for a metric other than the loss: `prefix`, then which rule's
+  // median final `metric` (`what_metric`) is lowest and by how much, then the same for the test
+  // loss (`what_loss`).
+  void set_metric_message(const std::string& tag, const std::string& file,
+                          const std::function<double(const TrainingRecord&)>& metric,
+                          const std::string& what_metric, const std::string& loss_lead,
+                          const std::string& what_loss, const std::string& prefix = "") const;
   // Per setting: final test loss per seed with median and worst; the saturated-neuron
   // fraction when recorded; the time split per step of every rule.
   void add_tables() const;
