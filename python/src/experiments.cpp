@@ -12,6 +12,7 @@
 #include "physgrad/io/csv.hpp"
 #include "physgrad/run/registry.hpp"
 #include "physgrad/run/run.hpp"
+#include "physgrad/stop.hpp"
 #include "python_simulator.hpp"
 
 namespace physgrad::python {
@@ -81,31 +82,81 @@ py::dict outcome_dict(const experiments::RunOutcome& outcome) {
   return out;
 }
 
+// The hooks of a run called from Python: every progress line to `progress` (a callable, or None
+// for silence, or True for the lines that stay — a run started or finished — on sys.stderr), and
+// at each line a look at Python's pending signals: a Ctrl-C (KeyboardInterrupt) becomes the
+// library's stop request, so that the run stops in order and keeps its checkpoint. The run
+// itself releases the interpreter; each hook takes it back for its call.
+struct PythonHooks {
+  py::object progress;
+  bool interrupted = false;
+
+  experiments::RunHooks hooks() {
+    experiments::RunHooks h;
+    h.progress = [this](const std::string& line) { deliver(line, false); };
+    h.progress_event = [this](const std::string& line) { deliver(line, true); };
+    h.log = [this](const std::string& line) { deliver(line, true); };
+    return h;
+  }
+
+  void deliver(const std::string& line, bool stays) {
+    py::gil_scoped_acquire held;
+    if (PyErr_CheckSignals() != 0) {
+      // Only KeyboardInterrupt is taken here; another exception a signal handler raised is
+      // dropped with the run's stop, which it asked for.
+      PyErr_Clear();
+      interrupted = true;
+      request_stop();
+    }
+    if (progress.is_none()) return;
+    if (py::isinstance<py::bool_>(progress)) {
+      if (progress.cast<bool>() && stays) {
+        py::module_::import("sys").attr("stderr").attr("write")(line + "\n");
+      }
+      return;
+    }
+    progress(line);
+  }
+};
+
+// Raises KeyboardInterrupt naming the stopped run (and how to continue it) when Ctrl-C stopped it.
+py::dict finished_outcome(const experiments::RunOutcome& outcome, const PythonHooks& hooks) {
+  if (hooks.interrupted && !outcome.finished) {
+    clear_stop_request();
+    PyErr_SetString(PyExc_KeyboardInterrupt, outcome.stopped.c_str());
+    throw py::error_already_set();
+  }
+  return outcome_dict(outcome);
+}
+
 // Runs experiment `name` with `options` (option name → value, as `physgrad run NAME --NAME VALUE`)
 // into the run folder `out` (empty: --out, or a new runs/NAME-<timestamp>) through the library's
-// run lifecycle (run/run.hpp), without progress output.
-py::dict run_experiment(const std::string& name, const py::dict& options, const std::string& out) {
+// run lifecycle (run/run.hpp).
+py::dict run_experiment(const std::string& name, const py::dict& options, const std::string& out,
+                        const py::object& progress) {
   const experiments::Experiment& experiment = experiments::registry().find(name);
   std::vector<std::pair<std::string, std::string>> given;
   for (const auto& [key, value] : options) {
     given.emplace_back(py::str(key).cast<std::string>(), option_text(value));
   }
   const experiments::Settings settings = experiments::resolve_settings(experiment, given);
+  PythonHooks hooks{progress};
   experiments::RunOutcome outcome;
   {
     py::gil_scoped_release released;
-    outcome = experiments::Run::start(experiment, settings, out);
+    outcome = experiments::Run::start(experiment, settings, out, hooks.hooks());
   }
-  return outcome_dict(outcome);
+  return finished_outcome(outcome, hooks);
 }
 
-py::dict resume_experiment(const std::string& folder) {
+py::dict resume_experiment(const std::string& folder, const py::object& progress) {
+  PythonHooks hooks{progress};
   experiments::RunOutcome outcome;
   {
     py::gil_scoped_release released;
-    outcome = experiments::Run::resume(folder);
+    outcome = experiments::Run::resume(folder, hooks.hooks());
   }
-  return outcome_dict(outcome);
+  return finished_outcome(outcome, hooks);
 }
 
 }  // namespace
@@ -128,12 +179,16 @@ void bind_experiments(py::module_& m) {
   m.def("open_summary", &open_summary, py::arg("folder"),
         "A run folder's summary.json as a dict.");
   m.def("run_experiment", &run_experiment, py::arg("name"), py::arg("options") = py::dict(),
-        py::arg("out") = "",
+        py::arg("out") = "", py::arg("progress") = true,
         "Runs experiment NAME with options {name: value} (as `physgrad run NAME --name value`; a "
         "list is joined by commas) into the run folder `out`; returns {folder, finished, report, "
-        "stopped, summary}.");
-  m.def("resume_experiment", &resume_experiment, py::arg("folder"),
-        "Continues the unfinished run in `folder` (as `physgrad resume FOLDER`).");
+        "stopped, summary}. progress: True writes the lines that stay (a run started or "
+        "finished, with the time left) to sys.stderr, None is silent, a callable gets every "
+        "progress line. Ctrl-C stops the run in order (a learning run keeps its checkpoint) and "
+        "raises KeyboardInterrupt naming the folder to resume.");
+  m.def("resume_experiment", &resume_experiment, py::arg("folder"), py::arg("progress") = true,
+        "Continues the unfinished run in `folder` (as `physgrad resume FOLDER`); progress and "
+        "Ctrl-C as in run_experiment.");
 }
 
 }  // namespace physgrad::python
