@@ -12,6 +12,7 @@
 
 namespace physgrad::experiments {
 namespace {
+namespace comparison_case {
 
 // "(x₀, x₁)" with 4 significant digits.
 std::string point(const Vector& x) {
@@ -72,7 +73,10 @@ class Comparison final : public Experiment {
     std::vector<DirectResult> results;
     for (const RuleSetup& rule : rules) {
       context.progress("comparison: " + rule.label);
-      results.push_back(run_direct(context, rule, objective, x0, iterations, 0.0));
+      results.push_back(run_direct(context, rule, objective, x0, iterations, 0.0,
+                                   nlohmann::json::object(), [](const IterationRecord& record) {
+                                     return nlohmann::json{{"x_distance", record.x.norm()}};
+                                   }));
     }
     context.finish_progress();
 
@@ -100,7 +104,8 @@ class Comparison final : public Experiment {
         "with u = x₀ − x₁; √2 ≈ 1.414 means the update points straight at the minimum.");
 
     add_figures(context, x0, physics, results);
-    context.set_message("trajectories_x.svg", closest_sentence(results, iterations));
+    context.set_message("trajectories_x.svg", closest_sentence(results, iterations),
+                        {"x_distance", "final distance ‖x‖ to the minimum"});
   }
 
  private:
@@ -170,8 +175,11 @@ class Comparison final : public Experiment {
   }
 };
 
+}  // namespace comparison_case
 }  // namespace
 
-std::unique_ptr<Experiment> make_comparison() { return std::make_unique<Comparison>(); }
+std::unique_ptr<Experiment> make_comparison() {
+  return std::make_unique<comparison_case::Comparison>();
+}
 
-}  // namespace physgrad::experiments
+} // namespace physgrad::experiments

@@ -18,6 +18,7 @@
 
 namespace physgrad::experiments {
 namespace {
+namespace heat_inverse_case {
 
 constexpr int kMaxBoxes = 10;
 constexpr double kWeightCopies = 6;  // θ, ∇θ, the rule's state, checkpoints: vectors of |θ|
@@ -175,11 +176,11 @@ class HeatInverse final : public LearningExperiment {
     for (const auto& entry : trained) runs.push_back(entry.first);
     sweep.add_loss_figures(context, tag, std::to_string(dims) + "d");
     const std::string x_loss_file = "x_loss_vs_time_" + std::to_string(dims) + "d.svg";
-    const auto x_loss = [](const TrainingRecord& r) { return r.extras["x_loss"].get<double>(); };
+    const auto x_loss = LearningSweep::extra("x_loss");
     LearningSweep::add_metric_figure(context, sweep.rule_groups(tag), x_loss_file,
                                      "Reconstruction error ½‖x − x*‖² vs time (" + tag + ")",
                                      "mean x loss on the test set", x_loss);
-    sweep.set_metric_message(tag, x_loss_file, x_loss,
+    sweep.set_metric_message(tag, x_loss_file, "x_loss",
                              "final reconstruction error ½‖x − x*‖² on the test set",
                              "Lowest y loss (what the rules train on)", "final y loss");
     if (dims == 1) {
@@ -317,8 +318,11 @@ class HeatInverse final : public LearningExperiment {
   }
 };
 
+}  // namespace heat_inverse_case
 }  // namespace
 
-std::unique_ptr<Experiment> make_heat_inverse() { return std::make_unique<HeatInverse>(); }
+std::unique_ptr<Experiment> make_heat_inverse() {
+  return std::make_unique<heat_inverse_case::HeatInverse>();
+}
 
-}  // namespace physgrad::experiments
+} // namespace physgrad::experiments

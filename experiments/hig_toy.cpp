@@ -16,6 +16,7 @@
 
 namespace physgrad::experiments {
 namespace {
+namespace hig_toy_case {
 
 constexpr double kTrackedInput = 0.354;  // the validation sample whose y-path is drawn
 constexpr Index kHidden = 7;
@@ -177,7 +178,11 @@ class HigToy final : public LearningExperiment {
                         "Test loss vs iteration for each λ, one y axis. Line: median over the "
                         "seeds; band: their minimum to maximum. Dots: evaluations.",
                         svg::side_by_side(panels)});
-    context.set_message(file, sentence);
+    // The index compares run folders at the hardest λ (the smallest: the most ill-conditioned).
+    const double hardest = *std::min_element(lambdas.begin(), lambdas.end());
+    context.set_message(file, sentence,
+                        {"test_loss", "median final test loss at λ = " + format_value(hardest),
+                         sweep.labels("λ=" + format_value(hardest))});
   }
 
   static void add_figures(RunContext& context, const LearningSweep& sweep, double lambda,
@@ -238,8 +243,11 @@ class HigToy final : public LearningExperiment {
   }
 };
 
+}  // namespace hig_toy_case
 }  // namespace
 
-std::unique_ptr<Experiment> make_hig_toy() { return std::make_unique<HigToy>(); }
+std::unique_ptr<Experiment> make_hig_toy() {
+  return std::make_unique<hig_toy_case::HigToy>();
+}
 
-}  // namespace physgrad::experiments
+} // namespace physgrad::experiments

@@ -14,6 +14,7 @@
 
 namespace physgrad::experiments {
 namespace {
+namespace oscillators_case {
 
 // States s₀ ~ U[0, 1)^(2N); the target is the initial state itself.
 Dataset make_states(Index n, Index dim, std::uint64_t seed) {
@@ -209,8 +210,11 @@ class Oscillators final : public LearningExperiment {
   }
 };
 
+}  // namespace oscillators_case
 }  // namespace
 
-std::unique_ptr<Experiment> make_oscillators() { return std::make_unique<Oscillators>(); }
+std::unique_ptr<Experiment> make_oscillators() {
+  return std::make_unique<oscillators_case::Oscillators>();
+}
 
-}  // namespace physgrad::experiments
+} // namespace physgrad::experiments

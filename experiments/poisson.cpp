@@ -13,6 +13,7 @@
 
 namespace physgrad::experiments {
 namespace {
+namespace poisson_case {
 
 // Smooth random fields x* with zero mean and unit standard deviation per sample: sine modes
 // sin(πp(i+1)/(n+1)) sin(πq(j+1)/(n+1)) with N(0, 1) weights ∝ 1/(p² + q²) (a stand-in for
@@ -163,8 +164,11 @@ class PoissonExperiment final : public LearningExperiment {
   }
 };
 
+}  // namespace poisson_case
 }  // namespace
 
-std::unique_ptr<Experiment> make_poisson() { return std::make_unique<PoissonExperiment>(); }
+std::unique_ptr<Experiment> make_poisson() {
+  return std::make_unique<poisson_case::PoissonExperiment>();
+}
 
-}  // namespace physgrad::experiments
+} // namespace physgrad::experiments

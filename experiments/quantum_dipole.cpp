@@ -15,6 +15,7 @@
 
 namespace physgrad::experiments {
 namespace {
+namespace quantum_dipole_case {
 
 // Targets (c₁ψ₂ + c₂ψ₃)/√(c₁² + c₂²) with c ~ N(0, 1); every sample starts in ψ₁.
 Dataset make_targets(Index n, Index points, std::uint64_t seed) {
@@ -202,10 +203,11 @@ class QuantumDipoleExperiment final : public LearningExperiment {
   }
 };
 
+}  // namespace quantum_dipole_case
 }  // namespace
 
 std::unique_ptr<Experiment> make_quantum_dipole() {
-  return std::make_unique<QuantumDipoleExperiment>();
+  return std::make_unique<quantum_dipole_case::QuantumDipoleExperiment>();
 }
 
 }  // namespace physgrad::experiments

@@ -11,6 +11,7 @@
 
 namespace physgrad::experiments {
 namespace {
+namespace scaled_toy_case {
 
 using Kind = OptionSpec::Kind;
 
@@ -81,7 +82,8 @@ class ScaledToy final : public Experiment {
 
     add_iteration_table(context, alphas, by_alpha, tol, relative);
     add_iteration_figure(context, alphas, by_alpha);
-    context.set_message("iterations_vs_alpha.svg", invariance_sentence(alphas, by_alpha));
+    context.set_message("iterations_vs_alpha.svg", invariance_sentence(alphas, by_alpha),
+                        {"iterations", "iterations to the tolerance, over every α"});
     for (std::size_t a = 0; a < alphas.size(); ++a) {
       add_alpha_figures(context, alphas[a], x0, by_alpha[a]);
     }
@@ -202,8 +204,11 @@ class ScaledToy final : public Experiment {
   }
 };
 
+}  // namespace scaled_toy_case
 }  // namespace
 
-std::unique_ptr<Experiment> make_scaled_toy() { return std::make_unique<ScaledToy>(); }
+std::unique_ptr<Experiment> make_scaled_toy() {
+  return std::make_unique<scaled_toy_case::ScaledToy>();
+}
 
-}  // namespace physgrad::experiments
+} // namespace physgrad::experiments

@@ -11,6 +11,7 @@
 
 namespace physgrad::experiments {
 namespace {
+namespace sensitivity_case {
 
 using Kind = OptionSpec::Kind;
 
@@ -148,8 +149,11 @@ class Sensitivity final : public Experiment {
   }
 };
 
+}  // namespace sensitivity_case
 }  // namespace
 
-std::unique_ptr<Experiment> make_sensitivity() { return std::make_unique<Sensitivity>(); }
+std::unique_ptr<Experiment> make_sensitivity() {
+  return std::make_unique<sensitivity_case::Sensitivity>();
+}
 
-}  // namespace physgrad::experiments
+} // namespace physgrad::experiments

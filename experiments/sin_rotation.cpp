@@ -15,6 +15,7 @@
 
 namespace physgrad::experiments {
 namespace {
+namespace sin_rotation_case {
 
 // The landscape figure's target and view, as in the SIP paper's figure.
 const Vector kTrackedTarget{{0.3, -0.5}};
@@ -128,16 +129,14 @@ class SinRotationExperiment final : public LearningExperiment {
       const std::vector<const LearningResult*> runs = sweep.first_seed_runs(tag);
       sweep.add_loss_figures(context, tag, "xi_" + format_value(xi));
       const std::string distance_file = "x_distance_vs_time_xi_" + format_value(xi) + ".svg";
-      const auto distance = [](const TrainingRecord& r) {
-        return r.extras["x_distance"].get<double>();
-      };
+      const auto distance = LearningSweep::extra("x_distance");
       LearningSweep::add_metric_figure(
           context, sweep.rule_groups(tag), distance_file,
           "x-distance to the nearest exact solution vs time (" + tag + ")",
           "mean |f(y*) − x_closest| on the test set", distance);
       // The message: at the stiffest ξ, how much closer to an exact solution the best rule lands.
       if (xi == *std::max_element(xis.begin(), xis.end())) {
-        sweep.set_metric_message(tag, distance_file, distance,
+        sweep.set_metric_message(tag, distance_file, "x_distance",
                                  "final x-distance to the nearest exact solution",
                                  "Lowest test loss", "final test loss",
                                  "At ξ = " + format_value(xi) + ", ");
@@ -259,10 +258,11 @@ class SinRotationExperiment final : public LearningExperiment {
   }
 };
 
+}  // namespace sin_rotation_case
 }  // namespace
 
 std::unique_ptr<Experiment> make_sin_rotation() {
-  return std::make_unique<SinRotationExperiment>();
+  return std::make_unique<sin_rotation_case::SinRotationExperiment>();
 }
 
 }  // namespace physgrad::experiments

@@ -17,6 +17,7 @@
 
 namespace physgrad::experiments {
 namespace {
+namespace time_reversal_case {
 
 // One inverse problem: the simulator, its context (the controls), the true and the start state.
 struct Problem {
@@ -228,7 +229,10 @@ class TimeReversal final : public Experiment {
       if (message_figure.empty()) message_figure = "loss_vs_passes_" + problem.key + ".svg";
     }
     context.finish_progress();
-    if (!message_figure.empty()) context.set_message(message_figure, message);
+    if (!message_figure.empty()) {
+      context.set_message(message_figure, message,
+                          {"simulator_passes", "simulator passes, over every problem"});
+    }
     context.add_table(std::move(table));
     context.add_note(
         "A simulator pass is one sample's forward integration, VJP (a Jacobian costs one per "
@@ -293,8 +297,11 @@ class TimeReversal final : public Experiment {
   }
 };
 
+}  // namespace time_reversal_case
 }  // namespace
 
-std::unique_ptr<Experiment> make_time_reversal() { return std::make_unique<TimeReversal>(); }
+std::unique_ptr<Experiment> make_time_reversal() {
+  return std::make_unique<time_reversal_case::TimeReversal>();
+}
 
-}  // namespace physgrad::experiments
+} // namespace physgrad::experiments

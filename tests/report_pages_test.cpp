@@ -586,7 +586,8 @@ TEST_F(ReportPages, HostileFolderNamesAndLabelsGiveLocalLinksAndValidPages) {
   EXPECT_NE(index.find("Adam\xef\xbf\xbd"
                        "evil\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd<"),
             std::string::npos);
-  EXPECT_EQ(inline_svgs(index).size(), 1u);
+  // The comparison folders' x-distance and the learning folder's test loss.
+  EXPECT_EQ(inline_svgs(index).size(), 2u);
 }
 
 TEST_F(ReportPages, TypedFolderNamesWithBidirectionalControlsOrNoncharactersAreRefused) {
@@ -707,6 +708,49 @@ TEST_F(ReportPages, ChromiumRunsNoScriptAndAsksNoServerForHostileFolders) {
                              << console;
 }
 
+// The index compares folders of one experiment by the metric its message compares: sin-rotation
+// by the x-distance at ξ = 32 only, with the options a folder changed and the rules' colours.
+TEST_F(ReportPages, TheIndexComparesFoldersByTheMessageMetric) {
+  const std::string args =
+      "run sin-rotation --xi 1,32 --iters 60 --train-size 100 --test-size 20 --eval-every 20";
+  ASSERT_EQ(run(args + " --out runs/a").exit_code, 0);
+  ASSERT_EQ(run(args + " --lr 0.01 --out runs/b").exit_code, 0);
+  ASSERT_EQ(run("report runs").exit_code, 0);
+  const std::string index = read_file(dir_ / "runs" / "index.html");
+  const std::size_t section = index.find("<h2>sin-rotation</h2>");
+  ASSERT_NE(section, std::string::npos);
+  // Each folder's message sentence, then the table by the metric it names.
+  EXPECT_NE(index.find("<p>a: At ξ = 32, ", section), std::string::npos);
+  EXPECT_NE(index.find("<p>b: At ξ = 32, ", section), std::string::npos);
+  EXPECT_NE(index.find("<th>final x-distance to the nearest exact solution</th>", section),
+            std::string::npos);
+  // Options: what differs from the defaults (iters, sizes, eval-every; b also lr), per folder.
+  EXPECT_NE(index.find("<td>eval-every = 20, iters = 60, test-size = 20, train-size = 100</td>"),
+            std::string::npos);
+  EXPECT_NE(index.find("<td>eval-every = 20, iters = 60, lr = 0.01, test-size = 20, "
+                       "train-size = 100</td>"),
+            std::string::npos);
+  // Only the ξ = 32 runs are compared, each rule in its colour, one best per folder.
+  const std::string table = index.substr(section, index.find("<h2>Every run</h2>") - section);
+  EXPECT_EQ(table.find("ξ=1)"), std::string::npos);
+  EXPECT_NE(table.find("SIP (ξ=32)"), std::string::npos);
+  EXPECT_NE(table.find("<span class=\"swatch\" style=\"background:#000000\"></span>SIP (ξ=32)"),
+            std::string::npos);  // SIP's colour in the catalogue
+  std::size_t best = 0;
+  for (std::size_t at = table.find("<td>best</td>"); at != std::string::npos;
+       at = table.find("<td>best</td>", at + 1)) {
+    ++best;
+  }
+  EXPECT_EQ(best, 2u);
+  // The overlay draws the x-distance of the six compared runs.
+  const std::vector<std::string> svgs = inline_svgs(table);
+  ASSERT_EQ(svgs.size(), 1u);
+  EXPECT_NE(svgs[0].find("final x-distance to the nearest exact solution vs training time"),
+            std::string::npos);
+  EXPECT_NE(svgs[0].find("b: Adam (ξ=32)"), std::string::npos);
+  EXPECT_EQ(svgs[0].find("ξ=1)"), std::string::npos);
+}
+
 TEST_F(ReportPages, AFolderWithAFieldOfTheWrongTypeIsLeftOutWithAOneLineWarning) {
   ASSERT_EQ(run("run comparison --iters 2 --out runs/good").exit_code, 0);
   const auto broken = [&](const std::string& name, const std::string& file,
@@ -761,7 +805,8 @@ TEST_F(ReportPages, LargeFilesAreReadInBoundedTimeAndMemoryAndWhatIsLeftOutIsSai
     std::ofstream(dir_ / "runs" / name / "summary.json") << summary;
     return dir_ / "runs" / name;
   };
-  const std::string one_run = R"({"experiment": "hig-toy", "runs": [{"label": "L"}]})";
+  const std::string one_run =
+      R"({"experiment": "hig-toy", "runs": [{"label": "L", "final": {"test_loss": 1}}]})";
   // 12,000 runs of one label, 40 values of alpha with 300 seeds each.
   nlohmann::json runs = nlohmann::json::array();
   for (int k = 0; k < 12000; ++k) {

@@ -41,6 +41,10 @@ class Error : public std::runtime_error {
               (cols < 0 ? " entries" : "") + ", expected " + shape(expected_rows, expected_cols));
 }
 
+// Throws Error "WHO: WHAT, got VALUE" unless `ok`: the check of one argument of WHO, e.g.
+// require(xi > 0, "sin_rotation", "xi must be finite and positive", xi).
+void require(bool ok, const char* who, const char* what, double value);
+
 // Numerical trouble below an update rule: a non-finite operand, a factorization that did not
 // converge. The drivers (minimize(), train_step()) turn it into a run that ends with
 // "numerical_failure" and this message, instead of letting it escape.

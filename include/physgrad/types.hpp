@@ -3,12 +3,15 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <limits>
 
 namespace physgrad {
 
 using Index = Eigen::Index;
 using Vector = Eigen::VectorXd;
 using Matrix = Eigen::MatrixXd;
+
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // True when every entry is finite (no NaN, no ±Inf).
 template <typename Derived>

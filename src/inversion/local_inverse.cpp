@@ -25,7 +25,7 @@ constexpr NameTable<InverseMethod, 5> kMethodNames{{
     {InverseMethod::kInverseGradient, "ig"},
 }};
 
-void check_options(const LocalInverseOptions& options) {
+void check_inverse_options(const LocalInverseOptions& options) {
   require_positive("local inverse: tolerance", options.tolerance);
   require_in_range("local inverse: relative_tolerance", options.relative_tolerance, 0.0, 1.0);
   require_in_range("local inverse: function_tolerance", options.function_tolerance, 0.0, INFINITY);
@@ -164,7 +164,7 @@ LocalInverseResult local_inverse(const Simulator& user_simulator, const Vector& 
   if (method == InverseMethod::kAnalytic || method == InverseMethod::kTimeReversal) {
     result = closed_form(simulator, method, y, x0, context, domain);
   } else {
-    check_options(options);
+    check_inverse_options(options);
     result = numerical(simulator, method, y, x0, context, options, domain);
   }
   result.counts = simulator.counts() - counts_at_start;

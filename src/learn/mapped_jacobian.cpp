@@ -19,7 +19,7 @@ Index checked_rows(const double* data, Index batch, Index outputs, Index cols) {
   return batch * outputs;
 }
 
-int blas_dim(Index n) { return static_cast<int>(n); }
+int blas_size(Index n) { return static_cast<int>(n); }
 
 }  // namespace
 
@@ -33,8 +33,8 @@ Matrix MappedJacobian::gram() const {
   Matrix g = Matrix::Zero(r, r);
   if (r == 0 || cols() == 0) return g;
   // (Jᵀ)ᵀ Jᵀ, lower triangle, as power_pinv's Gram path reads it.
-  cblas_dsyrk(CblasColMajor, CblasLower, CblasTrans, blas_dim(r), blas_dim(cols()), 1.0,
-              transposed_.data(), blas_dim(cols()), 0.0, g.data(), blas_dim(r));
+  cblas_dsyrk(CblasColMajor, CblasLower, CblasTrans, blas_size(r), blas_size(cols()), 1.0,
+              transposed_.data(), blas_size(cols()), 0.0, g.data(), blas_size(r));
   return g;
 }
 

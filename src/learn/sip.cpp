@@ -7,6 +7,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/inversion/y_step.hpp"
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/timing.hpp"
 
 namespace physgrad {
 
@@ -49,8 +50,7 @@ Step SipUpdate::step(const BatchState& batch) {
     }
     cotangent.col(i) = (x - x_tilde) / divisor;
   }
-  step.inversion_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  step.inversion_seconds = seconds_since(start);
   // Every rank takes part in backprop's sum, also with a NaN cotangent, so no rank waits alone;
   // a non-finite proxy gradient leaves Adam's moments as they were.
   const Vector gradient = batch.backprop(cotangent);

@@ -8,7 +8,7 @@
 namespace physgrad {
 
 namespace {
-void check_shapes(const Vector& y, const Vector& target) {
+void check_target_shape(const Vector& y, const Vector& target) {
   if (y.size() != target.size()) {
     std::ostringstream msg;
     msg << "loss: output has " << y.size() << " entries but the target has " << target.size();
@@ -30,22 +30,22 @@ L2Loss::L2Loss(double weight) : weight_(weight) {
 }
 
 double L2Loss::value(const Vector& y, const Vector& target) const {
-  check_shapes(y, target);
+  check_target_shape(y, target);
   return 0.5 * weight_ * (y - target).squaredNorm();
 }
 
 Vector L2Loss::gradient(const Vector& y, const Vector& target) const {
-  check_shapes(y, target);
+  check_target_shape(y, target);
   return weight_ * (y - target);
 }
 
 Matrix L2Loss::hessian(const Vector& y, const Vector& target) const {
-  check_shapes(y, target);
+  check_target_shape(y, target);
   return weight_ * Matrix::Identity(y.size(), y.size());
 }
 
 Vector L2Loss::newton_step(const Vector& y, const Vector& target) const {
-  check_shapes(y, target);
+  check_target_shape(y, target);
   return target - y;
 }
 

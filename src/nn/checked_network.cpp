@@ -9,7 +9,7 @@ namespace physgrad {
 namespace {
 
 // Reads one dimension of `inner`, which must be ≥ 1.
-Index checked_dim(const Network& inner, Index value, const char* what) {
+Index network_dim(const Network& inner, Index value, const char* what) {
   if (value < 1) {
     std::ostringstream msg;
     msg << "network '" << inner.name() << "': " << what << "() returned " << value
@@ -23,9 +23,9 @@ Index checked_dim(const Network& inner, Index value, const char* what) {
 
 CheckedNetwork::CheckedNetwork(const Network& inner)
     : inner_(&inner),
-      input_dim_(checked_dim(inner, inner.input_dim(), "input_dim")),
-      output_dim_(checked_dim(inner, inner.output_dim(), "output_dim")),
-      parameters_(checked_dim(inner, inner.num_parameters(), "num_parameters")) {
+      input_dim_(network_dim(inner, inner.input_dim(), "input_dim")),
+      output_dim_(network_dim(inner, inner.output_dim(), "output_dim")),
+      parameters_(network_dim(inner, inner.num_parameters(), "num_parameters")) {
   const Index size = inner.parameters().size();
   if (size != parameters_) {
     std::ostringstream msg;

@@ -13,7 +13,7 @@ namespace {
 
 blasint blas_dim(Index value) { return static_cast<blasint>(value); }
 
-std::string shape(const Matrix& m) {
+std::string matrix_shape(const Matrix& m) {
   return std::to_string(m.rows()) + "×" + std::to_string(m.cols());
 }
 
@@ -57,7 +57,7 @@ DenseLayerGram::DenseLayerGram(Index columns, Index batch, std::vector<Index> se
 void DenseLayerGram::add(const Matrix& deltas, const Matrix& inputs, bool with_bias) {
   if (finished_) throw Error("DenseLayerGram::add: the sum was already taken by finish()");
   if (deltas.cols() != columns_ || inputs.cols() != batch_) {
-    throw Error("DenseLayerGram::add: deltas " + shape(deltas) + " and inputs " + shape(inputs) +
+    throw Error("DenseLayerGram::add: deltas " + matrix_shape(deltas) + " and inputs " + matrix_shape(inputs) +
                 " do not fit " + std::to_string(columns_) + " columns of a batch of " +
                 std::to_string(batch_));
   }

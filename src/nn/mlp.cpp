@@ -19,7 +19,7 @@ constexpr NameTable<Init, 2> kInitNames{{
     {Init::kHeUniform, "he"},
 }};
 
-std::string shape(Index rows, Index cols) {
+std::string shape_text(Index rows, Index cols) {
   return std::to_string(rows) + "x" + std::to_string(cols);
 }
 
@@ -42,7 +42,7 @@ void check_parameters(const Mlp& mlp) {
 void check_input(const Mlp& mlp, const Matrix& x) {
   check_parameters(mlp);
   if (x.rows() != mlp.input_dim()) {
-    throw Error(std::string("Mlp::forward: input x is ") + shape(x.rows(), x.cols()) +
+    throw Error(std::string("Mlp::forward: input x is ") + shape_text(x.rows(), x.cols()) +
                 ", expected " + std::to_string(mlp.input_dim()) + " rows");
   }
 }
@@ -66,8 +66,8 @@ Index check_cache(const Mlp& mlp, const MlpCache& cache, const Matrix& gy) {
   const Index batch = cache.activations[0].cols();
   const auto expect = [&](const Matrix& m, Index rows, const std::string& what) {
     if (m.rows() != rows || m.cols() != batch) {
-      throw Error(std::string("Mlp: ") + what + " is " + shape(m.rows(), m.cols()) +
-                  ", expected " + shape(rows, batch));
+      throw Error(std::string("Mlp: ") + what + " is " + shape_text(m.rows(), m.cols()) +
+                  ", expected " + shape_text(rows, batch));
     }
   };
   for (std::size_t l = 0; l < widths.size(); ++l) {
@@ -220,8 +220,8 @@ void Mlp::per_sample_gradients(const NetworkCache& network_cache, const Matrix& 
   const Index batch = check_cache(*this, cache, gy);
   if (out.rows() != batch || out.cols() != num_parameters()) {
     throw Error(std::string("Mlp::per_sample_gradients: output block is ") +
-                shape(out.rows(), out.cols()) + ", expected " +
-                shape(batch, num_parameters()));
+                shape_text(out.rows(), out.cols()) + ", expected " +
+                shape_text(batch, num_parameters()));
   }
   backpropagate(*this, cache, gy, [&](Index l, const Matrix& delta) {
     // Sample-major copies: column j of delta_t is δ_l[j, :]ᵀ, column i of input_t a_{l−1}[i, :]ᵀ.

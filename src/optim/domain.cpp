@@ -11,8 +11,6 @@ namespace physgrad {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
 void check_size(const Vector& v, Index n, const char* name) {
   if (v.size() != 0 && v.size() != n) {
     std::ostringstream msg;

@@ -6,6 +6,7 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/text.hpp"
+#include "physgrad/timing.hpp"
 
 namespace physgrad {
 
@@ -41,9 +42,7 @@ bool converged(Termination termination) {
 
 namespace {
 
-std::string number(double value) { return report_number(value); }
-
-void check_options(const MinimizeOptions& options) {
+void check_minimize_options(const MinimizeOptions& options) {
   if (options.max_iterations < 1) {
     throw Error("minimize: max_iterations must be ≥ 1, got " +
                 std::to_string(options.max_iterations));
@@ -73,19 +72,19 @@ class StoppingRules {
   bool at_point(double loss, const Vector& x, const Vector* gradient, MinimizeSummary& out) const {
     if (std::isfinite(loss) && loss <= options_.loss_tolerance) {
       return stop(out, Termination::kConverged,
-                  "L = " + number(loss) + " ≤ loss_tolerance = " + number(options_.loss_tolerance));
+                  "L = " + report_number(loss) + " ≤ loss_tolerance = " + report_number(options_.loss_tolerance));
     }
     const double relative = options_.relative_loss_tolerance * initial_loss_;
     if (options_.relative_loss_tolerance > 0 && std::isfinite(loss) && loss <= relative) {
       return stop(out, Termination::kRelativeLoss,
-                  "L = " + number(loss) + " ≤ relative_loss_tolerance·L₀ = " + number(relative));
+                  "L = " + report_number(loss) + " ≤ relative_loss_tolerance·L₀ = " + report_number(relative));
     }
     if (gradient != nullptr) {
       out.gradient_norm = domain_.projected_gradient_norm(x, *gradient);
       if (std::isfinite(out.gradient_norm) && out.gradient_norm <= options_.gradient_tolerance) {
         return stop(out, Termination::kGradientTolerance,
-                    "projected gradient max-norm " + number(out.gradient_norm) +
-                        " ≤ gradient_tolerance = " + number(options_.gradient_tolerance));
+                    "projected gradient max-norm " + report_number(out.gradient_norm) +
+                        " ≤ gradient_tolerance = " + report_number(options_.gradient_tolerance));
       }
     }
     return false;
@@ -99,15 +98,15 @@ class StoppingRules {
     const double allowed = options_.function_tolerance * before;
     if (moved && options_.function_tolerance > 0 && std::isfinite(change) && change <= allowed) {
       return stop(out, Termination::kFunctionTolerance,
-                  "|ΔL| = " + number(change) + " ≤ function_tolerance·L = " + number(allowed));
+                  "|ΔL| = " + report_number(change) + " ≤ function_tolerance·L = " + report_number(allowed));
     }
     const double tol = options_.parameter_tolerance;
     const double length = domain_.scaled_norm(dx);
     const double limit = tol * (domain_.scaled_norm(x) + tol);
     if (tol > 0 && std::isfinite(length) && length <= limit) {
       return stop(out, Termination::kParameterTolerance,
-                  std::string(moved ? "step" : "rejected trial") + " ‖Δx ⊘ s‖ = " + number(length) +
-                      " ≤ parameter_tolerance·(‖x ⊘ s‖ + parameter_tolerance) = " + number(limit));
+                  std::string(moved ? "step" : "rejected trial") + " ‖Δx ⊘ s‖ = " + report_number(length) +
+                      " ≤ parameter_tolerance·(‖x ⊘ s‖ + parameter_tolerance) = " + report_number(limit));
     }
     return false;
   }
@@ -143,12 +142,9 @@ class StoppingRules {
 
 MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const Vector& x0,
                          const MinimizeOptions& options) {
-  check_options(options);
+  check_minimize_options(options);
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
-  const auto since = [](Clock::time_point from) {
-    return std::chrono::duration<double>(Clock::now() - from).count();
-  };
   // Everything below reaches the simulator through `problem`, whose simulator is checked and
   // counted (a nested run, pg's local inverse, shares the outer run's CheckedSimulator).
   const CheckedObjective checked(objective);
@@ -176,7 +172,7 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
     const auto begin = Clock::now();
     const double value =
         with_gradient ? problem.value_and_gradient(x, gradient) : problem.value(x);
-    summary.evaluation_seconds += since(begin);
+    summary.evaluation_seconds += seconds_since(begin);
     ++summary.evaluations;
     return value;
   };
@@ -198,7 +194,7 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
   summary.stopping_rules = rules.listed();
   const Vector* tested_gradient = with_gradient ? &gradient : nullptr;
   const auto record = [&](double step_norm) {
-    summary.history.push_back({summary.iterations, summary.loss, step_norm, since(start),
+    summary.history.push_back({summary.iterations, summary.loss, step_norm, seconds_since(start),
                                summary.evaluations, simulator.counts() - counts_at_start,
                                summary.x});
     return options.callback && options.callback(summary.history.back());
@@ -218,7 +214,7 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
   while (!stop && !done) {
     if (summary.iterations >= options.max_iterations) break;
     if (budget.out_of_time()) {
-      end_on(Termination::kMaxSeconds, "max_seconds = " + number(options.max_seconds) +
+      end_on(Termination::kMaxSeconds, "max_seconds = " + report_number(options.max_seconds) +
                                            " reached after iteration " +
                                            std::to_string(summary.iterations));
       break;
@@ -232,7 +228,7 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
     try {
       const auto step_start = Clock::now();
       step = optimizer.step(problem, summary.x, domain);
-      summary.step_seconds += since(step_start);
+      summary.step_seconds += seconds_since(step_start);
       summary.evaluations += step.evaluations;
       if (step.status == Step::Status::kOk && all_finite(step.delta)) {
         // The rule keeps x + Δx in the box; the projection only removes rounding in the sum.
@@ -297,19 +293,19 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
     summary.message = "max_iterations = " + std::to_string(options.max_iterations) + " reached";
   } else if (converged(summary.termination) && !(summary.loss <= summary.initial_loss)) {
     end_on(Termination::kDiverged, to_string(summary.termination) + " held (" + summary.message +
-                                       "), but L = " + number(summary.loss) +
-                                       " is above L(x₀) = " + number(summary.initial_loss));
+                                       "), but L = " + report_number(summary.loss) +
+                                       " is above L(x₀) = " + report_number(summary.initial_loss));
   }
   summary.counts = simulator.counts() - counts_at_start;
   summary.at_bounds = domain.count_at_bounds(summary.x);
-  summary.wall_seconds = since(start);
+  summary.wall_seconds = seconds_since(start);
   return summary;
 }
 
 std::string brief_report(const MinimizeSummary& s) {
   return s.optimizer + ": " + std::to_string(s.iterations) + " iterations, " +
          std::to_string(s.evaluations) + " evaluations, " + std::to_string(s.counts.passes) +
-         " simulator passes, loss " + number(s.initial_loss) + " → " + number(s.loss) + ", " +
+         " simulator passes, loss " + report_number(s.initial_loss) + " → " + report_number(s.loss) + ", " +
          to_string(s.termination);
 }
 
@@ -330,12 +326,12 @@ std::string full_report(const MinimizeSummary& s) {
     row(name, value.is_string() ? value.get<std::string>() : value.dump());
   }
   out << "\nStopping rules and budgets\n";
-  for (const auto& [name, value] : s.stopping_rules) row(name, number(value));
+  for (const auto& [name, value] : s.stopping_rules) row(name, report_number(value));
   out << "\nLoss\n";
-  row("initial", number(s.initial_loss));
-  row("final", number(s.loss));
-  row("change", number(s.initial_loss - s.loss));
-  if (s.gradient_norm >= 0) row("projected gradient", number(s.gradient_norm));
+  row("initial", report_number(s.initial_loss));
+  row("final", report_number(s.loss));
+  row("change", report_number(s.initial_loss - s.loss));
+  if (s.gradient_norm >= 0) row("projected gradient", report_number(s.gradient_norm));
   out << "\nWork\n";
   row("iterations", std::to_string(s.iterations) + " (" + std::to_string(s.rejected_steps) +
                         " rejected trials)");
@@ -348,9 +344,9 @@ std::string full_report(const MinimizeSummary& s) {
   row("  time reversals", std::to_string(s.counts.reversals));
   row("  inverses", std::to_string(s.counts.inverses));
   out << "\nTime (seconds)\n";
-  row("rule steps", number(s.step_seconds));
-  row("loss evaluations", number(s.evaluation_seconds));
-  row("total", number(s.wall_seconds));
+  row("rule steps", report_number(s.step_seconds));
+  row("loss evaluations", report_number(s.evaluation_seconds));
+  row("total", report_number(s.wall_seconds));
   out << "\nTermination: " << to_string(s.termination)
       << (converged(s.termination) ? " (convergence)" : "") << "\n";
   if (!s.message.empty()) out << "  " << s.message << "\n";

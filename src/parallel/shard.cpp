@@ -3,16 +3,13 @@
 #include <chrono>
 
 #include "physgrad/error.hpp"
+#include "physgrad/timing.hpp"
 
 namespace physgrad {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 ColumnRange range_of(Index count, int rank, int size) {
   const Share share = share_of(static_cast<std::size_t>(count), rank, size);

@@ -9,7 +9,7 @@ namespace physgrad {
 namespace {
 
 // Reads one dimension of `inner`, which must be at least `least`.
-Index checked_dim(const Simulator& inner, Index value, const char* what, Index least) {
+Index simulator_dim(const Simulator& inner, Index value, const char* what, Index least) {
   if (value < least) {
     std::ostringstream msg;
     msg << "simulator '" << inner.name() << "': " << what << "() returned " << value
@@ -64,9 +64,9 @@ std::string to_string(const SimulatorCounts& counts) {
 
 CheckedSimulator::CheckedSimulator(const Simulator& inner)
     : inner_(&inner),
-      n_(checked_dim(inner, inner.input_dim(), "input_dim", 1)),
-      m_(checked_dim(inner, inner.output_dim(), "output_dim", 1)),
-      context_dim_(checked_dim(inner, inner.context_dim(), "context_dim", 0)),
+      n_(simulator_dim(inner, inner.input_dim(), "input_dim", 1)),
+      m_(simulator_dim(inner, inner.output_dim(), "output_dim", 1)),
+      context_dim_(simulator_dim(inner, inner.context_dim(), "context_dim", 0)),
       has_inverse_(inner.has_inverse()),
       has_time_reversal_(inner.has_time_reversal()) {}
 

@@ -58,20 +58,14 @@ double likelihood(double a, double scale) {
 
 constexpr double kMaxLogGain = 88;  // ⌊ln(largest float)⌋
 
-void require(bool ok, const char* what, double value) {
-  if (ok) return;
-  std::ostringstream msg;
-  msg << "heat_diffusion: " << what << ", got " << value;
-  throw Error(msg.str());
-}
-
 }  // namespace
 
 HeatDiffusion::HeatDiffusion(HeatConfig config) : config_(config) {
-  require(config.n >= 1, "n must be ≥ 1", static_cast<double>(config.n));
-  require(config.dims == 1 || config.dims == 2, "dims must be 1 or 2", config.dims);
-  require(std::isfinite(config.amount) && config.amount >= 0, "amount must be finite and ≥ 0",
-          config.amount);
+  require(config.n >= 1, "heat_diffusion", "n must be ≥ 1", static_cast<double>(config.n));
+  require(config.dims == 1 || config.dims == 2, "heat_diffusion", "dims must be 1 or 2",
+          config.dims);
+  require(std::isfinite(config.amount) && config.amount >= 0, "heat_diffusion",
+          "amount must be finite and ≥ 0", config.amount);
   // The kernel, its logarithm and a field's complex spectra in both passes, about 8 reals per
   // cell; in double, so an n whose n² overflows Index is refused here too.
   const double cells = std::pow(static_cast<double>(config.n), config.dims);
@@ -134,9 +128,9 @@ Vector HeatDiffusion::inverse_diffusion(const Vector& dy, double uncertainty_sca
     throw Error(std::string("heat_diffusion.inverse_diffusion: dy has ") +
                 std::to_string(dy.size()) + " values, expected " + std::to_string(size_));
   }
-  require(std::isfinite(uncertainty_scale) && uncertainty_scale >= 0,
+  require(std::isfinite(uncertainty_scale) && uncertainty_scale >= 0, "heat_diffusion",
           "uncertainty_scale must be finite and ≥ 0", uncertainty_scale);
-  require(std::isfinite(uncertainty_floor) && uncertainty_floor >= 0,
+  require(std::isfinite(uncertainty_floor) && uncertainty_floor >= 0, "heat_diffusion",
           "uncertainty_floor must be finite and ≥ 0", uncertainty_floor);
 
   const double noise = (dy.array().abs() * uncertainty_scale + uncertainty_floor).matrix().norm();

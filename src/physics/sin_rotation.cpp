@@ -10,19 +10,12 @@
 
 namespace physgrad {
 
-namespace {
-void require(bool ok, const char* what, double value) {
-  if (ok) return;
-  std::ostringstream msg;
-  msg << "sin_rotation: " << what << ", got " << value;
-  throw Error(msg.str());
-}
-}  // namespace
-
 SinRotation::SinRotation(SinRotationConfig config) : config_(config) {
-  require(std::isfinite(config.xi) && config.xi > 0, "xi must be finite and positive", config.xi);
-  require(std::isfinite(config.phi_degrees), "phi_degrees must be finite", config.phi_degrees);
-  require(std::isfinite(config.global_scale) && config.global_scale > 0,
+  require(std::isfinite(config.xi) && config.xi > 0, "sin_rotation",
+          "xi must be finite and positive", config.xi);
+  require(std::isfinite(config.phi_degrees), "sin_rotation", "phi_degrees must be finite",
+          config.phi_degrees);
+  require(std::isfinite(config.global_scale) && config.global_scale > 0, "sin_rotation",
           "global_scale must be finite and positive", config.global_scale);
   const double phi = config.phi_degrees * std::numbers::pi / 180;
   Eigen::Matrix2d rotation;

@@ -7,12 +7,12 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/report/colors.hpp"
+#include "physgrad/types.hpp"
 
 namespace physgrad {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kShades = 64;  // colormap steps of shading and colour bars
 constexpr double kBarWidth = 14;
 

@@ -30,6 +30,7 @@ figure svg{display:block;max-width:100%;height:auto}
 .figure-scroll{overflow-x:auto;max-width:100%}
 figcaption{font-size:.9em;color:#555;margin-top:.3em;max-width:640px}
 p.message{font-size:1.15em;font-weight:600;color:#222;margin:.2em 0 .4em}
+.swatch{display:inline-block;width:.8em;height:.8em;margin-right:.4em;vertical-align:-.05em}
 )";
 
 // The width (px) at which an SVG document of svg::open() shows its smallest text at 11 px: its
@@ -76,6 +77,13 @@ std::string paragraphs(std::string_view text) {
   return out;
 }
 
+bool is_hex_colour(const std::string& text) {
+  return text.size() == 7 && text[0] == '#' &&
+         std::all_of(text.begin() + 1, text.end(), [](char c) {
+           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F');
+         });
+}
+
 std::string table_html(const HtmlTable& table, const std::string& where) {
   const auto check = [&](std::size_t cells, std::size_t r, const char* what) {
     if (cells != table.header.size()) {
@@ -84,9 +92,13 @@ std::string table_html(const HtmlTable& table, const std::string& where) {
                   " cells but the header has " + std::to_string(table.header.size()));
     }
   };
-  if (!table.links.empty() && table.links.size() != table.rows.size()) {
-    throw Error("html_report: a table in " + where + " has " + std::to_string(table.rows.size()) +
-                " rows but " + std::to_string(table.links.size()) + " rows of links");
+  for (const auto& [cells, what] : {std::pair(&table.links, "links"),
+                                     std::pair(&table.colours, "colours")}) {
+    if (!cells->empty() && cells->size() != table.rows.size()) {
+      throw Error("html_report: a table in " + where + " has " +
+                  std::to_string(table.rows.size()) + " rows but " +
+                  std::to_string(cells->size()) + " rows of " + what);
+    }
   }
   // The caption sits above the scroll box, as wide as the text, however narrow the table.
   std::string out;
@@ -100,14 +112,23 @@ std::string table_html(const HtmlTable& table, const std::string& where) {
     const auto& row = table.rows[r];
     check(row.size(), r, "row");
     if (!table.links.empty()) check(table.links[r].size(), r, "row of links");
+    if (!table.colours.empty()) check(table.colours[r].size(), r, "row of colours");
     out += "<tr>";
     for (std::size_t c = 0; c < row.size(); ++c) {
       const std::string link = table.links.empty() ? std::string() : table.links[r][c];
-      out +=
-          "<td>" +
-          (link.empty() ? xml_escape(row[c])
-                        : "<a href=\"" + local_href(link) + "\">" + xml_escape(row[c]) + "</a>") +
-          "</td>";
+      const std::string colour = table.colours.empty() ? std::string() : table.colours[r][c];
+      out += "<td>";
+      if (!colour.empty()) {
+        if (!is_hex_colour(colour)) {
+          throw Error("html_report: '" + shown_text(colour) + "' in a table in " + where +
+                      " is not a colour #rrggbb");
+        }
+        out += "<span class=\"swatch\" style=\"background:" + colour + "\"></span>";
+      }
+      out += link.empty()
+                 ? xml_escape(row[c])
+                 : "<a href=\"" + local_href(link) + "\">" + xml_escape(row[c]) + "</a>";
+      out += "</td>";
     }
     out += "</tr>\n";
   }

@@ -11,6 +11,7 @@
 #include "physgrad/report/plot_axes.hpp"
 #include "physgrad/report/plot_geometry.hpp"
 #include "physgrad/report/plot_legend.hpp"
+#include "physgrad/types.hpp"
 
 namespace physgrad {
 
@@ -23,7 +24,6 @@ using plot::Polyline;
 using plot::Scale;
 using svg::num;
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 void check_lengths(const std::string& what, const Series& s, const std::vector<double>& values) {
   if (values.size() != s.x.size()) {

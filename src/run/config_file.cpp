@@ -20,8 +20,6 @@ constexpr std::size_t kMaxDepth = 16;
 constexpr std::size_t kMaxBytes = 1 << 20;
 constexpr std::size_t kPreviewBytes = 60;
 
-std::string flag(const OptionSpec& spec) { return "--" + spec.name; }
-
 // A JSON value as named in a message: 'text' for strings, JSON otherwise; cut to a short prefix.
 std::string preview(const json& value) {
   std::string text = value.is_string()
@@ -73,15 +71,15 @@ std::string list_text(const OptionSpec& spec, const json& items) {
   for (std::size_t i = 0; i < items.size(); ++i) {
     const json& item = items[i];
     if (numbers ? !item.is_number() : !item.is_string()) {
-      throw Error(flag(spec) + ": expected " + kind_description(spec.kind) + ", got item " +
+      throw Error(spec.flag() + ": expected " + kind_description(spec.kind) + ", got item " +
                   preview(item));
     }
     const std::string item_text = numbers ? number_text(item, false) : item.get<std::string>();
     if (item_text.find_first_not_of(" \t") == std::string::npos) {
-      throw Error(flag(spec) + ": empty entry in list " + preview(items));
+      throw Error(spec.flag() + ": empty entry in list " + preview(items));
     }
     if (item_text.find(',') != std::string::npos) {
-      throw Error(flag(spec) + ": list entry '" + item_text + "' contains a comma");
+      throw Error(spec.flag() + ": list entry '" + item_text + "' contains a comma");
     }
     if (i > 0) text += ',';
     text += item_text;
@@ -103,7 +101,7 @@ std::string option_text(const OptionSpec& spec, const json& value) {
       if (value.is_array()) return list_text(spec, value);
       break;
   }
-  throw Error(flag(spec) + ": expected " + kind_description(spec.kind) + ", got " +
+  throw Error(spec.flag() + ": expected " + kind_description(spec.kind) + ", got " +
               preview(value));
 }
 

@@ -109,11 +109,14 @@ DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Object
   for (const auto& [key, value] : rule.extra_params.items()) params[key] = value;
   for (const auto& [key, value] : row_extras.items()) params[key] = value;
   const MinimizeSummary& s = result.summary;
+  // The final entry also holds the extra columns of the last iterate (e.g. its simulator passes).
+  nlohmann::json final = {{"loss", s.loss}, {"x", std::vector<double>(s.x.begin(), s.x.end())}};
+  if (columns) final.update(columns(s.history.back()));
   context.add_run({{"label", rule.label},
                    {"optimizer", rule.id},
                    {"params", params},
                    {"initial", {{"loss", result.initial_loss}}},
-                   {"final", {{"loss", s.loss}, {"x", std::vector<double>(s.x.begin(), s.x.end())}}},
+                   {"final", final},
                    {"iterations", s.iterations},
                    {"epochs", nullptr},
                    {"wall_seconds", s.wall_seconds},

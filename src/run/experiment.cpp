@@ -17,8 +17,6 @@ namespace {
 
 using Kind = OptionSpec::Kind;
 
-std::string flag(const OptionSpec& spec) { return "--" + spec.name; }
-
 std::string trim(const std::string& text) {
   const auto first = text.find_first_not_of(" \t");
   if (first == std::string::npos) return {};
@@ -72,22 +70,22 @@ bool is_decimal(const std::string& item, bool whole) {
 double parse_real(const OptionSpec& spec, const std::string& text) {
   const std::string item = trim(text);
   if (!is_decimal(item, false)) {
-    throw Error(flag(spec) + ": " + in_quotes(text) +
+    throw Error(spec.flag() + ": " + in_quotes(text) +
                 " is not a number (decimal, like 16, -2.5 or 1e-3)");
   }
   // strtod, not stod: a value below the normal range (1e-310) is kept as the subnormal it is.
   errno = 0;
   const double value = std::strtod(item.c_str(), nullptr);
   if (errno == ERANGE && std::isinf(value)) {
-    throw Error(flag(spec) + ": " + in_quotes(text) + " is out of the range of a double");
+    throw Error(spec.flag() + ": " + in_quotes(text) + " is out of the range of a double");
   }
   if (errno == ERANGE && value == 0) {
-    throw Error(flag(spec) + ": " + in_quotes(text) +
+    throw Error(spec.flag() + ": " + in_quotes(text) +
                 " is too close to 0 for a double (it would read 0)");
   }
   const bool below = spec.min_exclusive ? !(value > spec.min) : !(value >= spec.min);
   if (below || value > spec.max || (spec.nonzero && value == 0)) {
-    throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got " + in_quotes(text));
+    throw Error(spec.flag() + ": must be " + describe_range(spec) + ", got " + in_quotes(text));
   }
   return value;
 }
@@ -95,7 +93,7 @@ double parse_real(const OptionSpec& spec, const std::string& text) {
 long long parse_integer(const OptionSpec& spec, const std::string& text) {
   const std::string item = trim(text);
   if (!is_decimal(item, true)) {
-    throw Error(flag(spec) + ": " + in_quotes(text) +
+    throw Error(spec.flag() + ": " + in_quotes(text) +
                 " is not a whole number (decimal digits, like 16)");
   }
   errno = 0;
@@ -103,19 +101,19 @@ long long parse_integer(const OptionSpec& spec, const std::string& text) {
   const bool beyond = errno == ERANGE;  // a whole number beyond ±9.2e18
   const auto as_double = static_cast<double>(value);
   if (beyond || as_double < spec.min || as_double > spec.max || (spec.nonzero && value == 0)) {
-    throw Error(flag(spec) + ": must be " + describe_range(spec) + ", got " + in_quotes(text));
+    throw Error(spec.flag() + ": must be " + describe_range(spec) + ", got " + in_quotes(text));
   }
   return value;
 }
 
 std::string parse_text(const OptionSpec& spec, const std::string& text) {
   if (const std::string problem = text_problem(text); !problem.empty()) {
-    throw Error(flag(spec) + ": " + in_quotes(text) + " " + problem);
+    throw Error(spec.flag() + ": " + in_quotes(text) + " " + problem);
   }
   const std::string item = trim(text);
   if (!spec.choices.empty() &&
       std::find(spec.choices.begin(), spec.choices.end(), item) == spec.choices.end()) {
-    throw Error(flag(spec) + ": " + unknown_name_text("value", item, spec.choices));
+    throw Error(spec.flag() + ": " + unknown_name_text("value", item, spec.choices));
   }
   return item;
 }
@@ -177,18 +175,18 @@ nlohmann::json parse_option(const OptionSpec& spec, const std::string& text) {
     case Kind::kText: return parse_text(spec, text);
     case Kind::kRealList:
     case Kind::kTextList: {
-      if (trim(text).empty()) throw Error(flag(spec) + ": needs at least one value");
+      if (trim(text).empty()) throw Error(spec.flag() + ": needs at least one value");
       nlohmann::json items = nlohmann::json::array();
       std::vector<std::string> entries, names;  // as given, and as labels show them
       for (const std::string& item : split_list(text)) {
-        if (item.empty()) throw Error(flag(spec) + ": empty entry in list " + in_quotes(text));
+        if (item.empty()) throw Error(spec.flag() + ": empty entry in list " + in_quotes(text));
         const bool number = spec.kind == Kind::kRealList;
         const double value = number ? parse_real(spec, item) : 0.0;
         const std::string name = number ? format_value(value) : parse_text(spec, item);
         const auto same = std::find(names.begin(), names.end(), name);
         if (spec.distinct && same != names.end()) {
           const std::string& first = entries[static_cast<std::size_t>(same - names.begin())];
-          throw Error(flag(spec) + ": " +
+          throw Error(spec.flag() + ": " +
                       (first == item ? in_quotes(item) + " is listed twice"
                                      : in_quotes(first) + " and " + in_quotes(item) +
                                            " both read " + in_quotes(name) +
@@ -316,7 +314,7 @@ Settings resolve_settings(const Experiment& experiment,
     const double each = spec.bytes_each(settings);
     const long long count = settings.integer(spec.name);
     require_memory(static_cast<double>(count) * each,
-                   flag(spec) + ": " + std::to_string(count) + " (items of at least " +
+                   spec.flag() + ": " + std::to_string(count) + " (items of at least " +
                        format_bytes(each) + " each)");
   }
   return settings;

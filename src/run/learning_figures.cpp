@@ -24,6 +24,14 @@ std::string milliseconds(double seconds, long long steps) {
 
 }  // namespace
 
+void mark_if_diverging(Series& series) {
+  if (series.y.size() > 1 && series.y.back() > series.y.front()) {
+    series.sets_range = false;
+    series.end_label =
+        "diverging: ends at ×" + format_value(series.y.back() / series.y.front()) + " its start";
+  }
+}
+
 Series held_controls(const std::string& label, const Vector& u, double dt,
                      const std::string& color) {
   Series s{label, {}, std::vector<double>(u.data(), u.data() + u.size()), color};
@@ -98,11 +106,7 @@ RunContext::Figure LearningSweep::metric_figure(
     // Over time the seeds are evaluated at different moments: each holds its last value, so
     // median and band change in steps.
     s.steps = n > 1 && progress == Progress::kTime;
-    // A loss that ends above where it started (a diverging rule) does not set the axis range.
-    if (log_y && s.y.size() > 1 && s.y.back() > s.y.front()) {
-      s.sets_range = false;
-      s.end_label = "diverging: ends at ×" + format_value(s.y.back() / s.y.front()) + " its start";
-    }
+    if (log_y) mark_if_diverging(s);
     if (stopped > 0) {
       s.end_label = n > 1 ? std::to_string(stopped) + " of " + std::to_string(n) +
                                 " runs stopped: not finite"
@@ -178,20 +182,35 @@ void LearningSweep::set_time_message(const std::string& tag, const std::string& 
   const std::string sentence = lowest_value_sentence(
       final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }), what);
   context_.set_message("loss_vs_time_" + file_tag + ".svg",
-                       sentence.substr(0, sentence.size() - 1) + ", after the same budget.");
+                       sentence.substr(0, sentence.size() - 1) + ", after the same budget.",
+                       {"test_loss", what, labels(tag)});
 }
 
 void LearningSweep::set_metric_message(const std::string& tag, const std::string& file,
-                                       const std::function<double(const TrainingRecord&)>& metric,
-                                       const std::string& what_metric,
+                                       const std::string& metric, const std::string& what_metric,
                                        const std::string& loss_lead, const std::string& what_loss,
                                        const std::string& prefix) const {
   context_.set_message(
-      file, prefix + lowest_value_sentence(final_medians(tag, metric), what_metric) + " " +
-                loss_lead + ": " +
-                lowest_value_sentence(
-                    final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }),
-                    what_loss));
+      file,
+      prefix + lowest_value_sentence(final_medians(tag, extra(metric)), what_metric) + " " +
+          loss_lead + ": " +
+          lowest_value_sentence(
+              final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }), what_loss),
+      {metric, what_metric, labels(tag)});
+}
+
+std::function<double(const TrainingRecord&)> LearningSweep::extra(const std::string& key) {
+  return [key](const TrainingRecord& r) { return r.extras.at(key).get<double>(); };
+}
+
+std::vector<std::string> LearningSweep::labels(const std::string& tag) const {
+  std::vector<std::string> out;
+  for (const LearningResult& r : results_) {
+    if (r.tag == tag && std::find(out.begin(), out.end(), r.label) == out.end()) {
+      out.push_back(r.label);
+    }
+  }
+  return out;
 }
 
 std::string lowest_value_sentence(const std::vector<LearningSweep::RuleValue>& values,

@@ -62,7 +62,16 @@ nlohmann::json config_document(const Experiment& experiment, const Settings& set
 }
 
 nlohmann::json summary_document(const Experiment& experiment, const RunContext& context) {
-  return {{"experiment", experiment.name()}, {"runs", context.runs()}};
+  nlohmann::json summary = {{"experiment", experiment.name()}, {"runs", context.runs()}};
+  if (!context.message_figure().empty()) {
+    const MessageMetric& metric = context.message_metric();
+    summary["message"] = {{"figure", context.message_figure()},
+                          {"sentence", context.message()},
+                          {"metric", metric.key},
+                          {"metric_text", metric.text},
+                          {"labels", metric.labels}};
+  }
+  return summary;
 }
 
 bool is_result_file(const std::string& name) {

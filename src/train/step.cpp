@@ -9,16 +9,13 @@
 #include "physgrad/learn/sharded_jacobian.hpp"
 #include "physgrad/nn/checked_network.hpp"
 #include "physgrad/physics/checked_simulator.hpp"
+#include "physgrad/timing.hpp"
 
 namespace physgrad {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 const Simulator& require_models(const LearningProblem& problem) {
   if (problem.physics == nullptr || problem.loss == nullptr) {
@@ -50,7 +47,7 @@ class CheckedModels {
 };
 
 // Dimension checks of check_problem() without reading the values.
-void check_shapes(const CheckedModels& models, const Dataset& data, const char* name) {
+void check_batch_shapes(const CheckedModels& models, const Dataset& data, const char* name) {
   const Network& network = models.network();
   const Simulator& physics = models.physics();
   std::ostringstream msg;
@@ -94,14 +91,14 @@ double loss_sum(const Loss& loss, const Matrix& y, const Matrix& targets, double
 void check_problem(const Network& network, const LearningProblem& problem, const Dataset& data,
                    const char* name) {
   data.validate(name);
-  check_shapes(CheckedModels(network, problem), data, name);
+  check_batch_shapes(CheckedModels(network, problem), data, name);
 }
 
 double mean_loss(const Network& user_network, const LearningProblem& problem, const Dataset& data,
                  const Shard& shard) {
   const CheckedModels models(user_network, problem);
   data.validate("data set");
-  check_shapes(models, data, "data set");
+  check_batch_shapes(models, data, "data set");
   const Network& network = models.network();
   const ColumnRange own = shard.columns(data.size());
   double total = 0;
@@ -211,7 +208,7 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
   // The rule and evaluate_batch() see the network and the simulator only through the checked
   // models; θ is updated on `network` itself.
   const CheckedModels models(network, problem);
-  check_shapes(models, batch, "batch");
+  check_batch_shapes(models, batch, "batch");
   if (batch.size() == 0) throw Error("train_step: the batch has no samples");
   if (!state.cache) state.cache = models.network().new_cache();
   const auto start = Clock::now();

@@ -10,16 +10,13 @@
 #include "physgrad/error.hpp"
 #include "physgrad/stop.hpp"
 #include "physgrad/text.hpp"
+#include "physgrad/timing.hpp"
 
 namespace physgrad {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 constexpr NameTable<TrainingTermination, 5> kTerminationNames{{
     {TrainingTermination::kMaxIterations, "max_iterations"},
@@ -36,7 +33,7 @@ double epochs(const TrainingSummary& s) {
                        : 0.0;
 }
 
-void check_options(const TrainerOptions& options) {
+void check_trainer_options(const TrainerOptions& options) {
   const auto at_least_one = [](const char* name, const std::optional<long long>& value) {
     if (value && *value < 1) {
       throw Error(std::string(name) + " must be ≥ 1, got " + std::to_string(*value));
@@ -411,7 +408,7 @@ TrainingSummary train(Network& network, LearningUpdate& update, const LearningPr
                       const TrainerOptions& options) {
   check_problem(network, problem, train_set, "training set");
   if (test_set != nullptr) check_problem(network, problem, *test_set, "test set");
-  check_options(options);
+  check_trainer_options(options);
   return TrainingRun(network, update, problem, train_set, test_set, options).run();
 }
 

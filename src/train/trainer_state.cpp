@@ -11,12 +11,14 @@ namespace physgrad {
 namespace {
 
 // NaN (a test loss without a test set) is written as null.
-nlohmann::json number(double value) { return std::isfinite(value) ? nlohmann::json(value) : nullptr; }
+nlohmann::json finite_or_null(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nullptr;
+}
 
 nlohmann::json record_to_json(const TrainingRecord& r) {
   return {{"iteration", r.iteration},         {"epoch", r.epoch},
-          {"train_seconds", r.train_seconds}, {"train_loss", number(r.train_loss)},
-          {"test_loss", number(r.test_loss)}, {"extras", r.extras}};
+          {"train_seconds", r.train_seconds}, {"train_loss", finite_or_null(r.train_loss)},
+          {"test_loss", finite_or_null(r.test_loss)}, {"extras", r.extras}};
 }
 
 TrainingRecord record_from_json(const nlohmann::json& document) {

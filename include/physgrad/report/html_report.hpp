@@ -18,6 +18,9 @@ struct HtmlTable {
   // Optional links: empty, or one row per row of `rows` whose non-empty cells make the cell a
   // link to that file: a path relative to the page's folder, segments separated by '/'.
   std::vector<std::vector<std::string>> links{};
+  // Optional colours, shaped as links: a cell's "#rrggbb" draws a square of that colour before
+  // its text (e.g. a rule's colour, as its figures draw it).
+  std::vector<std::vector<std::string>> colours{};
 };
 
 struct HtmlFigure {
@@ -44,8 +47,8 @@ struct HtmlSection {
 // "." or ".." segment (an absolute path, or one that leaves the folder).
 std::string local_href(std::string_view relative_path);
 
-// Throws Error when a table row's cell count (or a row of its links) differs from its header's,
-// or a link is not a path local_href takes.
+// Throws Error when a table row's cell count (or a row of its links or colours) differs from its
+// header's, a link is not a path local_href takes, or a colour is not "#rrggbb".
 std::string html_report(const std::string& title, const std::string& intro,
                         const std::vector<HtmlSection>& sections);
 

@@ -54,7 +54,8 @@ void require_iterate_memory(const Settings& settings, std::size_t runs);
 // Runs one rule from x0, records one metrics row per iterate (with `row_extras` columns) and
 // a summary entry (with `extra_params` merged into params). `tolerance` is the loss level
 // counted as converged. `columns`, when given, adds the columns it returns for an iterate (its
-// record of the history: loss, time, simulator counts, …) to that iterate's metrics row.
+// record of the history: loss, time, simulator counts, …) to that iterate's metrics row, and
+// those of the last iterate to the run's "final" entry in summary.json.
 DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Objective& objective,
                         const Vector& x0, int iterations, double tolerance,
                         const nlohmann::json& row_extras = nlohmann::json::object(),

@@ -55,6 +55,8 @@ struct OptionSpec {
     return *this;
   }
   OptionSpec& quick(std::string text) { quick_text = std::move(text); return *this; }
+
+  std::string flag() const { return "--" + name; }  // as messages name the option
 };
 
 OptionSpec real_option(std::string name, std::string default_text, std::string help);
@@ -89,6 +91,16 @@ class Settings {
   nlohmann::json values_;
 };
 
+// The quantity a message compares, lower being better: `key` names a number of each run's
+// summary entry ("final"'s keys first, then the entry's own, e.g. "iterations") and, where
+// it is one, a column of metrics.csv; `text` says what it is ("final test loss"); `labels`
+// are the runs compared (empty: every run). The index of run folders compares folders by it.
+struct MessageMetric {
+  std::string key;
+  std::string text;
+  std::vector<std::string> labels{};
+};
+
 // Collects what a run produces; Run (run.hpp) turns it into the run folder.
 class RunContext {
  public:
@@ -114,13 +126,16 @@ class RunContext {
   void add_table(Table table) { tables_.push_back(std::move(table)); }
   void add_note(std::string text) { notes_.push_back(std::move(text)); }
   // The experiment's point: the figure that shows it (a file of add_figure) and one sentence
-  // with the ratio it measures. report.html shows this figure first, the sentence under it.
-  void set_message(std::string figure_file, std::string sentence) {
+  // with the ratio it measures, and the metric the sentence compares (none: an empty key).
+  // report.html shows this figure first, the sentence under it; summary.json keeps all three.
+  void set_message(std::string figure_file, std::string sentence, MessageMetric metric = {}) {
     message_figure_ = std::move(figure_file);
     message_ = std::move(sentence);
+    message_metric_ = std::move(metric);
   }
   const std::string& message_figure() const { return message_figure_; }
   const std::string& message() const { return message_; }
+  const MessageMetric& message_metric() const { return message_metric_; }
   // A trained network {"label", "seed", "widths", "parameters"} for networks.json.
   void add_network(nlohmann::json network) { networks_.push_back(std::move(network)); }
   // A progress line, handed to the function set_progress() gave (none: the run is silent).
@@ -180,6 +195,7 @@ class RunContext {
   std::vector<Table> tables_;
   std::vector<std::string> notes_;
   std::string message_figure_, message_;
+  MessageMetric message_metric_;
   std::vector<nlohmann::json> networks_;
   std::string experiment_name_;
   const std::atomic<bool>* stop_ = nullptr;

@@ -37,6 +37,10 @@ struct RuleDefaults {
   std::optional<Index> batch;
 };
 
+// On a log y axis, a series that ends above where it started (a diverging run) does not set the
+// axis range, and its end label says where it ends relative to its start.
+void mark_if_diverging(Series& series);
+
 // Controls u₀ … u_{N−1}, each held for dt, as steps over [0, N·dt].
 Series held_controls(const std::string& label, const Vector& u, double dt,
                      const std::string& color);
@@ -98,13 +102,17 @@ class LearningSweep {
   // rule's median final `what` is lowest within the same budget, and by how much.
   void set_time_message(const std::string& tag, const std::string& file_tag,
                         const std::string& what = "final test loss") const;
-  // Makes figure `file` the message for a metric other than the loss: `prefix`, then which rule's
-  // median final `metric` (`what_metric`) is lowest and by how much, then the same for the test
-  // loss (`what_loss`).
+  // Makes figure `file` the message for a metric other than the loss, the record's extra
+  // `metric`: `prefix`, then which rule's median final `metric` (`what_metric`) is lowest and by
+  // how much, then the same for the test loss (`what_loss`).
   void set_metric_message(const std::string& tag, const std::string& file,
-                          const std::function<double(const TrainingRecord&)>& metric,
-                          const std::string& what_metric, const std::string& loss_lead,
-                          const std::string& what_loss, const std::string& prefix = "") const;
+                          const std::string& metric, const std::string& what_metric,
+                          const std::string& loss_lead, const std::string& what_loss,
+                          const std::string& prefix = "") const;
+  // The value of a record's extra `key` (TrainingRecord::extras, filled by on_evaluate).
+  static std::function<double(const TrainingRecord&)> extra(const std::string& key);
+  // The labels of the runs of `tag`, in the order they ran (each once).
+  std::vector<std::string> labels(const std::string& tag) const;
   // Per setting: final test loss per seed with median and worst; the saturated-neuron
   // fraction when recorded; the time split per step of every rule.
   void add_tables() const;

@@ -102,7 +102,8 @@ void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
 // unfinished folder besides config.json and the checkpoint.
 bool is_result_file(const std::string& name);
 
-// The summary.json document: {"experiment": NAME, "runs": [...]}.
+// The summary.json document: {"experiment": NAME, "runs": [...]} and, when the experiment set
+// one, "message": {"figure", "sentence", "metric", "metric_text", "labels"} (RunContext).
 nlohmann::json summary_document(const Experiment& experiment, const RunContext& context);
 
 // Fault injection for tests: with PHYSGRAD_FAULT=ACTION@NAME:K the K-th pass through the point

@@ -1,6 +1,9 @@
-// The index page of a folder of run folders (`physgrad report DIR`): every run of every run
-// folder with its final figures and a link to its report, and per experiment the loss curves of
-// all its run folders overlaid (median over seeds with the min–max band, from metrics.csv).
+// The index page of a folder of run folders (`physgrad report DIR`), a comparison page: per
+// experiment, each folder's message sentence, a table of folder × rule by the metric the message
+// compares (summary.json "message"; the final loss where a folder has none) with the options that
+// differ from the experiment's defaults and the rules' colours, and that metric of every compared
+// run vs training time overlaid (median over seeds with the min–max band, from metrics.csv); then
+// every run of every folder with its final figures and a link to its report.
 #pragma once
 
 #include <cstddef>
