@@ -41,6 +41,24 @@ Error wrong_kind(const RuleOptions& options, Kind wanted) {
                (wanted == Kind::kDirect ? "direct" : "learning") + " rule");
 }
 
+// The rule of `Rules` (classes deriving from Base) whose Options `options` holds; Error when none
+// does.
+template <class Base, class... Rules>
+std::unique_ptr<Base> build(const RuleOptions& options, Kind kind) {
+  std::unique_ptr<Base> rule;
+  std::visit(
+      [&rule](const auto& o) {
+        using T = std::decay_t<decltype(o)>;
+        const auto make = [&]<class Rule>() {
+          if constexpr (std::is_same_v<typename Rule::Options, T>) rule = std::make_unique<Rule>(o);
+        };
+        (make.template operator()<Rules>(), ...);
+      },
+      options);
+  if (!rule) throw wrong_kind(options, kind);
+  return rule;
+}
+
 }  // namespace
 
 const std::vector<RuleInfo>& rule_catalogue() {
@@ -164,34 +182,8 @@ std::string rule_table_markdown(Kind kind) {
 }
 
 std::unique_ptr<Optimizer> make_optimizer(const RuleOptions& options) {
-  return std::visit(
-      [&options](const auto& o) -> std::unique_ptr<Optimizer> {
-        using T = std::decay_t<decltype(o)>;
-        if constexpr (std::is_same_v<T, GradientDescentOptions>) {
-          return std::make_unique<GradientDescent>(o);
-        } else if constexpr (std::is_same_v<T, MomentumOptions>) {
-          return std::make_unique<Momentum>(o);
-        } else if constexpr (std::is_same_v<T, AdamOptions>) {
-          return std::make_unique<Adam>(o);
-        } else if constexpr (std::is_same_v<T, NewtonOptions>) {
-          return std::make_unique<Newton>(o);
-        } else if constexpr (std::is_same_v<T, BfgsOptions>) {
-          return std::make_unique<Bfgs>(o);
-        } else if constexpr (std::is_same_v<T, LbfgsOptions>) {
-          return std::make_unique<Lbfgs>(o);
-        } else if constexpr (std::is_same_v<T, GaussNewtonOptions>) {
-          return std::make_unique<GaussNewton>(o);
-        } else if constexpr (std::is_same_v<T, LevenbergMarquardtOptions>) {
-          return std::make_unique<LevenbergMarquardt>(o);
-        } else if constexpr (std::is_same_v<T, InverseGradientOptions>) {
-          return std::make_unique<InverseGradient>(o);
-        } else if constexpr (std::is_same_v<T, PhysicalGradientOptions>) {
-          return std::make_unique<PhysicalGradient>(o);
-        } else {
-          throw wrong_kind(options, Kind::kDirect);
-        }
-      },
-      options);
+  return build<Optimizer, GradientDescent, Momentum, Adam, Newton, Bfgs, Lbfgs, GaussNewton,
+               LevenbergMarquardt, InverseGradient, PhysicalGradient>(options, Kind::kDirect);
 }
 
 std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSettings& settings) {
@@ -199,22 +191,8 @@ std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSetti
 }
 
 std::unique_ptr<LearningUpdate> make_learning_update(const RuleOptions& options) {
-  return std::visit(
-      [&options](const auto& o) -> std::unique_ptr<LearningUpdate> {
-        using T = std::decay_t<decltype(o)>;
-        if constexpr (std::is_same_v<T, SgdOptions>) {
-          return std::make_unique<SgdUpdate>(o);
-        } else if constexpr (std::is_same_v<T, AdamOptions>) {
-          return std::make_unique<AdamUpdate>(o);
-        } else if constexpr (std::is_same_v<T, HigOptions>) {
-          return std::make_unique<HigUpdate>(o);
-        } else if constexpr (std::is_same_v<T, SipOptions>) {
-          return std::make_unique<SipUpdate>(o);
-        } else {
-          throw wrong_kind(options, Kind::kLearning);
-        }
-      },
-      options);
+  return build<LearningUpdate, SgdUpdate, AdamUpdate, HigUpdate, SipUpdate>(options,
+                                                                           Kind::kLearning);
 }
 
 std::unique_ptr<LearningUpdate> make_learning_update(const std::string& id,
