@@ -19,8 +19,8 @@ int main() {
 
   physgrad::Mlp network({4, 32, config.steps}, physgrad::Activation::kTanh);
   network.initialize(7);
-  const auto adam = physgrad::make_learning_update("adam", {.lr = 1e-2});
-  const auto hig = physgrad::make_learning_update("hig", {.lr = 1.0});
+  const auto adam = physgrad::make_learning_update("adam", {{"lr", 1e-2}});
+  const auto hig = physgrad::make_learning_update("hig", {{"lr", 1.0}});
 
   physgrad::StepState state;  // the numerical guard's memory and the network cache
   std::mt19937_64 rng(3);

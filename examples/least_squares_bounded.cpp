@@ -80,7 +80,7 @@ Fit best_step_size(const std::string& id, const physgrad::Objective& objective,
   Fit best{budget, 0, false, true, INFINITY, ""};
   for (int j = 0; j <= 12; ++j) {
     const double lr = std::pow(10.0, -j);
-    const Fit f = fit(id, {.lr = lr}, objective, start, options,
+    const Fit f = fit(id, {{"lr", lr}}, objective, start, options,
                       best.reached ? best.iterations : budget);
     if (!f.feasible) best.feasible = false;
     if (!best.reached && f.loss < best.loss) best.loss = f.loss;

@@ -67,7 +67,7 @@ int main() {
   for (const auto& [id, lr] : {std::pair{"adam", 1e-2}, std::pair{"hig", 1.0}}) {
     physgrad::Mlp network({4, 32, config.steps}, physgrad::Activation::kTanh);
     network.initialize(7);
-    auto update = physgrad::make_learning_update(id, {.lr = lr});
+    auto update = physgrad::make_learning_update(id, {{"lr", lr}});
     const physgrad::TrainingSummary summary =
         physgrad::train(network, *update, problem, train_set, &test_set, options);
     const physgrad::TrainingRecord& first = summary.history.front();

@@ -54,7 +54,7 @@ int main() {
   for (const char* id : {"adam", "sip"}) {
     physgrad::Mlp network({4, 32, config.steps}, physgrad::Activation::kTanh);
     network.initialize(7);
-    auto update = physgrad::make_learning_update(id, {.lr = 1e-2});
+    auto update = physgrad::make_learning_update(id, {{"lr", 1e-2}});
     const physgrad::TrainingSummary summary =
         physgrad::train(network, *update, problem, train_set, &test_set, options);
     const physgrad::TrainingRecord& first = summary.history.front();

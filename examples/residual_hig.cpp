@@ -66,7 +66,7 @@ int main() {
   options.max_iterations = 400;
   for (const auto& [id, lr] : {std::pair{"adam", 1e-2}, std::pair{"hig", 1.0}}) {
     example::ResidualNetwork trained = network;  // the same start for both rules
-    const auto update = physgrad::make_learning_update(id, {.lr = lr});
+    const auto update = physgrad::make_learning_update(id, {{"lr", lr}});
     const physgrad::TrainingSummary summary =
         physgrad::train(trained, *update, {&pendulum, &loss}, train_set, &test_set, options);
     std::printf("%-4s final loss %.3e (test %.3e, start %.3e), %lld iterations, %.2f s\n", id,

@@ -209,11 +209,11 @@ class HeatInverse final : public LearningExperiment {
   // B·n² rows and ~8n⁴ columns): batch 4, lr 1, τ 1e-6 as in the HIG paper. SGD (optional):
   // lr 0.1.
   inline static const std::map<std::string, RuleDefaults> kDefaults = {
-      {"sgd", {{.lr = 0.1}, 128}},
-      {"adam", {{.lr = 1e-3}, 128}},
-      {"gn", {{.lr = 1.0}, 4}},
-      {"hig", {{.lr = 1.0}, 4}},
-      {"sip", {{.lr = 1e-3}, 128}}};
+      {"sgd", {{{"lr", 0.1}}, 128}},
+      {"adam", {{{"lr", 1e-3}}, 128}},
+      {"gn", {{{"lr", 1.0}}, 4}},
+      {"hig", {{{"lr", 1.0}}, 4}},
+      {"sip", {{{"lr", 1e-3}}, 128}}};
 
   // Per shown test sample: x*, y* and every rule's reconstruction as steps over the cells
   // [i, i + 1) of 0..n.

@@ -26,8 +26,8 @@ constexpr Index kHidden = 7;
 // 0.03, 0.1, 0.3, 1), HIG 1 as in the HIG paper. docs/results.md lists the sweep.
 const std::map<std::string, RuleDefaults>& rule_defaults() {
   static const std::map<std::string, RuleDefaults> defaults = {
-      {"sgd", {{.lr = 0.1}, 128}}, {"adam", {{.lr = 0.01}, 128}}, {"gn", {{.lr = 0.1}, 128}},
-      {"hig", {{.lr = 1.0}, 128}}, {"sip", {{.lr = 0.01}, 128}}};
+      {"sgd", {{{"lr", 0.1}}, 128}}, {"adam", {{{"lr", 0.01}}, 128}}, {"gn", {{{"lr", 0.1}}, 128}},
+      {"hig", {{{"lr", 1.0}}, 128}}, {"sip", {{{"lr", 0.01}}, 128}}};
   return defaults;
 }
 

@@ -38,19 +38,19 @@ Configuration configuration(const std::string& name) {
   if (name == "book") {
     // Notebook: HIG B 32 lr 1 τ 1e-10; Adam B 256 lr 1e-3; SIP B 256 Adam 1e-3.
     return {OscillatorConfig::book(), Activation::kTanh, {"adam", "hig", "sip"},
-            {{"adam", {{.lr = 1e-3}, 256}},
-             {"sgd", {{.lr = 1e-2}, 256}},
-             {"gn", {{.lr = 1.0, .rcond = 1e-10}, 32}},
-             {"hig", {{.lr = 1.0, .rcond = 1e-10}, 32}},
-             {"sip", {{.lr = 1e-3}, 256}}}};
+            {{"adam", {{{"lr", 1e-3}}, 256}},
+             {"sgd", {{{"lr", 1e-2}}, 256}},
+             {"gn", {{{"lr", 1.0}, {"rcond", 1e-10}}, 32}},
+             {"hig", {{{"lr", 1.0}, {"rcond", 1e-10}}, 32}},
+             {"sip", {{{"lr", 1e-3}}, 256}}}};
   }
   // Paper: Adam B 512 lr 3e-4; GN and HIG B 128 lr 1 τ 1e-6.
   return {OscillatorConfig::paper(), Activation::kRelu, {"adam", "gn", "hig"},
-          {{"adam", {{.lr = 3e-4}, 512}},
-           {"sgd", {{.lr = 1e-2}, 512}},
-           {"gn", {{.lr = 1.0}, 128}},
-           {"hig", {{.lr = 1.0}, 128}},
-           {"sip", {{.lr = 1e-3}, 256}}}};
+          {{"adam", {{{"lr", 3e-4}}, 512}},
+           {"sgd", {{{"lr", 1e-2}}, 512}},
+           {"gn", {{{"lr", 1.0}}, 128}},
+           {"hig", {{{"lr", 1.0}}, 128}},
+           {"sip", {{{"lr", 1e-3}}, 256}}}};
 }
 
 // The 20-20-20 network of both configurations.

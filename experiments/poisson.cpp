@@ -57,11 +57,11 @@ Dataset make_data(const Poisson& physics, Index count, std::uint64_t seed) {
 
 const std::map<std::string, RuleDefaults>& rule_defaults() {
   static const std::map<std::string, RuleDefaults> defaults = {
-      {"adam", {{.lr = 3e-4}, 64}},
-      {"sgd", {{.lr = 1e-2}, 64}},
-      {"gn", {{.lr = 0.16, .rcond = 1e-5}, 16}},
-      {"hig", {{.lr = 0.16, .rcond = 1e-5}, 16}},
-      {"sip", {{.lr = 1e-3}, 64}}};
+      {"adam", {{{"lr", 3e-4}}, 64}},
+      {"sgd", {{{"lr", 1e-2}}, 64}},
+      {"gn", {{{"lr", 0.16}, {"rcond", 1e-5}}, 16}},
+      {"hig", {{{"lr", 0.16}, {"rcond", 1e-5}}, 16}},
+      {"sip", {{{"lr", 1e-3}}, 64}}};
   return defaults;
 }
 

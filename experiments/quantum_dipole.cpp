@@ -50,10 +50,10 @@ Mlp make_network(const QuantumDipole& physics, std::uint64_t seed) {
 
 const std::map<std::string, RuleDefaults>& rule_defaults() {
   static const std::map<std::string, RuleDefaults> defaults = {
-      {"adam", {{.lr = 5e-4}, 256}},
-      {"sgd", {{.lr = 1e-2}, 256}},
-      {"gn", {{.lr = 0.5, .rcond = 1e-5}, 16}},
-      {"hig", {{.lr = 0.5, .rcond = 1e-5}, 16}}};
+      {"adam", {{{"lr", 5e-4}}, 256}},
+      {"sgd", {{{"lr", 1e-2}}, 256}},
+      {"gn", {{{"lr", 0.5}, {"rcond", 1e-5}}, 16}},
+      {"hig", {{{"lr", 0.5}, {"rcond", 1e-5}}, 16}}};
   return defaults;
 }
 

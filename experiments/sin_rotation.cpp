@@ -198,11 +198,11 @@ class SinRotationExperiment final : public LearningExperiment {
   // (docs/reference_experiments.md).
   static std::map<std::string, RuleDefaults> rule_defaults(double xi, const std::string& form) {
     const double sgd = (form == "code" ? 3e-3 : 0.1) / (xi * xi);
-    return {{"sgd", {{.lr = sgd}, kBatch}},
-            {"adam", {{.lr = 1e-3}, kBatch}},
-            {"gn", {{.lr = 0.1}, 32}},
-            {"hig", {{.lr = 1.0}, 32}},
-            {"sip", {{.lr = 1e-3}, kBatch}}};
+    return {{"sgd", {{{"lr", sgd}}, kBatch}},
+            {"adam", {{{"lr", 1e-3}}, kBatch}},
+            {"gn", {{{"lr", 0.1}}, 32}},
+            {"hig", {{{"lr", 1.0}}, 32}},
+            {"sip", {{{"lr", 1e-3}}, kBatch}}};
   }
 
 

@@ -1,5 +1,7 @@
 #include "physgrad/catalogue.hpp"
 
+#include <algorithm>
+#include <set>
 #include <type_traits>
 
 #include "physgrad/error.hpp"
@@ -12,41 +14,20 @@ namespace {
 
 using Kind = RuleKind;
 
-// Applies the fields of `s` that `o` has (requires-expressions pick them at compile time).
+// The descriptions of every option of `options`' type.
 template <typename Options>
-void apply(Options& o, const RuleSettings& s) {
-  const auto take = [](auto& field, const auto& value) {
-    if (value) field = *value;
-  };
-  if constexpr (requires { o.lr; }) {
-    take(o.lr, s.lr);
-  } else if constexpr (requires { o.initial_step; }) {
-    take(o.initial_step, s.lr);
+std::vector<OptionDescription> descriptions(const Options& /*options*/) {
+  return {Options::descriptors().begin(), Options::descriptors().end()};
+}
+
+// Sets each option of `o` that `settings` names, by its name or else its alias.
+template <typename Options>
+void apply(const std::string& rule, Options& o, const RuleSettings& settings) {
+  for (const RuleOption<Options>& option : Options::descriptors()) {
+    auto found = settings.find(option.name);
+    if (found == settings.end() && !option.alias.empty()) found = settings.find(option.alias);
+    if (found != settings.end()) set_option(rule, option, o, found->second);
   }
-  if constexpr (requires { o.beta; }) take(o.beta, s.beta);
-  if constexpr (requires { o.beta1; }) take(o.beta1, s.beta1);
-  if constexpr (requires { o.beta2; }) take(o.beta2, s.beta2);
-  if constexpr (requires { o.epsilon; }) take(o.epsilon, s.epsilon);
-  if constexpr (requires { o.rcond; }) take(o.rcond, s.rcond);
-  if constexpr (requires { o.kappa; }) take(o.kappa, s.kappa);
-  if constexpr (requires { o.backend; }) take(o.backend, s.backend);
-  if constexpr (requires { o.memory; }) take(o.memory, s.memory);
-  if constexpr (requires { o.line_search; }) {
-    take(o.line_search.c1, s.c1);
-    take(o.line_search.c2, s.c2);
-  }
-  if constexpr (requires { o.initial_damping; }) take(o.initial_damping, s.initial_damping);
-  if constexpr (requires { o.min_damping; }) take(o.min_damping, s.min_damping);
-  if constexpr (requires { o.inverse.method; }) {
-    take(o.inverse.method, s.inverse);
-    take(o.inverse.tolerance, s.inverse_tolerance);
-    take(o.inverse.max_iterations, s.inverse_iterations);
-    take(o.inverse.relative_tolerance, s.inverse_relative_tolerance);
-    take(o.inverse.function_tolerance, s.inverse_function_tolerance);
-    take(o.inverse.rcond, s.inverse_rcond);
-  }
-  if constexpr (requires { o.y_step; }) take(o.y_step, s.y_step);
-  if constexpr (requires { o.adam; }) apply(o.adam, s);  // sip's Adam on the proxy loss
 }
 
 // Thrown when a factory gets the options of a rule of the other kind.
@@ -58,6 +39,24 @@ Error wrong_kind(const RuleOptions& options, Kind wanted) {
   return Error(std::string(wanted == Kind::kDirect ? "make_optimizer" : "make_learning_update") +
                ": the options of " + comma_list(ids) + " make no " +
                (wanted == Kind::kDirect ? "direct" : "learning") + " rule");
+}
+
+// The rule of `Rules` (classes deriving from Base) whose Options `options` holds; Error when none
+// does.
+template <class Base, class... Rules>
+std::unique_ptr<Base> build(const RuleOptions& options, Kind kind) {
+  std::unique_ptr<Base> rule;
+  std::visit(
+      [&rule](const auto& o) {
+        using T = std::decay_t<decltype(o)>;
+        const auto make = [&]<class Rule>() {
+          if constexpr (std::is_same_v<typename Rule::Options, T>) rule = std::make_unique<Rule>(o);
+        };
+        (make.template operator()<Rules>(), ...);
+      },
+      options);
+  if (!rule) throw wrong_kind(options, kind);
+  return rule;
 }
 
 }  // namespace
@@ -113,8 +112,50 @@ const RuleInfo& find_rule(Kind kind, const std::string& id) {
                            rule_ids(kind));
 }
 
-RuleOptions with_settings(RuleOptions options, const RuleSettings& settings) {
-  std::visit([&settings](auto& o) { apply(o, settings); }, options);
+std::vector<OptionDescription> rule_options(const RuleInfo& rule) {
+  return std::visit([](const auto& o) { return descriptions(o); }, rule.defaults);
+}
+
+std::vector<std::string> rule_option_names(Kind kind) {
+  std::set<std::string> names;
+  for (const RuleInfo& rule : rule_catalogue()) {
+    if (rule.kind != kind) continue;
+    for (const OptionDescription& option : rule_options(rule)) {
+      names.insert(option.name);
+      if (!option.alias.empty()) names.insert(option.alias);
+    }
+  }
+  return {names.begin(), names.end()};
+}
+
+SharedRuleOption shared_rule_option(const std::string& name, std::optional<Kind> kind) {
+  SharedRuleOption shared;
+  shared.option.name = name;
+  for (const RuleInfo& rule : rule_catalogue()) {
+    if (kind && rule.kind != *kind) continue;
+    for (const OptionDescription& option : rule_options(rule)) {
+      if (option.name != name && option.alias != name) continue;
+      shared.option.range =
+          shared.rules.empty() ? option.range : shared.option.range.common(option.range);
+      if (shared.option.help.empty() && option.name == name) shared.option.help = option.help;
+      if (std::find(shared.rules.begin(), shared.rules.end(), rule.id) == shared.rules.end()) {
+        shared.rules.push_back(rule.id);
+      }
+    }
+  }
+  if (shared.rules.empty()) throw Error("no rule has the option " + in_quotes(name));
+  return shared;
+}
+
+RuleOptions with_settings(const RuleInfo& rule, const RuleSettings& settings) {
+  const std::vector<std::string> known = rule_option_names(rule.kind);
+  for (const auto& [name, value] : settings) {
+    if (!std::binary_search(known.begin(), known.end(), name)) {
+      throw unknown_name_error("rule option", name, known);
+    }
+  }
+  RuleOptions options = rule.defaults;
+  std::visit([&](auto& o) { apply(rule.id, o, settings); }, options);
   return options;
 }
 
@@ -141,62 +182,22 @@ std::string rule_table_markdown(Kind kind) {
 }
 
 std::unique_ptr<Optimizer> make_optimizer(const RuleOptions& options) {
-  return std::visit(
-      [&options](const auto& o) -> std::unique_ptr<Optimizer> {
-        using T = std::decay_t<decltype(o)>;
-        if constexpr (std::is_same_v<T, GradientDescentOptions>) {
-          return std::make_unique<GradientDescent>(o);
-        } else if constexpr (std::is_same_v<T, MomentumOptions>) {
-          return std::make_unique<Momentum>(o);
-        } else if constexpr (std::is_same_v<T, AdamOptions>) {
-          return std::make_unique<Adam>(o);
-        } else if constexpr (std::is_same_v<T, NewtonOptions>) {
-          return std::make_unique<Newton>(o);
-        } else if constexpr (std::is_same_v<T, BfgsOptions>) {
-          return std::make_unique<Bfgs>(o);
-        } else if constexpr (std::is_same_v<T, LbfgsOptions>) {
-          return std::make_unique<Lbfgs>(o);
-        } else if constexpr (std::is_same_v<T, GaussNewtonOptions>) {
-          return std::make_unique<GaussNewton>(o);
-        } else if constexpr (std::is_same_v<T, LevenbergMarquardtOptions>) {
-          return std::make_unique<LevenbergMarquardt>(o);
-        } else if constexpr (std::is_same_v<T, InverseGradientOptions>) {
-          return std::make_unique<InverseGradient>(o);
-        } else if constexpr (std::is_same_v<T, PhysicalGradientOptions>) {
-          return std::make_unique<PhysicalGradient>(o);
-        } else {
-          throw wrong_kind(options, Kind::kDirect);
-        }
-      },
-      options);
+  return build<Optimizer, GradientDescent, Momentum, Adam, Newton, Bfgs, Lbfgs, GaussNewton,
+               LevenbergMarquardt, InverseGradient, PhysicalGradient>(options, Kind::kDirect);
 }
 
 std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSettings& settings) {
-  return make_optimizer(with_settings(find_rule(Kind::kDirect, id).defaults, settings));
+  return make_optimizer(with_settings(find_rule(Kind::kDirect, id), settings));
 }
 
 std::unique_ptr<LearningUpdate> make_learning_update(const RuleOptions& options) {
-  return std::visit(
-      [&options](const auto& o) -> std::unique_ptr<LearningUpdate> {
-        using T = std::decay_t<decltype(o)>;
-        if constexpr (std::is_same_v<T, SgdOptions>) {
-          return std::make_unique<SgdUpdate>(o);
-        } else if constexpr (std::is_same_v<T, AdamOptions>) {
-          return std::make_unique<AdamUpdate>(o);
-        } else if constexpr (std::is_same_v<T, HigOptions>) {
-          return std::make_unique<HigUpdate>(o);
-        } else if constexpr (std::is_same_v<T, SipOptions>) {
-          return std::make_unique<SipUpdate>(o);
-        } else {
-          throw wrong_kind(options, Kind::kLearning);
-        }
-      },
-      options);
+  return build<LearningUpdate, SgdUpdate, AdamUpdate, HigUpdate, SipUpdate>(options,
+                                                                           Kind::kLearning);
 }
 
 std::unique_ptr<LearningUpdate> make_learning_update(const std::string& id,
                                                      const RuleSettings& settings) {
-  return make_learning_update(with_settings(find_rule(Kind::kLearning, id).defaults, settings));
+  return make_learning_update(with_settings(find_rule(Kind::kLearning, id), settings));
 }
 
 }  // namespace physgrad

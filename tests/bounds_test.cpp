@@ -115,17 +115,17 @@ struct RuleCase {
 
 // The rules with step sizes that suit ½‖Ax − b‖² (λ_max(AᵀA) ≈ 25).
 std::vector<RuleCase> least_squares_cases() {
-  return {{"gd", {.lr = 0.03}, 5000, 1e-8},
-          {"momentum", {.lr = 0.01}, 5000, 1e-8},
-          {"adam", {.lr = 0.01}, 5000, 1e-4},
+  return {{"gd", {{"lr", 0.03}}, 5000, 1e-8},
+          {"momentum", {{"lr", 0.01}}, 5000, 1e-8},
+          {"adam", {{"lr", 0.01}}, 5000, 1e-4},
           {"newton", {}, 50, 1e-10},
           {"bfgs", {}, 200, 1e-7},
           {"lbfgs", {}, 200, 1e-7},
           {"gn", {}, 50, 1e-10},
           {"lm", {}, 200, 1e-8},
           {"ig", {}, 50, 1e-10},
-          {"pg", {.inverse = InverseMethod::kLbfgs}, 50, 1e-6},
-          {"pg", {.inverse = InverseMethod::kInverseGradient}, 50, 1e-8}};
+          {"pg", {{"inverse", "lbfgs"}}, 50, 1e-6},
+          {"pg", {{"inverse", "ig"}}, 50, 1e-8}};
 }
 
 void expect_feasible(const MinimizeSummary& s, const Vector& lower, const Vector& upper,
@@ -146,7 +146,7 @@ TEST(Bounds, EveryRuleStaysInTheBoxAndReachesTheConstrainedLeastSquaresOptimum) 
   for (const Vector& scale : {Vector(), Vector{{0.5, 2.0, 0.1}}}) {
     for (const RuleCase& c : least_squares_cases()) {
       std::string what = c.id;
-      if (c.settings.inverse) what += " " + to_string(*c.settings.inverse);
+      if (c.settings.contains("inverse")) what += " " + c.settings.at("inverse").get<std::string>();
       if (scale.size() != 0) what += " (x_scale)";
       // Adam's step is per component, so its step size is in z when x_scale is set.
       const auto optimizer = make_optimizer(c.id, c.settings);
@@ -195,7 +195,7 @@ TEST(Bounds, AnalyticPhysicalGradientIsProjected) {
   const DiagonalScale physics(Vector{{1.0, 4.0}});
   const L2Loss loss;
   const Objective objective(physics, loss, Vector{{2.0, -2.0}});
-  const auto pg = make_optimizer("pg", {.lr = 0.5, .inverse = InverseMethod::kAnalytic});
+  const auto pg = make_optimizer("pg", {{"lr", 0.5}, {"inverse", "analytic"}});
   MinimizeOptions options;
   options.max_iterations = 200;
   options.lower = Vector{{-1.0, 0.0}};
@@ -230,12 +230,12 @@ TEST(XScale, FirstOrderStepsAreScaledAndSecondOrderOnesAreNot) {
   const Objective objective(physics, loss, Vector::Zero(2));
   const Vector x0{{0.48, 0.84}};
   const Domain scaled(2, {}, {}, Vector{{1.0, 0.01}});
-  const auto gd = make_optimizer("gd", {.lr = 1.0});
+  const auto gd = make_optimizer("gd", {{"lr", 1.0}});
   EXPECT_LT((x0 + gd->step(objective, x0, scaled).delta).norm(), 1e-15);
   EXPECT_GT((x0 + gd->step(objective, x0).delta).norm(), 1e3);
   // Newton, Gauss-Newton and IG are invariant to a rescaling of x (no truncation here).
   for (const std::string id : {"newton", "gn", "ig"}) {
-    const auto rule = make_optimizer(id, {.lr = 0.5});
+    const auto rule = make_optimizer(id, {{"lr", 0.5}});
     EXPECT_LT((rule->step(objective, x0, scaled).delta - rule->step(objective, x0).delta).norm(), 1e-14)
         << id;
   }
@@ -248,8 +248,8 @@ TEST(XScale, MakesGradientDescentAndAdamConvergeOnABadlyScaledFit) {
   const Objective objective(physics, loss, Vector{{1.0, 1.0}});
   for (const std::string id : {"gd", "momentum", "adam", "bfgs", "lbfgs"}) {
     RuleSettings settings;  // bfgs, lbfgs: the default first trial step 1
-    if (id == "gd" || id == "momentum") settings.lr = 0.5;
-    if (id == "adam") settings.lr = 0.1;
+    if (id == "gd" || id == "momentum") settings["lr"] = 0.5;
+    if (id == "adam") settings["lr"] = 0.1;
     const auto rule = make_optimizer(id, settings);
     MinimizeOptions options;
     options.max_iterations = 2000;

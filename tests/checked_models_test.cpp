@@ -144,9 +144,9 @@ TEST(CheckedSimulator, AWrongSizeFromAnyMethodIsAnErrorNotARun) {
     std::string expected;
   };
   const Case cases[] = {
-      {"time_reversal", 5, 1, "pg", {.inverse = InverseMethod::kTimeReversal},
+      {"time_reversal", 5, 1, "pg", {{"inverse", "time_reversal"}},
        "time_reversal returned 5 entries, expected 4"},
-      {"inverse", 3, 1, "pg", {.inverse = InverseMethod::kAnalytic},
+      {"inverse", 3, 1, "pg", {{"inverse", "analytic"}},
        "inverse returned 3 entries, expected 4"},
       {"vjp_batch", 5, 1, "gd", {}, "vjp_batch returned 5×1, expected 4×1"},
       {"vjp_batch", 4, 2, "lbfgs", {}, "vjp_batch returned 4×2, expected 4×1"},
@@ -259,7 +259,7 @@ TEST(CheckedNetwork, AWrongSizeFromAnyMethodIsAnErrorNamingTheNetwork) {
     const bool gram = method == "per_sample_gram";
     MisreportingNetwork network(method);
     const Vector before = network.parameters();
-    const auto update = gram ? make_learning_update("hig", {.backend = PinvBackend::kGram})
+    const auto update = gram ? make_learning_update("hig", {{"backend", "gram"}})
                              : make_learning_update("sgd");
     StepState state;
     EXPECT_EQ(error_of([&] { train_step(network, *update, problem, data, state); }), expected)
@@ -397,12 +397,12 @@ TEST(SimulatorCounts, EveryCallIsCountedByKindPerIterationAndInTotal) {
   MinimizeOptions options;
   options.max_iterations = 5;
   for (const auto& [id, settings] :
-       {std::pair{"gd", RuleSettings{.lr = 0.01}}, std::pair{"gn", RuleSettings{}},
+       {std::pair{"gd", RuleSettings{{"lr", 0.01}}}, std::pair{"gn", RuleSettings{}},
         std::pair{"newton", RuleSettings{}}, std::pair{"lbfgs", RuleSettings{}},
-        std::pair{"pg", RuleSettings{.inverse = InverseMethod::kAnalytic}},
-        std::pair{"pg", RuleSettings{.inverse = InverseMethod::kTimeReversal}},
-        std::pair{"pg", RuleSettings{.inverse = InverseMethod::kInverseGradient}},
-        std::pair{"pg", RuleSettings{.lr = 0.5, .inverse = InverseMethod::kLbfgs}}}) {
+        std::pair{"pg", RuleSettings{{"inverse", "analytic"}}},
+        std::pair{"pg", RuleSettings{{"inverse", "time_reversal"}}},
+        std::pair{"pg", RuleSettings{{"inverse", "ig"}}},
+        std::pair{"pg", RuleSettings{{"lr", 0.5}, {"inverse", "lbfgs"}}}}) {
     const Counted physics;
     const Objective objective(physics, loss, Vector{{1.0, 2.0}});
     const MinimizeSummary s = minimize(*make_optimizer(id, settings), objective, x0, options);
@@ -420,7 +420,7 @@ TEST(SimulatorCounts, EveryCallIsCountedByKindPerIterationAndInTotal) {
   // gd: x₀'s loss, then per iteration the gradient (forward, VJP) and the new point's loss.
   const Counted physics;
   const Objective objective(physics, loss, Vector{{1.0, 2.0}});
-  const MinimizeSummary s = minimize(*make_optimizer("gd", {.lr = 0.01}), objective, x0, options);
+  const MinimizeSummary s = minimize(*make_optimizer("gd", {{"lr", 0.01}}), objective, x0, options);
   EXPECT_EQ(s.counts.forward, 1 + 2 * 5);
   EXPECT_EQ(s.counts.vjp, 5);
   EXPECT_EQ(s.counts.passes, 16);
@@ -435,7 +435,7 @@ TEST(SimulatorCounts, PgCountsItsLocalInverseSolves) {
   MinimizeOptions options;
   options.max_iterations = 3;
   const MinimizeSummary s = minimize(
-      *make_optimizer("pg", {.lr = 0.5, .inverse = InverseMethod::kLbfgs}), objective,
+      *make_optimizer("pg", {{"lr", 0.5}, {"inverse", "lbfgs"}}), objective,
       Vector{{1.0, -1.0, 2.0}}, options);
   expect_counts(s.counts, physics, brief_report(s));
   EXPECT_GT(s.counts.vjp, 3 * 2);  // the L-BFGS solves' gradients
@@ -467,9 +467,7 @@ class SlowSine final : public Simulator {
 };
 
 // pg's local inverse runs until its iteration limit (no relative or stall test).
-const RuleSettings kLongInverse{.inverse = InverseMethod::kInverseGradient,
-                                .inverse_relative_tolerance = 0.0,
-                                .inverse_function_tolerance = 0.0};
+const RuleSettings kLongInverse{{"inverse", "ig"}, {"inverse_relative_tolerance", 0.0}, {"inverse_function_tolerance", 0.0}};
 
 // pg from 0.1 towards sin(x) = 3 with `options`.
 MinimizeSummary pg_out_of_reach(const SlowSine& sine, MinimizeOptions options) {
@@ -507,7 +505,7 @@ TEST(Reports, BriefAndFullReportsShowTheSimulatorsWork) {
   const L2Loss loss;
   const Objective objective(physics, loss, Vector{{1.0, 2.0}});
   const MinimizeSummary s =
-      minimize(*make_optimizer("pg", {.inverse = InverseMethod::kTimeReversal}), objective,
+      minimize(*make_optimizer("pg", {{"inverse", "time_reversal"}}), objective,
                Vector{{1.0, -1.0, 2.0}}, {.max_iterations = 2, .loss_tolerance = 1e-20});
   const std::string passes = std::to_string(s.counts.passes);
   EXPECT_NE(brief_report(s).find(", " + passes + " simulator passes, "), std::string::npos)

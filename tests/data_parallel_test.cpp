@@ -199,9 +199,9 @@ TEST_P(ThreadRanks, MatchOneProcessAndKeepParametersIdentical) {
   const Case& c = GetParam();
   const Problem p(c.batch > 64 ? 320 : 40);
   RuleSettings settings;
-  settings.rcond = c.rcond;
-  if (c.rule == "hig") settings.lr = 0.3;
-  if (c.rule == "gn") settings.lr = 0.1;
+  settings["rcond"] = c.rcond;
+  if (c.rule == "hig") settings["lr"] = 0.3;
+  if (c.rule == "gn") settings["lr"] = 0.1;
   TrainerOptions options;
   options.batch_size = c.batch;
   options.max_iterations = 12;

@@ -111,6 +111,48 @@ TEST(HigToyExperiment, HalfInverseGradientsBeatAdamAndGaussNewtonWhenIllConditio
   EXPECT_EQ(context.tables().size(), 3u);
 }
 
+// --lr and --rcond take the range every rule with that option takes, from the rules' option
+// descriptions; an experiment option named like a rule option is that shared option.
+TEST(ExperimentSettings, TheSharedRuleOptionsTakeTheRulesRanges) {
+  const Experiment& experiment = registry().find("hig-toy");
+  const std::vector<OptionSpec> specs = all_options(experiment);
+  const OptionSpec& rcond = find_option(experiment, specs, "rcond");
+  int rules = 0;
+  for (const RuleInfo& rule : rule_catalogue()) {
+    if (rule.kind != RuleKind::kLearning) continue;
+    for (const OptionDescription& option : rule_options(rule)) {
+      if (option.name != "rcond") continue;
+      ++rules;
+      EXPECT_EQ(rcond.min, option.range.min) << rule.id;
+      EXPECT_EQ(rcond.min_exclusive, option.range.min_open) << rule.id;
+      EXPECT_EQ(rcond.max, option.range.max) << rule.id;
+      EXPECT_EQ(rcond.max_exclusive, option.range.max_open) << rule.id;
+    }
+  }
+  EXPECT_EQ(rules, 2);  // gn and hig
+  EXPECT_EQ(resolve_settings(experiment, {{"rcond", "0.7"}}).real("rcond"), 0.7);
+  try {
+    resolve_settings(experiment, {{"rcond", "1"}});
+    ADD_FAILURE() << "--rcond 1 accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), "--rcond: must be in [0, 1), got '1'");
+  }
+  EXPECT_NE(rcond.help.find("(gn, hig; default: each rule's own)"), std::string::npos)
+      << rcond.help;
+  for (const auto& any : registry()) {
+    const std::string& name = any->name();
+    for (const OptionSpec& spec : all_options(*any)) {
+      for (const RuleKind kind : {RuleKind::kDirect, RuleKind::kLearning}) {
+        const std::vector<std::string> rule_names = rule_option_names(kind);
+        if (std::find(rule_names.begin(), rule_names.end(), spec.name) == rule_names.end()) continue;
+        const OptionRange range = shared_rule_option(spec.name, kind).option.range;
+        EXPECT_EQ(spec.min, range.min) << name << " --" << spec.name;
+        EXPECT_EQ(spec.max, range.max) << name << " --" << spec.name;
+      }
+    }
+  }
+}
+
 TEST(ExperimentSettings, DefaultsResolveAndBadValuesNameTheOption) {
   const Experiment& experiment = registry().find("scaled-toy");
   const Settings settings = resolve_settings(experiment, {});

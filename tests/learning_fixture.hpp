@@ -49,7 +49,7 @@ struct NetworkThroughPhysics {
 // The settings the learning tests train gn and hig with (their default η = 1 overshoots here).
 inline RuleSettings test_settings(const std::string& id) {
   RuleSettings settings;
-  if (id == "gn" || id == "hig") settings.lr = 0.1;
+  if (id == "gn" || id == "hig") settings["lr"] = 0.1;
   return settings;
 }
 

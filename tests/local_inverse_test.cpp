@@ -91,11 +91,11 @@ TEST(LocalInverse, OutOfRangeOptionsAndMissingCapabilitiesAreErrors) {
     return std::string("no error");
   };
   EXPECT_EQ(message({.method = InverseMethod::kLbfgs, .relative_tolerance = 1.5}),
-            "local inverse: relative_tolerance must be in [0, 1), got 1.5");
+            "local inverse: inverse_relative_tolerance must be in [0, 1), got 1.5");
   EXPECT_EQ(message({.method = InverseMethod::kInverseGradient, .rcond = -1}),
-            "local inverse: rcond must be in [0, 1), got -1");
+            "local inverse: inverse_rcond must be in [0, 1), got -1");
   EXPECT_EQ(message({.method = InverseMethod::kLbfgs, .max_iterations = 0}),
-            "local inverse: max_iterations must be ≥ 1, got 0");
+            "local inverse: inverse_iterations must be an integer ≥ 1, got 0");
   EXPECT_EQ(message({.method = InverseMethod::kTimeReversal}),
             "simulator 'comparison_toy' has no time reversal; use a numerical inverse (lbfgs or ig)");
   EXPECT_THROW(parse_inverse_method("reverse"), Error);

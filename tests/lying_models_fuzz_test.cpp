@@ -386,11 +386,11 @@ class Fuzz {
     const std::vector<std::string> ids = rule_ids(RuleKind::kDirect);
     const std::string id = ids[static_cast<std::size_t>(pick(static_cast<int>(ids.size())))];
     RuleSettings settings;
-    if (id == "pg") settings.inverse = draw_inverse();
-    if (id == "gd" || id == "momentum") settings.lr = 0.1;
-    if (id == "adam") settings.lr = 0.05;
+    if (id == "pg") settings["inverse"] = to_string(draw_inverse());
+    if (id == "gd" || id == "momentum") settings["lr"] = 0.1;
+    if (id == "adam") settings["lr"] = 0.05;
     const std::string inverse =
-        settings.inverse ? " (" + to_string(*settings.inverse) + ")" : std::string();
+        id == "pg" ? " (" + settings.at("inverse").get<std::string>() + ")" : std::string();
     const std::string what = describe(index, "minimize " + id + inverse, plan);
 
     Conduct conduct;
@@ -480,10 +480,10 @@ class Fuzz {
     const std::vector<std::string> ids = rule_ids(RuleKind::kLearning);
     const std::string id = ids[static_cast<std::size_t>(pick(static_cast<int>(ids.size())))];
     RuleSettings settings;
-    if (id == "gn" || id == "hig") settings.lr = 0.1;
+    if (id == "gn" || id == "hig") settings["lr"] = 0.1;
     if (id == "sip") {
-      settings.inverse = draw_inverse();
-      settings.inverse_iterations = 20;
+      settings["inverse"] = to_string(draw_inverse());
+      settings["inverse_iterations"] = 20;
     }
     const bool whole_run = pick(2) == 0;
     // In one case of four the physics VJPs of the stacked Jacobian run on two threads: a liar's

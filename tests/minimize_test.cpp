@@ -36,7 +36,7 @@ struct HalfSquares {
 
 MinimizeSummary run_gd(const Objective& objective, const Vector& x0, MinimizeOptions options,
                        double lr) {
-  const auto gd = make_optimizer("gd", {.lr = lr});
+  const auto gd = make_optimizer("gd", {{"lr", lr}});
   options.max_iterations = 1000;
   return minimize(*gd, objective, x0, options);
 }

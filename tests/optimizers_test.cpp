@@ -201,7 +201,7 @@ void expect_matches_notebook(const std::string& id, double lr, const double (&pr
   const ComparisonToy physics;
   const L2Loss loss(2.0);
   const Objective objective(physics, loss, Vector::Zero(2));
-  const auto optimizer = make_optimizer(id, {.lr = lr, .inverse = inverse});
+  const auto optimizer = make_optimizer(id, {{"lr", lr}, {"inverse", to_string(inverse)}});
   const std::vector<Vector> xs = iterates(*optimizer, objective, Vector{{3.0, 3.0}}, 10);
   ASSERT_EQ(xs.size(), 11u);
   for (int k = 0; k < 10; ++k) {
@@ -232,7 +232,7 @@ TEST(ScaleInvariance, InvertedRulesAreIndependentOfAlphaAndGdIsNot) {
     const DiagonalScale physics(Vector{{1.0, alpha}});
     const Objective objective(physics, loss, Vector::Zero(2));
     RuleSettings settings;
-    if (lr > 0) settings.lr = lr;
+    if (lr > 0) settings["lr"] = lr;
     const auto optimizer = make_optimizer(id, settings);
     return iterates(*optimizer, objective, x0, 8);
   };
@@ -308,7 +308,7 @@ TEST(Catalogue, BuildsEveryDirectRuleAndRejectsUnknownIdsAndBadValues) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("'sgdd'"), std::string::npos);
   }
-  EXPECT_THROW(make_optimizer("adam", {.lr = -0.1}), Error);
+  EXPECT_THROW(make_optimizer("adam", {{"lr", -0.1}}), Error);
 }
 
 // Numerical trouble inside a rule (a non-finite Hessian, curvature matrix or Jacobian) ends the

@@ -53,8 +53,8 @@ TEST(SipUpdate, NumericalLocalInverseGivesTheAnalyticStep) {
   const NetworkThroughPhysics s;  // ComparisonToy's analytic inverse against L-BFGS
   MlpCache cache;
   const BatchState state = s.evaluate(UpdateNeed::kNetworkOutputs, cache);
-  const Vector a = make_learning_update("sip", {.inverse = InverseMethod::kAnalytic})->step(state).delta;
-  const Vector b = make_learning_update("sip", {.inverse = InverseMethod::kLbfgs})->step(state).delta;
+  const Vector a = make_learning_update("sip", {{"inverse", "analytic"}})->step(state).delta;
+  const Vector b = make_learning_update("sip", {{"inverse", "lbfgs"}})->step(state).delta;
   EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-6);
 }
 
@@ -65,7 +65,7 @@ TEST(SipUpdate, ALocalInverseThatFailsNumericallyEndsTheRunWithoutAnException) {
   const L2Loss loss;
   Mlp network({1, 1}, Activation::kIdentity);  // θ = 0: f(in) = 0
   const Dataset data{Matrix::Ones(1, 4), Matrix::Constant(1, 4, 0.5), Matrix()};
-  const auto sip = make_learning_update("sip", {.inverse = InverseMethod::kInverseGradient});
+  const auto sip = make_learning_update("sip", {{"inverse", "ig"}});
   TrainerOptions options;
   options.batch_size = 4;
   options.max_iterations = 5;

@@ -142,7 +142,7 @@ TEST(PhysicalGradient, TimeReversalSolvesTheVerletChainInOneStepAndTheRk4Oscilla
     const FpuChain physics;
     const Vector x_true = random_uniform(rng, 16, 1, -1, 1);
     const Objective objective(physics, loss, physics.forward(x_true));
-    const auto pg = make_optimizer("pg", {.inverse = InverseMethod::kTimeReversal});
+    const auto pg = make_optimizer("pg", {{"inverse", "time_reversal"}});
     const MinimizeSummary s =
         minimize(*pg, objective, Vector::Zero(16), {.max_iterations = 10, .loss_tolerance = 1e-24});
     EXPECT_EQ(s.termination, Termination::kConverged) << s.message;
@@ -153,7 +153,7 @@ TEST(PhysicalGradient, TimeReversalSolvesTheVerletChainInOneStepAndTheRk4Oscilla
     const CoupledOscillators physics(state_oscillators());
     const Vector u = random_uniform(rng, 48, 1, -1, 1), x_true = random_uniform(rng, 4, 1, 0, 1);
     const Objective objective(physics, loss, physics.forward(x_true, u), u);
-    const auto pg = make_optimizer("pg", {.inverse = InverseMethod::kTimeReversal});
+    const auto pg = make_optimizer("pg", {{"inverse", "time_reversal"}});
     const MinimizeSummary s =
         minimize(*pg, objective, Vector::Zero(4), {.max_iterations = 20, .loss_tolerance = 1e-24});
     EXPECT_EQ(s.termination, Termination::kConverged) << s.message;
@@ -177,9 +177,9 @@ TEST(SipUpdate, TimeReversalGivesTheStepOfTheNumericalInverse) {
   const BatchState state =
       evaluate_batch(network, {&physics, &loss}, data, UpdateNeed::kNetworkOutputs, cache);
   const Vector reversal =
-      make_learning_update("sip", {.inverse = InverseMethod::kTimeReversal})->step(state).delta;
+      make_learning_update("sip", {{"inverse", "time_reversal"}})->step(state).delta;
   const Vector numerical =
-      make_learning_update("sip", {.inverse = InverseMethod::kInverseGradient})->step(state).delta;
+      make_learning_update("sip", {{"inverse", "ig"}})->step(state).delta;
   EXPECT_LT((reversal - numerical).cwiseAbs().maxCoeff(), 1e-6);
 }
 

@@ -46,8 +46,8 @@ TEST(TrainStep, AnOwnLoopIsTrainStepForStep) {
 // Adam's step size on the way.
 TEST(TrainStep, RulesCanBeSwitchedBetweenSteps) {
   NetworkThroughPhysics s(16);
-  const auto adam = make_learning_update("adam", {.lr = 0.02});
-  const auto hig = make_learning_update("hig", {.lr = 0.3});
+  const auto adam = make_learning_update("adam", {{"lr", 0.02}});
+  const auto hig = make_learning_update("hig", {{"lr", 0.3}});
   StepState state;
   const double start = mean_loss(s.network, s.problem, s.data);
   for (int it = 0; it < 40; ++it) {
@@ -71,7 +71,7 @@ TEST(TrainStep, TheGuardHalvesOrUndoesTheStepThatBrokeTheBatch) {
   // Gauss-Newton at 1.75× its full step (η = 1.75·B): 0 → 14, past the bound; one halving
   // brings it to 7.
   Mlp network({1, 1}, Activation::kIdentity);
-  const auto gn = make_learning_update("gn", {.lr = 3.5});
+  const auto gn = make_learning_update("gn", {{"lr", 3.5}});
   StepState state;
   ASSERT_TRUE(train_step(network, *gn, {&physics, &loss}, data, state).applied());
   EXPECT_NEAR(network.forward(Matrix::Ones(1, 1))(0, 0), 14.0, 1e-12);
@@ -82,7 +82,7 @@ TEST(TrainStep, TheGuardHalvesOrUndoesTheStepThatBrokeTheBatch) {
 
   // SGD cannot halve: the step that broke the batch is undone.
   Mlp other({1, 1}, Activation::kIdentity);
-  const auto sgd = make_learning_update("sgd", {.lr = 2.0});
+  const auto sgd = make_learning_update("sgd", {{"lr", 2.0}});
   StepState sgd_state;
   ASSERT_TRUE(train_step(other, *sgd, {&physics, &loss}, data, sgd_state).applied());
   const Vector broken = other.parameters();

@@ -97,7 +97,7 @@ TEST(Trainer, NonFiniteLossStopsTrainingWithFiniteParameters) {
   Mlp network({1, 1}, Activation::kTanh);
   network.initialize(0);
   Dataset data{Matrix::Ones(1, 8), Matrix::Constant(1, 8, 5e3), Matrix()};
-  const auto update = make_learning_update("sgd", {.lr = 0.4});
+  const auto update = make_learning_update("sgd", {{"lr", 0.4}});
   const TrainingSummary summary =
       train(network, *update, {&physics, &loss}, data, nullptr, limits(1000));
   EXPECT_EQ(summary.termination, TrainingTermination::kNumericalFailure);
@@ -117,7 +117,7 @@ TEST(Trainer, InvertedStepsThatBreakTheNextBatchAreRetriedAtHalfLength) {
   Mlp network({1, 1}, Activation::kTanh);
   network.initialize(0);
   const Dataset data{Matrix::Ones(1, 8), Matrix::Constant(1, 8, 900.0), Matrix()};
-  const auto gn = make_learning_update("gn", {.lr = 16.0});
+  const auto gn = make_learning_update("gn", {{"lr", 16.0}});
   const TrainingSummary summary = train(network, *gn, {&physics, &loss}, data, nullptr, limits(20));
   EXPECT_EQ(summary.termination, TrainingTermination::kMaxIterations) << summary.message;
   EXPECT_GE(summary.step_halvings, 2);
@@ -143,7 +143,7 @@ TEST(Trainer, NonFiniteTestLossRestoresTheLastEvaluatedParameters) {
   network.initialize(0);
   const Dataset train_set{Matrix::Ones(1, 8), Matrix::Constant(1, 8, 50.0), Matrix()};
   const Dataset test_set{Matrix::Constant(1, 4, 100.0), Matrix::Constant(1, 4, 5e3), Matrix()};
-  const auto adam = make_learning_update("adam", {.lr = 0.5});
+  const auto adam = make_learning_update("adam", {{"lr", 0.5}});
   const TrainingSummary summary =
       train(network, *adam, {&physics, &loss}, train_set, &test_set, limits(500));
   EXPECT_EQ(summary.termination, TrainingTermination::kNumericalFailure);

@@ -2,7 +2,9 @@
 // direct and learning; the factories build a rule from it by id, or from a rule's full options.
 #pragma once
 
+#include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <variant>
@@ -22,6 +24,7 @@
 #include "physgrad/optim/momentum.hpp"
 #include "physgrad/optim/newton.hpp"
 #include "physgrad/optim/physical_gradient.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
@@ -53,37 +56,31 @@ std::vector<std::string> rule_ids(RuleKind kind);
 // Throws Error naming the id and the known ones of that kind.
 const RuleInfo& find_rule(RuleKind kind, const std::string& id);
 
-// Overrides of a rule's options, e.g. from the command line: a set field replaces the default
-// of every rule that has that option, and a rule without it ignores it (so one RuleSettings can
-// configure several rules).
-struct RuleSettings {
-  std::optional<double> lr = std::nullopt;  // step size η (bfgs, lbfgs: the first trial step;
-                                            // sip: Adam's on the proxy loss)
-  std::optional<double> beta = std::nullopt;     // momentum
-  std::optional<double> beta1 = std::nullopt;    // adam, sip
-  std::optional<double> beta2 = std::nullopt;    // adam, sip
-  std::optional<double> epsilon = std::nullopt;  // adam, sip
-  std::optional<double> rcond = std::nullopt;    // newton, gn, ig (direct); gn, hig (learning)
-  std::optional<double> kappa = std::nullopt;    // gn, hig (learning): κ = 1 is Gauss-Newton
-  std::optional<PinvBackend> backend = std::nullopt;     // gn, hig (learning)
-  std::optional<int> memory = std::nullopt;              // lbfgs
-  std::optional<double> c1 = std::nullopt;               // bfgs, lbfgs: Wolfe constants
-  std::optional<double> c2 = std::nullopt;               // bfgs, lbfgs
-  std::optional<double> initial_damping = std::nullopt;  // lm
-  std::optional<double> min_damping = std::nullopt;      // lm
-  std::optional<InverseMethod> inverse = std::nullopt;   // pg, sip: the local inverse
-  // pg, sip: the numerical local inverse (LocalInverseOptions: tolerance, relative_tolerance,
-  // function_tolerance, max_iterations, rcond)
-  std::optional<double> inverse_tolerance = std::nullopt;
-  std::optional<int> inverse_iterations = std::nullopt;
-  std::optional<double> inverse_relative_tolerance = std::nullopt;
-  std::optional<double> inverse_function_tolerance = std::nullopt;
-  std::optional<double> inverse_rcond = std::nullopt;
-  std::optional<double> y_step = std::nullopt;             // sip
-};
+// Overrides of rules' options by name, e.g. {{"lr", 0.5}, {"inverse", "lbfgs"}} or from the
+// command line; values as params() reports them (numbers; names for the choices). A name replaces
+// the default of every rule that has that option and a rule without it ignores it (so one
+// RuleSettings can configure several rules); a name no rule of the kind has is an Error.
+using RuleSettings = std::map<std::string, nlohmann::json>;
 
-// `options` with the settings that apply to it.
-RuleOptions with_settings(RuleOptions options, const RuleSettings& settings);
+// Every option of the rule, as its options struct describes it (descriptors()).
+std::vector<OptionDescription> rule_options(const RuleInfo& rule);
+
+// The names settings may give the rules of one kind (each option's name and alias), sorted.
+std::vector<std::string> rule_option_names(RuleKind kind);
+
+// One option as a front end offers it for every rule of `kind` that has it (by name or alias;
+// every kind when none is given): the range all of them take, the help of the first, the ids.
+struct SharedRuleOption {
+  OptionDescription option;
+  std::vector<std::string> rules;
+};
+SharedRuleOption shared_rule_option(const std::string& name,
+                                    std::optional<RuleKind> kind = std::nullopt);
+
+// The rule's defaults with the settings that apply to it. Throws Error naming a name no rule of
+// the rule's kind has (unknown_name_error) or a value outside the option's range (rule, option,
+// value and range).
+RuleOptions with_settings(const RuleInfo& rule, const RuleSettings& settings);
 
 // Every option of the rule with its default, "beta = 0.9, lr = 0.01" (params() of the rule built
 // from its defaults).
@@ -94,8 +91,8 @@ std::string rule_defaults_text(const RuleInfo& rule);
 std::string rule_table_markdown(RuleKind kind);
 
 // A direct rule from its full options (Error for a learning-only type: SgdOptions,
-// HigOptions, SipOptions), or from its id with the catalogue's defaults and `settings`.
-// Throws Error naming an unknown id or an out-of-range value.
+// HigOptions, SipOptions), or from its id with the catalogue's defaults and `settings`
+// (with_settings). Throws Error naming an unknown id, an unknown option or an out-of-range value.
 std::unique_ptr<Optimizer> make_optimizer(const RuleOptions& options);
 std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSettings& settings = {});
 

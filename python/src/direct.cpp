@@ -3,9 +3,6 @@
 #include <pybind11/functional.h>
 #include <pybind11/stl.h>
 
-#include <functional>
-#include <map>
-
 #include "bindings.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
@@ -17,53 +14,27 @@ namespace physgrad::python {
 
 namespace {
 
-// The rule options minimize() takes by name, each setting one field of RuleSettings.
-using Setter = std::function<void(RuleSettings&, const py::handle&)>;
-
-template <class T>
-Setter set(std::optional<T> RuleSettings::*field) {
-  return [field](RuleSettings& s, const py::handle& v) { s.*field = v.cast<T>(); };
-}
-
-const std::map<std::string, Setter>& rule_options() {
-  static const std::map<std::string, Setter> options = {
-      {"lr", set(&RuleSettings::lr)},
-      {"beta", set(&RuleSettings::beta)},
-      {"beta1", set(&RuleSettings::beta1)},
-      {"beta2", set(&RuleSettings::beta2)},
-      {"epsilon", set(&RuleSettings::epsilon)},
-      {"rcond", set(&RuleSettings::rcond)},
-      {"memory", set(&RuleSettings::memory)},
-      {"c1", set(&RuleSettings::c1)},
-      {"c2", set(&RuleSettings::c2)},
-      {"initial_damping", set(&RuleSettings::initial_damping)},
-      {"min_damping", set(&RuleSettings::min_damping)},
-      {"inverse",
-       [](RuleSettings& s, const py::handle& v) {
-         s.inverse = parse_inverse_method(v.cast<std::string>());
-       }},
-      {"inverse_tolerance", set(&RuleSettings::inverse_tolerance)},
-      {"inverse_iterations", set(&RuleSettings::inverse_iterations)},
-      {"inverse_relative_tolerance", set(&RuleSettings::inverse_relative_tolerance)},
-      {"inverse_function_tolerance", set(&RuleSettings::inverse_function_tolerance)},
-      {"inverse_rcond", set(&RuleSettings::inverse_rcond)},
-  };
-  return options;
-}
-
+// The rule options minimize() takes by name (**options): numbers and names, as params() reports
+// them; the catalogue refuses a name no direct rule has and a value outside the option's range.
 RuleSettings rule_settings(const py::dict& given) {
   RuleSettings settings;
-  std::vector<std::string> known;
-  for (const auto& [name, setter] : rule_options()) known.push_back(name);
   for (const auto& [key, value] : given) {
     const std::string name = py::str(key);
-    const auto found = rule_options().find(name);
-    if (found == rule_options().end()) throw unknown_name_error("rule option", name, known);
-    try {
-      found->second(settings, value);
-    } catch (const py::cast_error&) {
-      throw Error("rule option " + name + ": " + std::string(py::str(py::repr(value))) +
-                  " is not a " + (name == "inverse" ? "name" : "number"));
+    const auto refuse = [&] {
+      return Error("rule option " + name + ": " + std::string(py::str(py::repr(value))) +
+                   " is not a number or a name");
+    };
+    if (py::isinstance<py::bool_>(value)) throw refuse();
+    if (py::isinstance<py::str>(value)) {
+      settings[name] = value.cast<std::string>();
+    } else if (py::isinstance<py::int_>(value)) {
+      settings[name] = value.cast<long long>();
+    } else {
+      try {
+        settings[name] = value.cast<double>();  // a float, or a NumPy number
+      } catch (const py::cast_error&) {
+        throw refuse();
+      }
     }
   }
   return settings;

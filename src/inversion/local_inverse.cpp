@@ -25,17 +25,6 @@ constexpr NameTable<InverseMethod, 5> kMethodNames{{
     {InverseMethod::kInverseGradient, "ig"},
 }};
 
-void check_inverse_options(const LocalInverseOptions& options) {
-  require_positive("local inverse: tolerance", options.tolerance);
-  require_in_range("local inverse: relative_tolerance", options.relative_tolerance, 0.0, 1.0);
-  require_in_range("local inverse: function_tolerance", options.function_tolerance, 0.0, INFINITY);
-  require_in_range("local inverse: rcond", options.rcond, 0.0, 1.0);
-  if (options.max_iterations < 1) {
-    throw Error("local inverse: max_iterations must be ≥ 1, got " +
-                std::to_string(options.max_iterations));
-  }
-}
-
 // The simulator's own inverse or its anchored time reversal, projected onto the box.
 LocalInverseResult closed_form(const Simulator& simulator, InverseMethod method, const Vector& y,
                                const Vector& x0, const Vector& context, const Domain& domain) {
@@ -121,17 +110,35 @@ InverseMethod parse_inverse_method(const std::string& text) {
   return value_named(kMethodNames, text, "inverse method");
 }
 
-nlohmann::json local_inverse_params(const LocalInverseOptions& options) {
-  nlohmann::json params = {{"inverse", to_string(options.method)}};
-  if (options.method != InverseMethod::kAnalytic &&
-      options.method != InverseMethod::kTimeReversal) {
-    params["inverse_tolerance"] = options.tolerance;
-    params["inverse_relative_tolerance"] = options.relative_tolerance;
-    params["inverse_function_tolerance"] = options.function_tolerance;
-    params["inverse_iterations"] = options.max_iterations;
-    params["inverse_rcond"] = options.rcond;
-  }
-  return params;
+const OptionList<LocalInverseOptions>& LocalInverseOptions::descriptors() {
+  using O = LocalInverseOptions;
+  static const OptionList<O> options = [] {
+    OptionList<O> list = {
+        rule_option("inverse", &O::method,
+                    {InverseMethod::kAuto, InverseMethod::kAnalytic, InverseMethod::kTimeReversal,
+                     InverseMethod::kLbfgs, InverseMethod::kInverseGradient},
+                    "the local inverse P⁻¹"),
+        rule_option("inverse_tolerance", &O::tolerance, positive(),
+                    "stop once ‖P(x) − y‖ ≤ tolerance·(1 + ‖y‖)"),
+        rule_option("inverse_relative_tolerance", &O::relative_tolerance, fraction(),
+                    "... or once ‖P(x) − y‖ ≤ this·‖P(x₀) − y‖ (0: off)"),
+        rule_option("inverse_function_tolerance", &O::function_tolerance, non_negative(),
+                    "... or once a step changes ½‖P(x) − y‖² by ≤ this·its value (0: off)"),
+        rule_option("inverse_iterations", &O::max_iterations, integer_at_least(1),
+                    "iterations of the numerical inverse at most"),
+        rule_option("inverse_rcond", &O::rcond, fraction(),
+                    "ig: singular values σ ≤ rcond·σ_max of J are dropped"),
+    };
+    // The numerical methods' settings mean nothing for the analytic and time-reversal inverses.
+    for (RuleOption<O>& option : list) {
+      if (option.name == "inverse") continue;
+      option.applies = [](const O& o) {
+        return o.method != InverseMethod::kAnalytic && o.method != InverseMethod::kTimeReversal;
+      };
+    }
+    return list;
+  }();
+  return options;
 }
 
 LocalInverseResult local_inverse(const Simulator& user_simulator, const Vector& y,
@@ -164,7 +171,7 @@ LocalInverseResult local_inverse(const Simulator& user_simulator, const Vector& 
   if (method == InverseMethod::kAnalytic || method == InverseMethod::kTimeReversal) {
     result = closed_form(simulator, method, y, x0, context, domain);
   } else {
-    check_inverse_options(options);
+    check_options("local inverse", options);
     result = numerical(simulator, method, y, x0, context, options, domain);
   }
   result.counts = simulator.counts() - counts_at_start;

@@ -1,28 +1,31 @@
 #include "physgrad/learn/hig.hpp"
 
-#include <cmath>
-
 #include "physgrad/error.hpp"
-#include "physgrad/optim/optimizer.hpp"
 
 namespace physgrad {
 
-HigUpdate::HigUpdate(Options options) : options_(options) {
-  require_positive((id() + ": lr").c_str(), options_.lr);
-  require_in_range((id() + ": rcond").c_str(), options_.rcond, 0.0, 1.0);
-  if (!std::isfinite(options_.kappa)) throw Error(id() + ": kappa must be finite");
+const OptionList<HigOptions>& HigOptions::descriptors() {
+  static const OptionList<HigOptions> options = {
+      rule_option("lr", &HigOptions::lr, positive(), "step size η"),
+      rule_option("kappa", &HigOptions::kappa, any_finite(),
+                  "exponent κ of J^{−κ}: ½ HIG, 1 Gauss-Newton"),
+      rule_option("rcond", &HigOptions::rcond, fraction(),
+                  "relative truncation τ: singular values σ ≤ τσ_max of J are dropped"),
+      rule_option("backend", &HigOptions::backend,
+                  {PinvBackend::kAuto, PinvBackend::kSvd, PinvBackend::kGram, PinvBackend::kNormal},
+                  "how J^{−κ} is computed (inversion/power_pinv.hpp)"),
+  };
+  return options;
 }
 
-nlohmann::json HigUpdate::params() const {
-  return {{"lr", options_.lr},
-          {"kappa", options_.kappa},
-          {"rcond", options_.rcond},
-          {"backend", to_string(options_.backend)}};
-}
+HigUpdate::HigUpdate(Options options) : options_(options) { check_options(id(), options_); }
+
+nlohmann::json HigUpdate::params() const { return option_values(options_); }
 
 void HigUpdate::set_learning_rate(double lr) {
-  require_positive((id() + ": lr").c_str(), lr);
-  options_.lr = lr;
+  Options changed = options_;
+  changed.lr = lr;
+  options_ = checked(id(), changed);
 }
 
 Step HigUpdate::step(const BatchState& batch) {

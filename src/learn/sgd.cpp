@@ -1,16 +1,20 @@
 #include "physgrad/learn/sgd.hpp"
 
-#include "physgrad/optim/optimizer.hpp"
-
 namespace physgrad {
 
-SgdUpdate::SgdUpdate(Options options) : options_(options) {
-  require_positive("sgd: lr", options_.lr);
+const OptionList<SgdOptions>& SgdOptions::descriptors() {
+  static const OptionList<SgdOptions> options = {
+      rule_option("lr", &SgdOptions::lr, positive(), "step size η"),
+  };
+  return options;
 }
 
+SgdUpdate::SgdUpdate(Options options) : options_(checked("sgd", options)) {}
+
 void SgdUpdate::set_learning_rate(double lr) {
-  require_positive("sgd: lr", lr);
-  options_.lr = lr;
+  Options changed = options_;
+  changed.lr = lr;
+  options_ = checked("sgd", changed);
 }
 
 }  // namespace physgrad

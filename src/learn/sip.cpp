@@ -11,15 +11,25 @@
 
 namespace physgrad {
 
-SipUpdate::SipUpdate(Options options) : options_(options), adam_(options.adam) {
-  require_positive("sip: y_step", options_.y_step);
+const OptionList<SipOptions>& SipOptions::descriptors() {
+  static const OptionList<SipOptions> options = joined<SipOptions>({
+      nested_options(&SipOptions::adam),
+      {rule_option("y_step", &SipOptions::y_step, positive(),
+                   "fraction η of the Newton step in y")},
+      nested_options(&SipOptions::inverse),
+  });
+  return options;
 }
 
-nlohmann::json SipUpdate::params() const {
-  nlohmann::json params = adam_.params();
-  params["y_step"] = options_.y_step;
-  params.update(local_inverse_params(options_.inverse));
-  return params;
+SipUpdate::SipUpdate(Options options) : options_(checked("sip", options)), adam_(options.adam) {}
+
+nlohmann::json SipUpdate::params() const { return option_values(options_); }
+
+void SipUpdate::set_learning_rate(double lr) {
+  Options changed = options_;
+  changed.adam.lr = lr;
+  options_ = checked("sip", changed);
+  adam_.set_learning_rate(lr);
 }
 
 Step SipUpdate::step(const BatchState& batch) {

@@ -9,12 +9,17 @@
 
 namespace physgrad {
 
-AdamState::AdamState(Options options) : options_(options) {
-  require_positive("adam: lr", options_.lr);
-  require_in_range("adam: beta1", options_.beta1, 0.0, 1.0);
-  require_in_range("adam: beta2", options_.beta2, 0.0, 1.0);
-  require_positive("adam: epsilon", options_.epsilon);
+const OptionList<AdamOptions>& AdamOptions::descriptors() {
+  static const OptionList<AdamOptions> options = {
+      rule_option("lr", &AdamOptions::lr, positive(), "step size η"),
+      rule_option("beta1", &AdamOptions::beta1, fraction(), "decay β₁ of the first moment"),
+      rule_option("beta2", &AdamOptions::beta2, fraction(), "decay β₂ of the second moment"),
+      rule_option("epsilon", &AdamOptions::epsilon, positive(), "ε added to √v̂"),
+  };
+  return options;
 }
+
+AdamState::AdamState(Options options) : options_(checked("adam", options)) {}
 
 void AdamState::reset() {
   m_.resize(0);
@@ -62,16 +67,12 @@ void AdamState::restore(const nlohmann::json& state, Index size) {
   t_ = t;
 }
 
-nlohmann::json AdamState::params() const {
-  return {{"lr", options_.lr},
-          {"beta1", options_.beta1},
-          {"beta2", options_.beta2},
-          {"epsilon", options_.epsilon}};
-}
+nlohmann::json AdamState::params() const { return option_values(options_); }
 
 void AdamState::set_learning_rate(double lr) {
-  require_positive("adam: lr", lr);
-  options_.lr = lr;
+  Options changed = options_;
+  changed.lr = lr;
+  options_ = checked("adam", changed);
 }
 
 Step Adam::propose(const Objective& objective, const Vector& x, const Domain& domain) {

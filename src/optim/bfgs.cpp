@@ -2,14 +2,19 @@
 
 namespace physgrad {
 
-Bfgs::Bfgs(Options options) : QuasiNewton(options.initial_step, options.line_search) {
-  require_positive("bfgs: initial_step", options.initial_step);
+const OptionList<BfgsOptions>& BfgsOptions::descriptors() {
+  static const OptionList<BfgsOptions> options = joined<BfgsOptions>({
+      {initial_step_option(&BfgsOptions::initial_step)},
+      nested_options(&BfgsOptions::line_search),
+  });
+  return options;
 }
 
+Bfgs::Bfgs(Options options)
+    : QuasiNewton(checked("bfgs", options).initial_step, options.line_search) {}
+
 nlohmann::json Bfgs::params() const {
-  return {{"initial_step", initial_step()},
-          {"c1", line_search_options().c1},
-          {"c2", line_search_options().c2}};
+  return option_values(BfgsOptions{initial_step(), line_search_options()});
 }
 
 Vector Bfgs::direction(const Vector& gradient) const {

@@ -4,10 +4,16 @@
 
 namespace physgrad {
 
-GaussNewton::GaussNewton(Options options) : options_(options) {
-  require_positive("gn: lr", options_.lr);
-  require_in_range("gn: rcond", options_.rcond, 0.0, 1.0);
+const OptionList<GaussNewtonOptions>& GaussNewtonOptions::descriptors() {
+  static const OptionList<GaussNewtonOptions> options = {
+      rule_option("lr", &GaussNewtonOptions::lr, positive(), "step size η"),
+      rule_option("rcond", &GaussNewtonOptions::rcond, fraction(),
+                  "relative cutoff: eigenvalues of Jᵀ H_y J ≤ rcond·λ_max are dropped"),
+  };
+  return options;
 }
+
+GaussNewton::GaussNewton(Options options) : options_(checked("gn", options)) {}
 
 Step GaussNewton::propose(const Objective& objective, const Vector& x, const Domain& domain) {
   const Vector y = objective.output(x);

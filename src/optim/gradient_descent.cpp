@@ -2,9 +2,14 @@
 
 namespace physgrad {
 
-GradientDescent::GradientDescent(Options options) : options_(options) {
-  require_positive("gd: lr", options_.lr);
+const OptionList<GradientDescentOptions>& GradientDescentOptions::descriptors() {
+  static const OptionList<GradientDescentOptions> options = {
+      rule_option("lr", &GradientDescentOptions::lr, positive(), "step size η"),
+  };
+  return options;
 }
+
+GradientDescent::GradientDescent(Options options) : options_(checked("gd", options)) {}
 
 Step GradientDescent::propose(const Objective& objective, const Vector& x, const Domain& domain) {
   // Δz = −η ∇_z L = −η D g, so Δx = D Δz = −η D² g; then projected onto the box.

@@ -5,10 +5,17 @@
 
 namespace physgrad {
 
-InverseGradient::InverseGradient(Options options) : options_(options) {
-  require_positive("ig: lr", options_.lr);
-  require_in_range("ig: rcond", options_.rcond, 0.0, 1.0);
+const OptionList<InverseGradientOptions>& InverseGradientOptions::descriptors() {
+  static const OptionList<InverseGradientOptions> options = {
+      rule_option("lr", &InverseGradientOptions::lr, positive(),
+                  "step size η, the fraction of the y-space Newton step"),
+      rule_option("rcond", &InverseGradientOptions::rcond, fraction(),
+                  "relative truncation: singular values σ ≤ rcond·σ_max of J are dropped"),
+  };
+  return options;
 }
+
+InverseGradient::InverseGradient(Options options) : options_(checked("ig", options)) {}
 
 Step InverseGradient::propose(const Objective& objective, const Vector& x, const Domain& domain) {
   const Vector y = objective.output(x);

@@ -6,17 +6,22 @@
 
 namespace physgrad {
 
-Lbfgs::Lbfgs(Options options)
-    : QuasiNewton(options.initial_step, options.line_search), memory_(options.memory) {
-  if (memory_ < 1) throw Error("lbfgs: memory must be ≥ 1, got " + std::to_string(memory_));
-  require_positive("lbfgs: initial_step", options.initial_step);
+const OptionList<LbfgsOptions>& LbfgsOptions::descriptors() {
+  static const OptionList<LbfgsOptions> options = joined<LbfgsOptions>({
+      {rule_option("memory", &LbfgsOptions::memory, integer_at_least(1),
+                   "curvature pairs m kept"),
+       initial_step_option(&LbfgsOptions::initial_step)},
+      nested_options(&LbfgsOptions::line_search),
+  });
+  return options;
 }
 
+Lbfgs::Lbfgs(Options options)
+    : QuasiNewton(checked("lbfgs", options).initial_step, options.line_search),
+      memory_(options.memory) {}
+
 nlohmann::json Lbfgs::params() const {
-  return {{"memory", memory_},
-          {"initial_step", initial_step()},
-          {"c1", line_search_options().c1},
-          {"c2", line_search_options().c2}};
+  return option_values(LbfgsOptions{memory_, initial_step(), line_search_options()});
 }
 
 Vector Lbfgs::direction(const Vector& gradient) const {

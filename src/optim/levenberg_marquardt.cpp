@@ -7,9 +7,17 @@
 
 namespace physgrad {
 
-LevenbergMarquardt::LevenbergMarquardt(Options options) : options_(options) {
-  require_positive("lm: initial_damping", options_.initial_damping);
-  require_positive("lm: min_damping", options_.min_damping);
+const OptionList<LevenbergMarquardtOptions>& LevenbergMarquardtOptions::descriptors() {
+  static const OptionList<LevenbergMarquardtOptions> options = {
+      rule_option("initial_damping", &LevenbergMarquardtOptions::initial_damping, positive(),
+                  "damping μ₀ of the first step, relative to diag(A)"),
+      rule_option("min_damping", &LevenbergMarquardtOptions::min_damping, positive(),
+                  "μ never drops below this"),
+  };
+  return options;
+}
+
+LevenbergMarquardt::LevenbergMarquardt(Options options) : options_(checked("lm", options)) {
   reset();
 }
 

@@ -11,11 +11,20 @@
 
 namespace physgrad {
 
+const OptionList<LineSearchOptions>& LineSearchOptions::descriptors() {
+  static const OptionList<LineSearchOptions> options = {
+      rule_option("c1", &LineSearchOptions::c1, open_fraction(),
+                  "sufficient decrease: φ(α) ≤ φ(0) + c1·α·φ'(0)"),
+      rule_option("c2", &LineSearchOptions::c2, open_fraction(),
+                  "curvature: |φ'(α)| ≤ c2·|φ'(0)|, c1 < c2"),
+  };
+  return options;
+}
+
 void LineSearchOptions::validate() const {
+  check_options("line_search", *this);
   std::ostringstream msg;
-  if (!(c1 > 0 && c1 < 1)) {
-    msg << "line_search: c1 must be in (0, 1), got " << c1;
-  } else if (!(c2 > c1 && c2 < 1)) {
+  if (!(c2 > c1)) {
     msg << "line_search: c2 must be in (c1, 1) = (" << c1 << ", 1), got " << c2;
   } else if (max_evaluations < 1) {
     msg << "line_search: max_evaluations must be ≥ 1, got " << max_evaluations;

@@ -2,10 +2,15 @@
 
 namespace physgrad {
 
-Momentum::Momentum(Options options) : options_(options) {
-  require_positive("momentum: lr", options_.lr);
-  require_in_range("momentum: beta", options_.beta, 0.0, 1.0);
+const OptionList<MomentumOptions>& MomentumOptions::descriptors() {
+  static const OptionList<MomentumOptions> options = {
+      rule_option("lr", &MomentumOptions::lr, positive(), "step size η"),
+      rule_option("beta", &MomentumOptions::beta, fraction(), "momentum β (0: gradient descent)"),
+  };
+  return options;
 }
+
+Momentum::Momentum(Options options) : options_(checked("momentum", options)) {}
 
 Step Momentum::propose(const Objective& objective, const Vector& x, const Domain& domain) {
   // The velocity lives in z: v ← βv + D g, Δx = −η D v, projected onto the box.

@@ -4,10 +4,16 @@
 
 namespace physgrad {
 
-Newton::Newton(Options options) : options_(options) {
-  require_positive("newton: lr", options_.lr);
-  require_in_range("newton: rcond", options_.rcond, 0.0, 1.0);
+const OptionList<NewtonOptions>& NewtonOptions::descriptors() {
+  static const OptionList<NewtonOptions> options = {
+      rule_option("lr", &NewtonOptions::lr, positive(), "step size η"),
+      rule_option("rcond", &NewtonOptions::rcond, fraction(),
+                  "relative cutoff: Hessian eigenvalues ≤ rcond·|λ|max are dropped"),
+  };
+  return options;
 }
+
+Newton::Newton(Options options) : options_(checked("newton", options)) {}
 
 Step Newton::propose(const Objective& objective, const Vector& x, const Domain& domain) {
   // In the free variables z_F: Δz_F = −η (D_F H_FF D_F)⁺ D_F g_F, held variables stay.

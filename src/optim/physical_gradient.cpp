@@ -4,15 +4,18 @@
 
 namespace physgrad {
 
-PhysicalGradient::PhysicalGradient(Options options) : options_(options) {
-  require_positive("pg: lr", options_.lr);
+const OptionList<PhysicalGradientOptions>& PhysicalGradientOptions::descriptors() {
+  static const OptionList<PhysicalGradientOptions> options = joined<PhysicalGradientOptions>({
+      {rule_option("lr", &PhysicalGradientOptions::lr, positive(),
+                   "step size η, the fraction of the y-space Newton step")},
+      nested_options(&PhysicalGradientOptions::inverse),
+  });
+  return options;
 }
 
-nlohmann::json PhysicalGradient::params() const {
-  nlohmann::json params = local_inverse_params(options_.inverse);
-  params["lr"] = options_.lr;
-  return params;
-}
+PhysicalGradient::PhysicalGradient(Options options) : options_(checked("pg", options)) {}
+
+nlohmann::json PhysicalGradient::params() const { return option_values(options_); }
 
 Step PhysicalGradient::propose(const Objective& objective, const Vector& x,
                                const Domain& domain) {

@@ -16,10 +16,9 @@ std::vector<RuleSetup> selected_rules(const Settings& settings,
   std::vector<RuleSetup> rules;
   for (const std::string& id : settings.texts("optimizers")) {
     RuleSetup rule{id, find_rule(RuleKind::kDirect, id).label, {}, nlohmann::json::object()};
-    if (settings.has("lr")) {
-      rule.settings.lr = settings.real("lr");
-    } else if (const auto it = default_lr.find(id); it != default_lr.end()) {
-      rule.settings.lr = it->second;
+    if (const auto it = default_lr.find(id); it != default_lr.end()) rule.settings["lr"] = it->second;
+    for (const auto& [name, value] : rule_settings(settings, RuleKind::kDirect)) {
+      rule.settings[name] = value;
     }
     rules.push_back(rule);
   }
@@ -55,7 +54,7 @@ std::vector<RuleSetup> with_pg_inverses(const std::vector<RuleSetup>& rules,
     }
     for (const std::string& method : methods) {
       RuleSetup pg = rule;
-      pg.settings.inverse = parse_inverse_method(method);
+      pg.settings["inverse"] = method;
       if (method == "analytic") {
         pg.label = "PG (analytic inverse)";
       } else if (method == "time_reversal") {

@@ -84,7 +84,8 @@ double parse_real(const OptionSpec& spec, const std::string& text) {
                 " is too close to 0 for a double (it would read 0)");
   }
   const bool below = spec.min_exclusive ? !(value > spec.min) : !(value >= spec.min);
-  if (below || value > spec.max || (spec.nonzero && value == 0)) {
+  const bool beyond = spec.max_exclusive ? !(value < spec.max) : !(value <= spec.max);
+  if (below || beyond || (spec.nonzero && value == 0)) {
     throw Error(spec.flag() + ": must be " + describe_range(spec) + ", got " + in_quotes(text));
   }
   return value;
@@ -156,16 +157,49 @@ std::string describe_range(const OptionSpec& spec) {
   const bool has_max = std::isfinite(spec.max);
   if (has_min && has_max) {
     parts.push_back("in " + std::string(spec.min_exclusive ? "(" : "[") + format_number(spec.min) +
-                    ", " + format_number(spec.max) + "]");
+                    ", " + format_number(spec.max) + (spec.max_exclusive ? ")" : "]"));
   } else if (has_min) {
     parts.push_back((spec.min_exclusive ? "> " : "≥ ") + format_number(spec.min));
   } else if (has_max) {
-    parts.push_back("≤ " + format_number(spec.max));
+    parts.push_back((spec.max_exclusive ? "< " : "≤ ") + format_number(spec.max));
   }
   if (spec.nonzero) parts.push_back("nonzero");
   std::string out = comma_list(parts);
   if (out.empty()) out = spec.kind == Kind::kInteger ? "a whole number" : "a finite number";
   return out;
+}
+
+OptionSpec rule_option_spec(const std::string& name, std::optional<RuleKind> kind,
+                            const std::vector<std::string>& offered) {
+  const SharedRuleOption shared = shared_rule_option(name, kind);
+  std::vector<std::string> rules;
+  for (const std::string& id : shared.rules) {
+    if (std::find(offered.begin(), offered.end(), id) != offered.end()) rules.push_back(id);
+  }
+  const OptionRange& range = shared.option.range;
+  std::string help = shared.option.help + " (" + (rules.empty() ? "" : comma_list(rules) + "; ") +
+                     "default: each rule's own)";
+  if (range.type == OptionRange::Type::kChoice) {
+    return text_option(name, "", std::move(help)).one_of(range.choices);
+  }
+  OptionSpec spec = range.type == OptionRange::Type::kInteger
+                        ? integer_option(name, "", std::move(help))
+                        : real_option(name, "", std::move(help));
+  spec.min = range.min;
+  spec.min_exclusive = range.min_open;
+  spec.max = range.max;
+  spec.max_exclusive = range.max_open;
+  return spec;
+}
+
+RuleSettings rule_settings(const Settings& settings, RuleKind kind) {
+  RuleSettings rule;
+  for (const std::string& name : rule_option_names(kind)) {
+    if (settings.json().contains(name) && !settings.json().at(name).is_null()) {
+      rule[name] = settings.json().at(name);
+    }
+  }
+  return rule;
 }
 
 nlohmann::json parse_option(const OptionSpec& spec, const std::string& text) {
@@ -259,9 +293,7 @@ std::vector<OptionSpec> common_options(const Experiment& experiment) {
           .at_least(1)
           .at_most(1e9)
           .quick("2"),
-      real_option("lr", "",
-                  "step size η for every selected rule (default: each rule's own, see the report)")
-          .above(0),
+      rule_option_spec("lr", std::nullopt, experiment.optimizer_choices()),
       integer_option("threads", "",
                      "BLAS threads (default: OPENBLAS_NUM_THREADS or OMP_NUM_THREADS if set, "
                      "else 1)")

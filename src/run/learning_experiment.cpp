@@ -82,9 +82,7 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
                      "one step may take at most 10¹² multiply-adds, B·m·|θ|·min(B·m, |θ|) for m "
                      "outputs (about two minutes)")
           .at_least(1),
-      real_option("rcond", "", "relative truncation τ of gn and hig (default: each rule's own)")
-          .at_least(0)
-          .at_most(0.5),
+      rule_option_spec("rcond", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
       integer_option("epochs", "", "epochs per run (at most 10⁹, as --iters)")
           .at_least(1)
           .at_most(1e9),

@@ -143,8 +143,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   const auto found = defaults_.find(id);
   const RuleDefaults defaults = found == defaults_.end() ? RuleDefaults{} : found->second;
   RuleSettings rule = defaults.settings;
-  if (settings_.has("lr")) rule.lr = settings_.real("lr");
-  if (settings_.has("rcond")) rule.rcond = settings_.real("rcond");
+  for (const auto& [name, value] : rule_settings(settings_, RuleKind::kLearning)) rule[name] = value;
   const std::unique_ptr<LearningUpdate> update = make_learning_update(id, rule);
 
   LearningResult result;

@@ -8,7 +8,7 @@ int main() {
   const physgrad::DiagonalScale physics(physgrad::Vector{{1.0, 100.0}});
   const physgrad::L2Loss loss;
   const physgrad::Objective objective(physics, loss, physgrad::Vector::Zero(2));
-  auto pg = physgrad::make_optimizer("pg", {.lr = 0.5});
+  auto pg = physgrad::make_optimizer("pg", {{"lr", 0.5}});
   const auto summary = physgrad::minimize(*pg, objective, physgrad::Vector{{0.48, 0.84}},
                                           {.max_iterations = 50, .loss_tolerance = 1e-12});
   std::printf("pg %s in %d iterations\n", physgrad::to_string(summary.termination).c_str(),

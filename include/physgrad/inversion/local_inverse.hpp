@@ -7,6 +7,7 @@
 
 #include "physgrad/optim/domain.hpp"
 #include "physgrad/physics/checked_simulator.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
@@ -38,12 +39,12 @@ struct LocalInverseOptions {
   double function_tolerance = 1e-6;
   // ig: singular values σ ≤ rcond·σ_max of J are dropped from its pseudo-inverse, in [0, 1).
   double rcond = 1e-10;
-};
 
-// The settings as pg and sip report them: "inverse", and for a numerical method also
-// inverse_tolerance, inverse_relative_tolerance, inverse_function_tolerance,
-// inverse_iterations and inverse_rcond.
-nlohmann::json local_inverse_params(const LocalInverseOptions& options);
+  // Each option once, under the names pg and sip report and take (params(), settings by name,
+  // validation): "inverse", and for a numerical method inverse_tolerance, inverse_iterations,
+  // inverse_relative_tolerance, inverse_function_tolerance and inverse_rcond.
+  static const OptionList<LocalInverseOptions>& descriptors();
+};
 
 struct LocalInverseResult {
   Vector x;

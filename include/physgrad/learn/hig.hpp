@@ -4,6 +4,7 @@
 
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
@@ -15,6 +16,9 @@ struct HigOptions {
   double kappa = 0.5;   // ½: HIG; 1: Gauss-Newton (id "gn")
   double rcond = 1e-6;  // relative truncation τ, in [0, 1)
   PinvBackend backend = PinvBackend::kAuto;
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<HigOptions>& descriptors();
 };
 
 class HigUpdate final : public LearningUpdate {

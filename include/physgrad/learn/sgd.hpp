@@ -3,11 +3,15 @@
 #pragma once
 
 #include "physgrad/learn/learning_update.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
 struct SgdOptions {
   double lr = 1e-2;  // η > 0
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<SgdOptions>& descriptors();
 };
 
 class SgdUpdate final : public LearningUpdate {

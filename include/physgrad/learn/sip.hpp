@@ -5,6 +5,7 @@
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/optim/adam.hpp"
 #include "physgrad/inversion/local_inverse.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
@@ -12,6 +13,9 @@ struct SipOptions {
   AdamOptions adam{};           // the first-order rule on the proxy loss (lr = η_NN)
   double y_step = 1.0;          // η > 0: fraction of the Newton step in y
   LocalInverseOptions inverse{};  // the simulator's own inverse when it has one (auto)
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<SipOptions>& descriptors();
 };
 
 // The proxy gradient is the cotangent (xᵢ − x̃ᵢ)/B backpropagated through the network. A sample
@@ -27,14 +31,14 @@ class SipUpdate final : public LearningUpdate {
   void reset() override { adam_.reset(); }
   Step step(const BatchState& batch) override;
   double learning_rate() const override { return adam_.options().lr; }
-  void set_learning_rate(double lr) override { adam_.set_learning_rate(lr); }
+  void set_learning_rate(double lr) override;
   nlohmann::json state() const override { return adam_.state(); }
   void restore(const nlohmann::json& state, Index parameter_count) override {
     adam_.restore(state, parameter_count);
   }
 
  private:
-  Options options_;
+  Options options_;  // adam.lr follows set_learning_rate
   AdamState adam_;
 };
 

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
@@ -13,6 +14,9 @@ struct AdamOptions {
   double beta1 = 0.9;    // 0 ≤ β₁ < 1
   double beta2 = 0.999;  // 0 ≤ β₂ < 1
   double epsilon = 1e-8; // ε > 0
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<AdamOptions>& descriptors();
 };
 
 // The moment update on a given gradient, shared by direct optimization and network training.

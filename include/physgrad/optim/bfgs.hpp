@@ -3,12 +3,16 @@
 #pragma once
 
 #include "physgrad/optim/quasi_newton.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
 struct BfgsOptions {
   double initial_step = 1.0;  // first trial α₀ of every line search (this rule's "lr"), > 0
   LineSearchOptions line_search{};
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<BfgsOptions>& descriptors();
 };
 
 // H starts as I; just before the first update it is rescaled to (yᵀs / yᵀy) I (N&W eq. 6.20).

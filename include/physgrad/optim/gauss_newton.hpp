@@ -3,12 +3,16 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
 struct GaussNewtonOptions {
   double lr = 1.0;       // η > 0
   double rcond = 1e-12;  // eigenvalues of Jᵀ H_y J ≤ rcond·λ_max are dropped, in [0, 1)
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<GaussNewtonOptions>& descriptors();
 };
 
 class GaussNewton final : public Optimizer {

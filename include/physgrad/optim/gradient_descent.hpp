@@ -4,11 +4,15 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
 struct GradientDescentOptions {
   double lr = 0.01;  // η > 0
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<GradientDescentOptions>& descriptors();
 };
 
 class GradientDescent final : public Optimizer {

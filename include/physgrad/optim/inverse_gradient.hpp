@@ -3,12 +3,16 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
 struct InverseGradientOptions {
   double lr = 1.0;       // η > 0, the fraction of the y-space Newton step
   double rcond = 1e-10;  // truncation of J's singular values, in [0, 1)
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<InverseGradientOptions>& descriptors();
 };
 
 class InverseGradient final : public Optimizer {

@@ -5,6 +5,7 @@
 #include <deque>
 
 #include "physgrad/optim/quasi_newton.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
@@ -12,6 +13,9 @@ struct LbfgsOptions {
   int memory = 10;            // m ≥ 1 curvature pairs kept
   double initial_step = 1.0;  // first trial α₀ of every line search (this rule's "lr"), > 0
   LineSearchOptions line_search{};
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<LbfgsOptions>& descriptors();
 };
 
 // Line search, restarts and the curvature test: see QuasiNewton.

@@ -3,12 +3,16 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
 struct LevenbergMarquardtOptions {
   double initial_damping = 1e-3;  // μ₀ > 0, relative to diag(A) (Marquardt scaling)
   double min_damping = 1e-15;     // μ never drops below this (> 0)
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<LevenbergMarquardtOptions>& descriptors();
 };
 
 // Bounds: variables held at a bound (Domain::free_variables) stay; the step in the others is cut

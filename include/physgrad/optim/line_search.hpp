@@ -6,6 +6,7 @@
 #include <string>
 
 #include "physgrad/optim/objective.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
@@ -22,6 +23,10 @@ struct LineSearchOptions {
 
   // Throws Error naming the field unless 0 < c1 < c2 < 1, max_evaluations ≥ 1, max_step > 0.
   void validate() const;
+
+  // c1 and c2, options of the rules with a line search (bfgs, lbfgs); max_evaluations and
+  // max_step are not set by name.
+  static const OptionList<LineSearchOptions>& descriptors();
 };
 
 struct LineSearchResult {

@@ -3,12 +3,16 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
 struct MomentumOptions {
   double lr = 0.01;   // η > 0
   double beta = 0.9;  // 0 ≤ β < 1
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<MomentumOptions>& descriptors();
 };
 
 class Momentum final : public Optimizer {

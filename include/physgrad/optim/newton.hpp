@@ -3,12 +3,16 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
 struct NewtonOptions {
   double lr = 1.0;       // η > 0
   double rcond = 1e-12;  // relative eigenvalue cutoff of the Hessian solve, in [0, 1)
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<NewtonOptions>& descriptors();
 };
 
 class Newton final : public Optimizer {

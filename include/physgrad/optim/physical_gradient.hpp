@@ -4,6 +4,7 @@
 
 #include "physgrad/inversion/local_inverse.hpp"
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
@@ -12,6 +13,9 @@ struct PhysicalGradientOptions {
   // kAnalytic needs a simulator with has_inverse(), kTimeReversal one with has_time_reversal();
   // the numerical methods work for any simulator with a VJP.
   LocalInverseOptions inverse{};
+
+  // Each option once: name, member, range, help (params(), settings by name, validation).
+  static const OptionList<PhysicalGradientOptions>& descriptors();
 };
 
 // Bounds and x_scale go to the local inverse: the numerical inverses solve inside the box in the

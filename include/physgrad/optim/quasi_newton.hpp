@@ -26,6 +26,16 @@ namespace physgrad {
 // that p would push outward get pᵢ = 0 (p stays a descent direction), and the line search is
 // bounded by the step where the ray x + αDp leaves the box (it accepts that step when φ still
 // decreases there).
+// The option "initial_step" of bfgs and lbfgs, the first trial α₀ of every line search; settings
+// may also give it as "lr", the step size of the other rules.
+template <class Options>
+RuleOption<Options> initial_step_option(double Options::*member) {
+  RuleOption<Options> option = rule_option("initial_step", member, positive(),
+                                           "first trial step α₀ of every line search");
+  option.alias = "lr";
+  return option;
+}
+
 class QuasiNewton : public Optimizer {
  public:
   void reset() override;

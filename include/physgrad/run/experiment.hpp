@@ -6,11 +6,13 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "physgrad/catalogue.hpp"
 #include "physgrad/parallel/communicator.hpp"
 #include "physgrad/types.hpp"
 
@@ -28,8 +30,9 @@ struct OptionSpec {
   std::string default_text;  // as typed on the command line; empty = unset (optional)
   std::string help;
   double min = -std::numeric_limits<double>::infinity();  // numeric bounds, inclusive unless
-  double max = std::numeric_limits<double>::infinity();   // min_exclusive
+  double max = std::numeric_limits<double>::infinity();   // min_exclusive / max_exclusive
   bool min_exclusive = false;
+  bool max_exclusive = false;
   bool nonzero = false;              // numeric: 0 is not allowed
   std::vector<std::string> choices;  // allowed texts (text kinds); empty = any
   // Lists: each entry is a setting of its own, named in labels, tables and file names, so no two
@@ -46,7 +49,8 @@ struct OptionSpec {
   // Chainable constraints: real_option("lr", "0.1", "step size").above(0).
   OptionSpec& above(double bound) { min = bound; min_exclusive = true; return *this; }
   OptionSpec& at_least(double bound) { min = bound; min_exclusive = false; return *this; }
-  OptionSpec& at_most(double bound) { max = bound; return *this; }
+  OptionSpec& at_most(double bound) { max = bound; max_exclusive = false; return *this; }
+  OptionSpec& below(double bound) { max = bound; max_exclusive = true; return *this; }
   OptionSpec& not_zero() { nonzero = true; return *this; }
   OptionSpec& one_of(std::vector<std::string> allowed) { choices = std::move(allowed); return *this; }
   OptionSpec& coordinates() { distinct = false; return *this; }
@@ -73,6 +77,17 @@ OptionSpec text_list_option(std::string name, std::string default_text, std::str
 nlohmann::json parse_option(const OptionSpec& spec, const std::string& text);
 // "a range like ≥ 1" for help texts; empty when unbounded.
 std::string describe_range(const OptionSpec& spec);
+
+// The command line's option `name` for every rule that has it (--lr, --rcond): unset by default,
+// so each rule keeps its own; its range (the one all those rules take) and its help come from
+// the rules' option descriptions (shared_rule_option in catalogue.hpp). `offered`: the rule ids
+// the experiment runs, named in the help; `kind`: which rules' range counts (none: every rule).
+OptionSpec rule_option_spec(const std::string& name, std::optional<RuleKind> kind,
+                            const std::vector<std::string>& offered);
+
+// The settings of a run that name a rule option (those rule_option_spec declared), as the
+// rules take them; each rule ignores those it has not.
+RuleSettings rule_settings(const Settings& settings, RuleKind kind);
 
 // The resolved settings of a run: option name → parsed value (null when unset).
 class Settings {
