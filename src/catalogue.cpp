@@ -30,6 +30,8 @@ void apply(Options& o, const RuleSettings& s) {
   if constexpr (requires { o.rcond; }) take(o.rcond, s.rcond);
   if constexpr (requires { o.kappa; }) take(o.kappa, s.kappa);
   if constexpr (requires { o.backend; }) take(o.backend, s.backend);
+  if constexpr (requires { o.precision; }) take(o.precision, s.precision);
+  if constexpr (requires { o.eigensolver; }) take(o.eigensolver, s.eigensolver);
   if constexpr (requires { o.memory; }) take(o.memory, s.memory);
   if constexpr (requires { o.line_search; }) {
     take(o.line_search.c1, s.c1);

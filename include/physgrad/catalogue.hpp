@@ -66,6 +66,8 @@ struct RuleSettings {
   std::optional<double> rcond = std::nullopt;    // newton, gn, ig (direct); gn, hig (learning)
   std::optional<double> kappa = std::nullopt;    // gn, hig (learning): κ = 1 is Gauss-Newton
   std::optional<PinvBackend> backend = std::nullopt;     // gn, hig (learning)
+  std::optional<PinvPrecision> precision = std::nullopt;      // gn, hig (learning)
+  std::optional<PinvEigensolver> eigensolver = std::nullopt;  // gn, hig (learning)
   std::optional<int> memory = std::nullopt;              // lbfgs
   std::optional<double> c1 = std::nullopt;               // bfgs, lbfgs: Wolfe constants
   std::optional<double> c2 = std::nullopt;               // bfgs, lbfgs

@@ -74,6 +74,7 @@ std::optional<Vector> ShardedJacobian::shared_gram_apply(const Vector& g,
   shard_.sum(x);  // U Σ^{−1−κ} Uᵀ g, the same bits on every rank
   out.rank = power.kept;
   out.sigma_max = power.sigma_max;
+  out.sigma_min_kept = power.sigma_min_kept;
   Vector result = apply_transpose(x);
   if (timing != nullptr) {
     timing->forming_seconds += forming;
