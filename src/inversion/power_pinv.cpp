@@ -134,8 +134,15 @@ struct Spectrum {
 lapack_int syevd(lapack_int n, double* a, double* w) {
   return LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', n, a, n, w);
 }
+// With the workspace sizes LAPACK documents for ssyevd (1 + 6n + 2n² and 3 + 5n): LAPACKE's
+// size query returns them as a float, which rounds 2n² down for n ≳ 2900 (ssyevd then fails).
 lapack_int syevd(lapack_int n, float* a, float* w) {
-  return LAPACKE_ssyevd(LAPACK_COL_MAJOR, 'V', 'L', n, a, n, w);
+  const auto count = static_cast<std::size_t>(n);
+  std::vector<float> work(1 + 6 * count + 2 * count * count);
+  std::vector<lapack_int> iwork(3 + 5 * count);
+  return LAPACKE_ssyevd_work(LAPACK_COL_MAJOR, 'V', 'L', n, a, n, w, work.data(),
+                             static_cast<lapack_int>(work.size()), iwork.data(),
+                             static_cast<lapack_int>(iwork.size()));
 }
 lapack_int syevr(lapack_int n, double* a, double vl, lapack_int* found, double* w, double* z,
                  lapack_int* support) {
