@@ -12,7 +12,9 @@
 #include <cmath>
 #include <vector>
 
+#include "physgrad/autodiff/dual.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
+#include "physgrad/learn/hig.hpp"
 #include "physgrad/threads.hpp"
 #include "physgrad/train/trainer.hpp"
 #include "physgrad/run/registry.hpp"
@@ -104,41 +106,49 @@ void power_pinv_backend(benchmark::State& state) {
   state.SetLabel(to_string(backend));
 }
 
-// W f(Λ) Wᵀ g with f(λ) = λ^{−(1+κ)/2} over λ > rcond²·λ_max of the symmetric PSD `gram`, as the
-// Gram path computes it: every eigenpair by dsyevd, or (subset) only those above a lower
-// bound of the cutoff by dsyevr with a value range; λ_max is bounded below by the Rayleigh
-// quotient of a few power steps, so no kept pair is missed. Returns the result; `rank` the
-// number of kept pairs.
+// A symmetric positive semi-definite matrix G seen as the normal equations of power_pinv_apply:
+// normal(g) = (G, g), so the normal path returns W f(Λ) Wᵀ g with f(λ) = λ^{−(1+κ)/2} over
+// λ > rcond²·λ_max — the eigen part of the Gram path alone, on the library's own code.
+class SymmetricOperator final : public JacobianOperator {
+ public:
+  explicit SymmetricOperator(const Matrix& g) : g_(&g) {}
+  Index rows() const override { return g_->rows(); }
+  Index cols() const override { return g_->cols(); }
+  Matrix gram() const override { return *g_; }
+  Vector apply_transpose(const Vector& c) const override { return c; }
+  Matrix materialize() const override { return *g_; }
+  Normal normal(const Vector& g) const override { return {*g_, g}; }
+
+ private:
+  const Matrix* g_;
+};
+
+// The eigensolve modes the benchmarks compare: 0 dsyevd (all pairs), 1 dsyevr (pairs above the
+// cutoff), 2 ssyevd, 3 ssyevr (the same in float), 4 auto precision and eigensolver.
+PowerPinvOptions eigensolve_options(std::int64_t mode, double kappa, double rcond) {
+  PowerPinvOptions options{.kappa = kappa, .rcond = rcond};
+  options.precision = mode == 4   ? PinvPrecision::kAuto
+                      : mode >= 2 ? PinvPrecision::kFloat
+                                  : PinvPrecision::kDouble;
+  options.eigensolver = mode == 4         ? PinvEigensolver::kAuto
+                        : mode % 2 == 1   ? PinvEigensolver::kSubset
+                                          : PinvEigensolver::kFull;
+  return options;
+}
+
+const char* eigensolve_label(std::int64_t mode) {
+  static const char* const labels[] = {"dsyevd", "dsyevr above cutoff", "ssyevd",
+                                       "ssyevr above cutoff", "auto"};
+  return labels[mode];
+}
+
 Vector eigen_product(const Matrix& gram, const Vector& g, double kappa, double rcond,
-                     bool subset, Index& rank) {
-  const auto n = static_cast<lapack_int>(gram.rows());
-  Matrix w = gram;
-  Vector lambda(n);
-  Matrix vectors;
-  lapack_int found = n;
-  if (subset) {
-    Index start = 0;
-    double bound = gram.diagonal().maxCoeff(&start);
-    Vector v = Vector::Unit(n, start);
-    for (int step = 0; step < 4; ++step) {
-      v = (gram * v).normalized();
-      bound = std::max(bound, v.dot(gram * v));
-    }
-    vectors.resize(n, n);
-    std::vector<lapack_int> support(2 * static_cast<std::size_t>(n));
-    LAPACKE_dsyevr(LAPACK_COL_MAJOR, 'V', 'V', 'L', n, w.data(), n, rcond * rcond * bound,
-                   2 * gram.trace() + 1, 0, 0, 0.0, &found, lambda.data(), vectors.data(), n,
-                   support.data());
-  } else {
-    LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', n, w.data(), n, lambda.data());
-  }
-  const Matrix& basis = subset ? vectors : w;
-  const Vector sigma = lambda.head(found).cwiseMax(0.0).cwiseSqrt();
-  rank = (sigma.array() > rcond * sigma(found - 1)).count();
-  const auto kept = basis.middleCols(found - rank, rank);
-  Vector c = kept.transpose() * g;
-  c.array() *= sigma.tail(rank).array().pow(-1 - kappa);
-  return kept * c;
+                     std::int64_t mode, PowerPinvInfo* info = nullptr,
+                     const PowerPinvInfo* previous = nullptr) {
+  PowerPinvOptions options = eigensolve_options(mode, kappa, rcond);
+  options.backend = PinvBackend::kNormal;
+  options.previous = previous;
+  return power_pinv_apply(SymmetricOperator(gram), g, options, info);
 }
 
 // The Gram matrix J Jᵀ of configuration `which` at `batch`, its g = ∂(mean L)/∂y and HIG's τ.
@@ -159,27 +169,30 @@ GramCase gram_case(std::int64_t which, Index batch) {
 }
 
 // The eigen part of the HIG Gram path on the Gram matrix of a reference configuration at batch
-// range(1): range(2) = 0 all eigenpairs (dsyevd, what power_pinv uses), 1 only those above the
-// cutoff (dsyevr with a value range). Counters: n, the kept rank, and the relative difference
-// of the two results.
+// range(1) in mode range(2) (eigensolve_options(): 0 dsyevd, what power_pinv uses by default,
+// 1 dsyevr above the cutoff, 2 ssyevd, 3 ssyevr, 4 auto after one call that sets `previous`).
+// Counters: n, the kept rank, σ_max/σ_min,kept, whether float resolves the spectrum, what auto
+// ran (precision 1 float; eigensolver 1 subset), and rel_diff: the distance to the dsyevd result
+// relative to it (for mode 0 that of dsyevr).
 void eigen_route(benchmark::State& state) {
-  const bool subset = state.range(2) == 1;
+  const std::int64_t mode = state.range(2);
   const GramCase gc = gram_case(state.range(0), static_cast<Index>(state.range(1)));
-  const Matrix& gram = gc.gram;
-  const Vector& g = gc.g;
-  const double rcond = gc.rcond;
-  Index rank = 0, other_rank = 0;
+  PowerPinvInfo info, previous;
+  eigen_product(gc.gram, gc.g, 0.5, gc.rcond, 0, &previous);
   Vector result;
   for (auto _ : state) {
-    result = eigen_product(gram, g, 0.5, rcond, subset, rank);
+    result = eigen_product(gc.gram, gc.g, 0.5, gc.rcond, mode, &info, &previous);
     benchmark::DoNotOptimize(result.data());
   }
-  const Vector other = eigen_product(gram, g, 0.5, rcond, !subset, other_rank);
-  state.counters["n"] = static_cast<double>(gram.rows());
-  state.counters["rank"] = static_cast<double>(rank);
+  const Vector other = eigen_product(gc.gram, gc.g, 0.5, gc.rcond, mode == 0 ? 1 : 0);
+  state.counters["n"] = static_cast<double>(gc.gram.rows());
+  state.counters["rank"] = static_cast<double>(info.rank);
+  state.counters["kept_condition"] = kept_condition(info);
+  state.counters["float_resolves"] = previous.float_resolves ? 1 : 0;
+  state.counters["float"] = info.precision == PinvPrecision::kFloat ? 1 : 0;
+  state.counters["subset"] = info.eigensolver == PinvEigensolver::kSubset ? 1 : 0;
   state.counters["rel_diff"] = (result - other).norm() / other.norm();
-  state.SetLabel(std::string(case_spec(state.range(0)).label) +
-                 (subset ? " dsyevr above cutoff" : " dsyevd"));
+  state.SetLabel(std::string(case_spec(state.range(0)).label) + " " + eigensolve_label(mode));
 }
 
 // An approximate f(G)·g with f(λ) = λ^{−(1+κ)/2}: k Lanczos steps from q₁ = g/‖g‖ (with full
@@ -238,8 +251,7 @@ void lanczos_route(benchmark::State& state) {
     result = lanczos_product(gram, g, 0.5, rcond, k);
     benchmark::DoNotOptimize(result.data());
   }
-  Index rank = 0;
-  const Vector exact = eigen_product(gram, g, 0.5, rcond, false, rank);
+  const Vector exact = eigen_product(gram, g, 0.5, rcond, 0);
   state.counters["n"] = static_cast<double>(gram.rows());
   state.counters["k"] = static_cast<double>(k);
   state.counters["rel_err"] = (result - exact).norm() / exact.norm();
@@ -275,6 +287,87 @@ void learning_step(benchmark::State& state) {
   const auto update = c.update(id);
   time_steps(state, c, *update);
   state.SetLabel(std::string(case_spec(state.range(0)).label) + " " + id);
+}
+
+// The HIG step on configuration range(0) with the eigensolve of mode range(1)
+// (eigensolve_options()); auto modes follow the previous step, as in training. Counters as
+// time_steps() plus what ran (float 1 / double 0, subset 1 / full 0) and σ_max/σ_min,kept.
+void learning_step_precision(benchmark::State& state) {
+  ReferenceCase c = make_case(state.range(0));
+  const nlohmann::json params = c.update("hig")->params();
+  const PowerPinvOptions options = eigensolve_options(state.range(1), 0.5, 0.0);
+  HigUpdate update({.lr = params.at("lr").get<double>(),
+                    .kappa = params.at("kappa").get<double>(),
+                    .rcond = params.at("rcond").get<double>(),
+                    .precision = options.precision,
+                    .eigensolver = options.eigensolver});
+  time_steps(state, c, update);
+  state.counters["float"] = update.last_info().precision == PinvPrecision::kFloat ? 1 : 0;
+  state.counters["subset"] = update.last_info().eigensolver == PinvEigensolver::kSubset ? 1 : 0;
+  state.counters["kept_condition"] = kept_condition(update.last_info());
+  state.SetLabel(std::string(case_spec(state.range(0)).label) + " hig " +
+                 eigensolve_label(state.range(1)));
+}
+
+// A chain of q unit masses with cubic springs, x = the initial displacements (velocities 0),
+// y = the displacements after 30 explicit steps: n = m = q, written once over its scalar type.
+struct CubicChain {
+  template <typename T>
+  Eigen::Matrix<T, Eigen::Dynamic, 1> operator()(const Eigen::Matrix<T, Eigen::Dynamic, 1>& x,
+                                                 const Vector& /*context*/) const {
+    const Index q = x.size();
+    Eigen::Matrix<T, Eigen::Dynamic, 1> u = x, v = Eigen::Matrix<T, Eigen::Dynamic, 1>::Zero(q);
+    const double dt = 0.05;
+    for (int step = 0; step < 30; ++step) {
+      for (Index i = 0; i < q; ++i) {
+        const T left = i > 0 ? u(i - 1) : T(0.0), right = i + 1 < q ? u(i + 1) : T(0.0);
+        const T a = left - u(i), b = right - u(i);
+        v(i) += dt * (a + b + 0.5 * (a * a * a + b * b * b));
+      }
+      u += dt * v;
+    }
+    return u;
+  }
+};
+
+// The chain as the library saw it before has_jacobian(): the stacked Jacobian makes m VJPs.
+class ChainThroughVjps final : public AutoDiffSimulator<CubicChain> {
+ public:
+  using AutoDiffSimulator::AutoDiffSimulator;
+  bool has_jacobian() const override { return false; }
+};
+
+// The HIG step on a forward-mode (dual number) simulator, the 16-mass cubic chain behind a
+// 16-64-16 tanh network, batch 32: range(0) = 0 its Jacobian from jacobian() once per sample,
+// 1 from m = 16 batched VJPs (each a dual Jacobian per sample, as AutoDiffSimulator's VJP is).
+void autodiff_step(benchmark::State& state) {
+  constexpr Index kMasses = 16, kBatch = 32;
+  const AutoDiffSimulator<CubicChain> chain(CubicChain{}, "cubic_chain", kMasses, kMasses);
+  const ChainThroughVjps through_vjps(CubicChain{}, "cubic_chain", kMasses, kMasses);
+  const Simulator& physics = state.range(0) == 0 ? static_cast<const Simulator&>(chain)
+                                                 : through_vjps;
+  const L2Loss loss;
+  const LearningProblem problem{&physics, &loss};
+  Mlp network({kMasses, 64, kMasses}, Activation::kTanh);
+  network.initialize(1);
+  Dataset batch;
+  batch.inputs = 0.3 * Matrix::Random(kMasses, kBatch);
+  batch.targets = chain.forward_batch(0.2 * Matrix::Random(kMasses, kBatch), Matrix());
+  HigUpdate update({.lr = 0.1});
+  StepState step_state;
+  double derivative_seconds = 0;
+  for (auto _ : state) {
+    const StepReport report = train_step(network, update, problem, batch, step_state);
+    if (!report.applied()) {
+      state.SkipWithError(describe_failure(report, 0).c_str());
+      break;
+    }
+    derivative_seconds += report.derivative_seconds;
+  }
+  state.counters["derivative_ms"] =
+      1e3 * derivative_seconds / static_cast<double>(std::max<std::int64_t>(1, state.iterations()));
+  state.SetLabel(state.range(0) == 0 ? "cubic chain hig, jacobian() per sample"
+                                     : "cubic chain hig, m VJPs");
 }
 
 // The HIG step on configuration range(0) with the m physics VJPs on range(1) threads.
@@ -316,9 +409,14 @@ BENCHMARK(power_pinv_backend)
     ->Args({1024, 24896, static_cast<int>(PinvBackend::kGram)})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(eigen_route)
-    ->ArgsProduct({{1}, {64, 128, 256}, {0, 1}})
-    ->ArgsProduct({{2}, {4, 16}, {0, 1}})
-    ->ArgsProduct({{4}, {16, 64}, {0, 1}})
+    ->ArgsProduct({{1}, {64, 128, 256}, {0, 1, 2, 3, 4}})
+    ->ArgsProduct({{2}, {4, 16}, {0, 1, 2, 3, 4}})
+    ->ArgsProduct({{4}, {16, 64}, {0, 1, 2, 3, 4}})
+    ->Unit(benchmark::kMillisecond);
+// n = 4096: seconds per call, one each.
+BENCHMARK(eigen_route)
+    ->ArgsProduct({{2}, {64}, {0, 1, 2, 3, 4}})
+    ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(lanczos_route)
     ->ArgsProduct({{1}, {128}, {32, 128, 512}})
@@ -330,6 +428,14 @@ BENCHMARK(learning_step)
     ->ArgsProduct({{1, 4}, {0, 1, 2}})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(learning_step)->Args({3, 2})->Iterations(2)->Unit(benchmark::kMillisecond);
+BENCHMARK(learning_step_precision)
+    ->ArgsProduct({{1, 2}, {0, 1, 2, 3, 4}})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(learning_step_precision)
+    ->ArgsProduct({{3}, {0, 2, 4}})
+    ->Iterations(2)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(autodiff_step)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 // Wall time: the CPU time of the main thread alone would hide the workers.
 BENCHMARK(learning_step_threads)
     ->ArgsProduct({{1, 4}, {1, 2}})

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <limits>
 
+#include "physgrad/types.hpp"
+
 namespace physgrad {
 
 namespace {
-
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // A value as a message shows it: numbers in the shortest form that reads back exactly (2, 1.5,
 // 1e-06), nan and ±inf by name, text in quotes.

@@ -76,6 +76,7 @@ class Misreporting final : public Simulator {
   Matrix jacobian(const Vector& x, const Vector& c) const override {
     return report("jacobian", lotka().jacobian(x, c));
   }
+  bool has_jacobian() const override { return true; }
   Matrix weighted_hessian(const Vector& x, const Vector& c, const Vector& w) const override {
     return report("weighted_hessian", lotka().weighted_hessian(x, c, w));
   }
@@ -172,6 +173,23 @@ TEST(CheckedSimulator, AWrongSizeFromAnyMethodIsAnErrorNotARun) {
   // check_derivatives too (it compared shapes and reported an infinite error at best).
   const Misreporting wide("jacobian", 2, 5);
   EXPECT_EQ(error_of([&] { check_derivatives(wide, kTruth); }),
+            "simulator 'lotka': jacobian returned 2×5, expected 2×4");
+}
+
+// The stacked Jacobian of a learning step asks a simulator with its own jacobian() once per
+// sample: a wrong size there is the same Error.
+TEST(CheckedSimulator, AWrongSizedJacobianIsAnErrorInTheStackedJacobian) {
+  const Misreporting wide("jacobian", 2, 5);
+  const L2Loss loss;
+  const LearningProblem problem{&wide, &loss};
+  Dataset data;
+  data.inputs = Matrix{{0.1, 0.2, -0.3}, {0.4, -0.5, 0.6}};
+  data.targets = lotka().forward_batch(kTruth.replicate(1, 3), Matrix());
+  Mlp network({2, 4}, Activation::kTanh);
+  network.initialize(1);
+  const std::unique_ptr<LearningUpdate> hig = make_learning_update("hig", {});
+  StepState state;
+  EXPECT_EQ(error_of([&] { train_step(network, *hig, problem, data, state); }),
             "simulator 'lotka': jacobian returned 2×5, expected 2×4");
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "cli_fixture.hpp"
+#include "physgrad/io/csv.hpp"
 
 namespace {
 
@@ -208,6 +209,39 @@ TEST_F(Cli, DescribeShowsEveryOptionAndRejectsUnknownExperiments) {
   EXPECT_NE(unknown.err.find("unknown experiment 'no-such-experiment'"), std::string::npos);
   const Outcome help = run("run scaled-toy --help");
   EXPECT_NE(help.out.find("--config FILE.json"), std::string::npos) << help.out;
+}
+
+// Each evaluation of a hig run records what the last step's inversion did; adam's rows and the
+// untrained network's row leave those cells empty.
+TEST_F(Cli, LearningMetricsRecordTheInversionOfEachEvaluation) {
+  const Outcome outcome =
+      run("run hig-toy --seeds 1 --iters 20 --eval-every 10 --optimizers adam,hig --out m");
+  ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+  const physgrad::CsvData metrics = physgrad::parse_csv(read_file(dir_ / "m" / "metrics.csv"));
+  const std::size_t optimizer = metrics.column("optimizer"), iteration = metrics.column("iteration");
+  std::vector<std::size_t> step_columns;
+  for (const char* name :
+       {"pinv_path", "pinv_precision", "pinv_eigensolver", "kept_directions", "kept_condition"}) {
+    step_columns.push_back(metrics.column(name));
+    ASSERT_LT(step_columns.back(), metrics.columns.size()) << name;
+  }
+  int hig_rows = 0, hig_runs = 0;
+  for (const auto& row : metrics.rows) {
+    hig_runs += row[optimizer] == "hig" && row[iteration] == "0";
+    const bool stepped = row[optimizer] == "hig" && row[iteration] != "0";
+    for (const std::size_t c : step_columns) {
+      EXPECT_EQ(row[c].empty(), !stepped) << metrics.columns[c] << " of " << row[optimizer];
+    }
+    if (!stepped) continue;
+    ++hig_rows;
+    EXPECT_EQ(row[step_columns[0]], "normal");  // 256 rows > 30 columns
+    EXPECT_EQ(row[step_columns[1]], "double");
+    EXPECT_TRUE(row[step_columns[2]] == "full" || row[step_columns[2]] == "subset");
+    EXPECT_GT(std::stod(row[step_columns[3]]), 0.0);
+    EXPECT_GE(std::stod(row[step_columns[4]]), 1.0);
+  }
+  EXPECT_GT(hig_runs, 0);
+  EXPECT_EQ(hig_rows, 2 * hig_runs);  // the evaluations after iterations 10 and 20
 }
 
 // bench: one JSON line with the step time, its split, the shape of J, the backend and the

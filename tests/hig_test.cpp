@@ -52,6 +52,41 @@ TEST(HigUpdate, OneStepIsThePapersFormulaOnEveryBackend) {
   EXPECT_GT(expected.norm(), 0.0);
 }
 
+// The last step's inversion info is the rule's state: step_info() names it for the metrics,
+// and a rule restored from state() makes the same auto choices, and so the same next step, as
+// the one that took the step; reset() forgets it.
+TEST(HigUpdate, TheLastStepsInversionIsItsStateAndStepInfo) {
+  const NetworkThroughPhysics s(6);
+  MlpCache cache;
+  const BatchState state = s.evaluate(UpdateNeed::kStackedJacobian, cache);
+  HigUpdate hig({.lr = 0.1,
+                 .rcond = 1e-3,
+                 .precision = PinvPrecision::kAuto,
+                 .eigensolver = PinvEigensolver::kAuto});
+  EXPECT_TRUE(hig.state().is_null());
+  EXPECT_TRUE(hig.step_info().empty());
+  hig.step(state);
+  const nlohmann::json info = hig.step_info();
+  EXPECT_EQ(info.at("pinv_path"), "gram");
+  EXPECT_EQ(info.at("kept_directions"), hig.last_info().rank);
+  EXPECT_EQ(info.at("kept_condition"), kept_condition(hig.last_info()));
+  EXPECT_EQ(info.at("pinv_precision"), to_string(hig.last_info().precision));
+  EXPECT_EQ(info.at("pinv_eigensolver"), "full");  // no previous step
+  HigUpdate restored({.lr = 0.1,
+                      .rcond = 1e-3,
+                      .precision = PinvPrecision::kAuto,
+                      .eigensolver = PinvEigensolver::kAuto});
+  restored.restore(nlohmann::json::parse(hig.state().dump()), s.network.num_parameters());
+  EXPECT_EQ(restored.state(), hig.state());
+  EXPECT_TRUE(restored.step(state).delta == hig.step(state).delta);
+  EXPECT_EQ(restored.state(), hig.state());
+  nlohmann::json broken = hig.state();
+  broken["float_resolves"] = 1;
+  EXPECT_THROW(restored.restore(broken, 0), Error);
+  restored.reset();
+  EXPECT_TRUE(restored.state().is_null());
+}
+
 TEST(HigUpdate, KappaOneIsGaussNewtonAndKappaMinusOneTheGradient) {
   const NetworkThroughPhysics s(20);  // J is 40 × 32 with full column rank
   MlpCache cache;

@@ -81,7 +81,8 @@ TEST(Catalogue, SettingsReachEveryOptionTheRulesReport) {
   const RuleSettings settings{
       {"lr", 0.123},         {"beta", 0.5},          {"beta1", 0.8},
       {"beta2", 0.95},       {"epsilon", 1e-5},      {"rcond", 1e-4},
-      {"kappa", 0.25},       {"backend", "normal"},  {"memory", 4},
+      {"kappa", 0.25},       {"backend", "normal"},  {"precision", "float"},
+      {"eigensolver", "subset"}, {"memory", 4},
       {"c1", 1e-3},          {"c2", 0.5},            {"initial_damping", 0.01},
       {"min_damping", 1e-12}, {"inverse", "ig"},     {"inverse_tolerance", 1e-7},
       {"inverse_iterations", 17}, {"inverse_relative_tolerance", 1e-3},

@@ -7,7 +7,9 @@
 #include <utility>
 
 #include "learning_fixture.hpp"
+#include "physgrad/autodiff/dual.hpp"
 #include "physgrad/autodiff/finite_difference.hpp"
+#include "physgrad/physics/checked_simulator.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/nn/dense_layer_gram.hpp"
 #include "physgrad/parallel/distributed_eigen.hpp"
@@ -73,6 +75,68 @@ TEST(StackedJacobian, IsTheSameOnAnyNumberOfThreads) {
   EXPECT_GT(one.first.norm(), 0.0);
 }
 
+// x ↦ (x₀x₁, sin x₀ + x₁², e^{x₁}): a simulator whose jacobian() is its own (forward duals).
+struct ThreeOutputs {
+  template <typename T>
+  Eigen::Matrix<T, Eigen::Dynamic, 1> operator()(const Eigen::Matrix<T, Eigen::Dynamic, 1>& x,
+                                                 const Vector& /*context*/) const {
+    using std::exp;
+    using std::sin;
+    Eigen::Matrix<T, Eigen::Dynamic, 1> y(3);
+    y << x(0) * x(1), sin(x(0)) + x(1) * x(1), exp(x(1));
+    return y;
+  }
+};
+
+// The same simulator without has_jacobian(): the stacked Jacobian then makes m VJPs.
+class ThroughVjps final : public AutoDiffSimulator<ThreeOutputs> {
+ public:
+  using AutoDiffSimulator::AutoDiffSimulator;
+  bool has_jacobian() const override { return false; }
+};
+
+// With has_jacobian() the stacked Jacobian asks jacobian() once per sample and makes no VJP at
+// all (Jᵀc comes from the stored cotangents); J, J Jᵀ and Jᵀc equal those through the m VJPs
+// and J matches finite differences of the stacked outputs.
+TEST(StackedJacobian, ThroughTheSimulatorsJacobianEqualsTheOneThroughVjps) {
+  const AutoDiffSimulator<ThreeOutputs> own(ThreeOutputs{}, "three_outputs", 2, 3);
+  const ThroughVjps vjps(ThreeOutputs{}, "three_outputs", 2, 3);
+  ASSERT_TRUE(own.has_jacobian());
+  ASSERT_FALSE(vjps.has_jacobian());
+  Mlp network({2, 5, 2}, Activation::kTanh);
+  network.initialize(4);
+  const Matrix inputs{{0.3, -0.2, 0.5, 0.1}, {0.7, 0.4, -0.6, -0.1}};
+  MlpCache cache;
+  const Matrix x = network.forward(inputs, cache);
+  const CheckedSimulator checked(own);
+  const LocalJacobian through_jacobian(network, cache, checked, x, Matrix());
+  const SimulatorCounts counts = checked.counts();
+  EXPECT_EQ(counts.jacobians, inputs.cols());
+  EXPECT_EQ(counts.vjp, 0);
+  const LocalJacobian through_vjps(network, cache, vjps, x, Matrix());
+
+  const Matrix j = through_jacobian.materialize();
+  const Matrix reference = through_vjps.materialize();
+  ASSERT_EQ(j.rows(), 3 * inputs.cols());
+  EXPECT_LT((j - reference).cwiseAbs().maxCoeff(), 1e-12 * reference.cwiseAbs().maxCoeff());
+  EXPECT_LT((through_jacobian.gram() - through_vjps.gram()).cwiseAbs().maxCoeff(),
+            1e-12 * through_vjps.gram().cwiseAbs().maxCoeff());
+  const Vector c = Vector::LinSpaced(j.rows(), -1.0, 2.0);
+  EXPECT_LT((through_jacobian.apply_transpose(c) - through_vjps.apply_transpose(c)).norm(),
+            1e-12 * through_vjps.apply_transpose(c).norm());
+  EXPECT_EQ(checked.counts(), counts);  // Jᵀc made no simulator call
+
+  const Matrix expected = finite_difference_jacobian(
+      [&](const Vector& theta) {
+        Mlp copy = network;
+        copy.set_parameters(theta);
+        return Vector(own.forward_batch(copy.forward(inputs), Matrix()).transpose().reshaped());
+      },
+      network.parameters());
+  EXPECT_LT((j - expected).cwiseAbs().maxCoeff(), 1e-7);
+  EXPECT_LT((reference - expected).cwiseAbs().maxCoeff(), 1e-7);
+}
+
 // A LocalJacobian given the output cotangents (as data-parallel runs gather them) is the one
 // that computes them, bit for bit.
 TEST(StackedJacobian, FromGivenCotangentsIsTheComputedOne) {
@@ -81,12 +145,13 @@ TEST(StackedJacobian, FromGivenCotangentsIsTheComputedOne) {
   const Matrix x = s.network.forward(s.data.inputs, cache);
   const LocalJacobian computed(s.network, cache, s.physics, x, Matrix());
   const std::vector<Matrix> cotangents = output_cotangents(s.physics, x, Matrix());
-  const LocalJacobian given(s.network, cache, s.physics, x, Matrix(), cotangents);
+  const LocalJacobian given(s.network, cache, s.physics, x, cotangents);
   EXPECT_EQ(given.materialize(), computed.materialize());
   EXPECT_EQ(given.gram(), computed.gram());
-  EXPECT_THROW(LocalJacobian(s.network, cache, s.physics, x, Matrix(), {cotangents[0]}), Error);
-  EXPECT_THROW(LocalJacobian(s.network, cache, s.physics, x, Matrix(),
-                             {cotangents[0], Matrix::Zero(2, 3)}),
+  EXPECT_THROW(LocalJacobian(s.network, cache, s.physics, x, std::vector<Matrix>{cotangents[0]}),
+               Error);
+  EXPECT_THROW(LocalJacobian(s.network, cache, s.physics, x,
+                             std::vector<Matrix>{cotangents[0], Matrix::Zero(2, 3)}),
                Error);
 }
 

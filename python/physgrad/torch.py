@@ -50,8 +50,10 @@ class _JacobianRule(torch.optim.Optimizer):
 
     kappa = 0.5
 
-    def __init__(self, params, lr=1.0, rcond=1e-6, backend="auto"):
-        super().__init__(params, dict(lr=lr, rcond=rcond, backend=backend))
+    def __init__(self, params, lr=1.0, rcond=1e-6, backend="auto", precision="double",
+                 eigensolver="auto"):
+        super().__init__(params, dict(lr=lr, rcond=rcond, backend=backend, precision=precision,
+                                      eigensolver=eigensolver))
         self.last_info = None
 
     @torch.no_grad()
@@ -80,8 +82,12 @@ class _JacobianRule(torch.optim.Optimizer):
         if j.device.type != "cpu":
             raise ValueError("physgrad.torch: the Jacobian must be on the CPU")
         g = dl_dy.detach().reshape(-1).to(torch.float64).numpy()
+        # The last step's spectrum guides the auto choice of precision and eigensolver.
+        previous = self.last_info["state"] if self.last_info else None
         return _physgrad.jacobian_step(j.numpy(), g, lr=group["lr"], kappa=self.kappa,
-                                       rcond=group["rcond"], backend=group["backend"])
+                                       rcond=group["rcond"], backend=group["backend"],
+                                       precision=group["precision"],
+                                       eigensolver=group["eigensolver"], previous=previous)
 
 
 class HIG(_JacobianRule):

@@ -22,7 +22,9 @@ namespace {
 // Δθ = −η J^{−κ} g for J given as an array of shape (B, m, P) or (B·m, P), C-contiguous: float64
 // is read where it lies; float32 is converted once into a double copy (the step is double).
 py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradient_y, double lr,
-                        double kappa, double rcond, const std::string& backend) {
+                        double kappa, double rcond, const std::string& backend,
+                        const std::string& precision, const std::string& eigensolver,
+                        const py::object& previous) {
   if (jacobian.ndim() != 2 && jacobian.ndim() != 3) {
     throw Error("jacobian_step: the Jacobian has " + std::to_string(jacobian.ndim()) +
                 " dimensions, expected (B, m, P) or (B·m, P)");
@@ -53,8 +55,17 @@ py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradie
     throw Error("jacobian_step: dL/dy has " + std::to_string(g.size()) + " entries, the Jacobian " +
                 std::to_string(batch * outputs) + " rows");
   }
-  HigUpdate update({.lr = lr, .kappa = kappa, .rcond = rcond,
-                    .backend = parse_pinv_backend(backend)});
+  HigUpdate update({.lr = lr,
+                    .kappa = kappa,
+                    .rcond = rcond,
+                    .backend = parse_pinv_backend(backend),
+                    .precision = parse_pinv_precision(precision),
+                    .eigensolver = parse_pinv_eigensolver(eigensolver)});
+  if (!previous.is_none()) {
+    // The previous step's info["state"]: its spectrum guides the auto choices of this one.
+    const std::string text = py::str(py::module_::import("json").attr("dumps")(previous));
+    update.restore(nlohmann::json::parse(text), cols);
+  }
   const auto mapped = std::make_shared<MappedJacobian>(data, batch, outputs, cols);
   BatchState state;
   state.batch_size = batch;
@@ -66,10 +77,16 @@ py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradie
     step = update.step(state);
   }
   py::dict info;
-  info["backend"] = to_string(update.last_info().backend);
-  info["rank"] = update.last_info().rank;
-  info["sigma_max"] = update.last_info().sigma_max;
-  info["rcond_used"] = update.last_info().rcond_used;
+  const PowerPinvInfo& last = update.last_info();
+  info["backend"] = to_string(last.backend);
+  info["rank"] = last.rank;
+  info["sigma_max"] = last.sigma_max;
+  info["sigma_min_kept"] = last.sigma_min_kept;
+  info["rcond_used"] = last.rcond_used;
+  info["precision"] = to_string(last.precision);
+  info["eigensolver"] = to_string(last.eigensolver);
+  info["float_rejected"] = last.float_rejected;
+  info["state"] = to_python(update.state());
   info["data_address"] = reinterpret_cast<std::uintptr_t>(mapped->data());
   info["converted"] = converted.size() != 0;
   info["jacobian_seconds"] = step.jacobian_seconds;
@@ -81,11 +98,16 @@ py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradie
 // between them): what jacobian_step costs without its binding, for bench/python_step.py.
 double time_jacobian_step(const py::array_t<double, py::array::c_style>& jacobian,
                           const py::object& loss_gradient_y, double lr, double kappa,
-                          double rcond, int repeats) {
+                          double rcond, int repeats, const std::string& precision,
+                          const std::string& eigensolver) {
   if (jacobian.ndim() != 3 || repeats < 1) {
     throw Error("time_jacobian_step: expected J of shape (B, m, P) and repeats ≥ 1");
   }
-  HigUpdate update({.lr = lr, .kappa = kappa, .rcond = rcond});
+  HigUpdate update({.lr = lr,
+                    .kappa = kappa,
+                    .rcond = rcond,
+                    .precision = parse_pinv_precision(precision),
+                    .eigensolver = parse_pinv_eigensolver(eigensolver)});
   BatchState state;
   state.jacobian = std::make_shared<MappedJacobian>(jacobian.data(), jacobian.shape(0),
                                                     jacobian.shape(1), jacobian.shape(2));
@@ -144,12 +166,15 @@ py::dict reference_step(const std::string& name, Index batch, const std::string&
 void bind_learning(py::module_& m) {
   m.def("jacobian_step", &jacobian_step, py::arg("jacobian"), py::arg("loss_gradient_y"),
         py::arg("lr") = 1.0, py::arg("kappa") = 0.5, py::arg("rcond") = 1e-6,
-        py::arg("backend") = "auto",
+        py::arg("backend") = "auto", py::arg("precision") = "double",
+        py::arg("eigensolver") = "auto", py::arg("previous") = py::none(),
         "Δθ = −lr·J^{−κ}·dL/dy (HigUpdate) for J of shape (B, m, P) or (B·m, P), C-contiguous "
-        "float64 (read in place) or float32 (converted once); returns (Δθ, info).");
+        "float64 (read in place) or float32 (converted once); returns (Δθ, info). "
+        "precision 'double' | 'float' | 'auto' and eigensolver 'full' | 'subset' | 'auto' choose "
+        "the eigensolve (auto follows `previous`, the info['state'] of the previous step).");
   m.def("_time_jacobian_step", &time_jacobian_step, py::arg("jacobian"),
         py::arg("loss_gradient_y"), py::arg("lr"), py::arg("kappa"), py::arg("rcond"),
-        py::arg("repeats"));
+        py::arg("repeats"), py::arg("precision") = "double", py::arg("eigensolver") = "auto");
   m.def("reference_step", &reference_step, py::arg("name") = "oscillators",
         py::arg("batch") = 128, py::arg("rule") = "hig",
         "A reference case's first batch and the library's first step of `rule` on it.");

@@ -68,6 +68,8 @@ class PythonSimulator final : public Simulator {
   Matrix forward_batch(const Matrix& x, const Matrix& context) const override;
   Matrix vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const override;
   Matrix jacobian(const Vector& x, const Vector& context = {}) const override;
+  // Its own jacobian(), or finite differences when it has no vjp (which then comes from J too).
+  bool has_jacobian() const override { return has_jacobian_ || !has_vjp_; }
 
   bool has_inverse() const override { return has_inverse_; }
   Vector inverse(const Vector& y, const Vector& x0, const Vector& context = {}) const override;

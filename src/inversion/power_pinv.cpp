@@ -7,8 +7,11 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
+#include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "physgrad/error.hpp"
 #include "physgrad/text.hpp"
@@ -23,6 +26,27 @@ constexpr NameTable<PinvBackend, 4> kBackendNames{{
     {PinvBackend::kGram, "gram"},
     {PinvBackend::kNormal, "normal"},
 }};
+constexpr NameTable<PinvPrecision, 3> kPrecisionNames{{
+    {PinvPrecision::kAuto, "auto"},
+    {PinvPrecision::kDouble, "double"},
+    {PinvPrecision::kFloat, "float"},
+}};
+constexpr NameTable<PinvEigensolver, 3> kEigensolverNames{{
+    {PinvEigensolver::kAuto, "auto"},
+    {PinvEigensolver::kFull, "full"},
+    {PinvEigensolver::kSubset, "subset"},
+}};
+
+// The name of `value` in `names`; Error naming the enum `what` for a value not in the table.
+template <typename Enum, std::size_t N>
+std::string checked_name(const NameTable<Enum, N>& names, Enum value, const char* what) {
+  const std::string_view name = name_of(names, value);
+  if (name.empty()) {
+    throw Error(std::string("to_string: invalid ") + what + " value " +
+                std::to_string(static_cast<int>(value)));
+  }
+  return std::string(name);
+}
 
 void check_rcond(double rcond) {
   if (!(rcond >= 0 && rcond < 1)) {
@@ -74,27 +98,177 @@ Vector svd_apply(Matrix& a, const Vector& g, double kappa, PowerPinvInfo& info) 
     throw NumericalError("power_pinv_apply: the largest singular value of J overflows");
   }
   info.rank = (sigma.array() > info.rcond_used * info.sigma_max).count();
+  info.sigma_min_kept = info.rank > 0 ? sigma(info.rank - 1) : 0.0;
   Vector c = u.leftCols(info.rank).transpose() * g;
   c.array() *= sigma.head(info.rank).array().pow(-kappa);
   return vt.topRows(info.rank).transpose() * c;
 }
 
-// W Σ^{−1−κ} Wᵀ x for the symmetric w = W Σ² Wᵀ (lower triangle used, overwritten by dsyevd)
-// over the kept σ, which are the trailing ones (dsyevd sorts ascending).
-Vector eigen_apply(Matrix& w, const Vector& x, double kappa, PowerPinvInfo& info) {
+// The float check's bounds for an n × n spectrum with largest eigenvalue λ_max: the float
+// eigenvalue error δ, the smallest clearly kept value and the largest clearly dropped one.
+struct FloatBounds {
+  double kept_from, dropped_below;
+  FloatBounds(Index n, double lambda_max, double rcond) {
+    const double delta = std::sqrt(static_cast<double>(n)) *
+                         std::numeric_limits<float>::epsilon() * lambda_max;
+    const double cut2 = rcond * rcond * lambda_max;
+    kept_from = std::max(kFloatAccuracy * delta, cut2 + delta);
+    dropped_below = cut2 - delta;
+  }
+  bool resolves(const Vector& lambda) const {
+    return (lambda.array() >= kept_from || lambda.array() <= dropped_below).all();
+  }
+};
+
+// The eigenpairs of a symmetric matrix that the cut may keep, ascending, in double.
+struct Spectrum {
+  Vector lambda;
+  Matrix vectors;  // n × lambda.size()
+  PinvPrecision precision = PinvPrecision::kDouble;
+  PinvEigensolver eigensolver = PinvEigensolver::kFull;
+  bool float_resolves = false;
+};
+
+// LAPACK's symmetric eigensolvers for one scalar type: all pairs (syevd), or those with
+// λ in (vl, ∞) (syevr by value range), lower triangle of the n × n `a` (overwritten).
+lapack_int syevd(lapack_int n, double* a, double* w) {
+  return LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', n, a, n, w);
+}
+// With the workspace sizes LAPACK documents for ssyevd (1 + 6n + 2n² and 3 + 5n): LAPACKE's
+// size query returns them as a float, which rounds 2n² down for n ≳ 2900 (ssyevd then fails).
+lapack_int syevd(lapack_int n, float* a, float* w) {
+  const auto count = static_cast<std::size_t>(n);
+  std::vector<float> work(1 + 6 * count + 2 * count * count);
+  std::vector<lapack_int> iwork(3 + 5 * count);
+  return LAPACKE_ssyevd_work(LAPACK_COL_MAJOR, 'V', 'L', n, a, n, w, work.data(),
+                             static_cast<lapack_int>(work.size()), iwork.data(),
+                             static_cast<lapack_int>(iwork.size()));
+}
+lapack_int syevr(lapack_int n, double* a, double vl, lapack_int* found, double* w, double* z,
+                 lapack_int* support) {
+  return LAPACKE_dsyevr(LAPACK_COL_MAJOR, 'V', 'V', 'L', n, a, n, vl,
+                        std::numeric_limits<double>::max(), 0, 0, 0.0, found, w, z, n, support);
+}
+lapack_int syevr(lapack_int n, float* a, float vl, lapack_int* found, float* w, float* z,
+                 lapack_int* support) {
+  return LAPACKE_ssyevr(LAPACK_COL_MAJOR, 'V', 'V', 'L', n, a, n, vl,
+                        std::numeric_limits<float>::max(), 0, 0, 0.0f, found, w, z, n, support);
+}
+
+// The spectrum of the symmetric `w` (lower triangle) in Scalar arithmetic: all pairs, or with
+// `subset` those with λ > vl. A double full solve works in place on `w`; the others on copies.
+template <typename Scalar>
+Spectrum solve_spectrum(Matrix& w, bool subset, double vl, double rcond) {
+  using ScalarMatrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+  using ScalarVector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
+  constexpr bool kIsFloat = std::is_same_v<Scalar, float>;
   const lapack_int n = lapack_dim(w.rows());
+  Spectrum out;
+  out.precision = kIsFloat ? PinvPrecision::kFloat : PinvPrecision::kDouble;
+  out.eigensolver = subset ? PinvEigensolver::kSubset : PinvEigensolver::kFull;
+  ScalarMatrix copy;
+  Scalar* a = nullptr;
+  if constexpr (kIsFloat) {
+    copy = w.cast<float>();
+    a = copy.data();
+  } else {
+    if (subset) copy = w;
+    a = subset ? copy.data() : w.data();
+  }
+  ScalarVector lambda(n);
+  if (!subset) {
+    check_lapack(syevd(n, a, lambda.data()), kIsFloat ? "ssyevd" : "dsyevd");
+    out.lambda = lambda.template cast<double>();
+    if constexpr (kIsFloat) {
+      out.vectors = copy.template cast<double>();
+    } else {
+      out.vectors = std::move(w);
+    }
+  } else {
+    ScalarMatrix z(n, n);
+    std::vector<lapack_int> support(2 * static_cast<std::size_t>(n));
+    lapack_int found = 0;
+    check_lapack(syevr(n, a, static_cast<Scalar>(vl), &found, lambda.data(), z.data(),
+                       support.data()),
+                 kIsFloat ? "ssyevr" : "dsyevr");
+    out.lambda = lambda.head(found).template cast<double>();
+    out.vectors = z.leftCols(found).template cast<double>();
+  }
+  // Eigenvalues ≤ vl that a subset left out must lie clearly below the cut for the check.
+  if (out.lambda.size() > 0) {
+    const FloatBounds bounds(n, out.lambda.maxCoeff(), rcond);
+    const bool complete = out.lambda.size() == n || vl <= bounds.dropped_below;
+    out.float_resolves = complete && bounds.resolves(out.lambda);
+  }
+  return out;
+}
+
+// A lower bound of λ_max of the symmetric positive semi-definite w (lower triangle): the
+// largest of its diagonal entries and of the Rayleigh quotients of a few power iterations.
+double lambda_max_lower_bound(const Matrix& w) {
+  const lapack_int n = lapack_dim(w.rows());
+  double bound = w.diagonal().maxCoeff();
+  Vector v = Vector::Ones(n) / std::sqrt(static_cast<double>(n));
+  Vector u(n);
+  for (int iteration = 0; iteration < 8; ++iteration) {
+    cblas_dsymv(CblasColMajor, CblasLower, n, 1.0, w.data(), n, v.data(), 1, 0.0, u.data(), 1);
+    bound = std::max(bound, v.dot(u));  // v has unit length
+    const double norm = u.norm();
+    if (!(norm > 0)) break;
+    v = u / norm;
+  }
+  return bound;
+}
+
+// The precision and eigensolver `options` ask for on an n × n matrix.
+bool wants_subset(const PowerPinvOptions& options, Index n) {
+  if (options.eigensolver != PinvEigensolver::kAuto) {
+    return options.eigensolver == PinvEigensolver::kSubset;
+  }
+  return options.previous != nullptr &&
+         static_cast<double>(options.previous->rank) <=
+             kSubsetKeptFraction * static_cast<double>(n);
+}
+bool tries_float(const PowerPinvOptions& options) {
+  if (options.precision != PinvPrecision::kAuto) return options.precision == PinvPrecision::kFloat;
+  return options.previous == nullptr || options.previous->float_resolves;
+}
+
+// W Σ^{−1−κ} Wᵀ x for the symmetric w = W Σ² Wᵀ (lower triangle used, consumed) over the kept
+// σ, which are the trailing ones (the eigensolvers sort ascending).
+Vector eigen_apply(Matrix& w, const Vector& x, const PowerPinvOptions& options,
+                   PowerPinvInfo& info) {
   if (!all_finite(w) || !all_finite(x)) {
     throw NumericalError("power_pinv_apply: J Jᵀ, JᵀJ or Jᵀg overflows (non-finite entry)");
   }
-  Vector lambda(n);
-  check_lapack(LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', n, w.data(), n, lambda.data()),
-               "dsyevd");
-  const Vector sigma = lambda.cwiseMax(0.0).cwiseSqrt();  // rounding can leave λ slightly < 0
-  info.sigma_max = sigma(n - 1);
-  info.rank = (sigma.array() > info.rcond_used * info.sigma_max).count();
-  Vector c = w.rightCols(info.rank).transpose() * x;
-  c.array() *= sigma.tail(info.rank).array().pow(-1 - kappa);
-  return w.rightCols(info.rank) * c;
+  const double rcond = info.rcond_used;
+  const bool subset = wants_subset(options, w.rows());
+  // Below a lower bound of the cut² = rcond²·λ_max, with room to spare: the pairs dsyevr finds
+  // include every kept one.
+  const double vl = subset ? 0.5 * rcond * rcond * lambda_max_lower_bound(w) : 0.0;
+  std::optional<Spectrum> spectrum;
+  if (tries_float(options)) {
+    spectrum = solve_spectrum<float>(w, subset, vl, rcond);
+    if (options.precision == PinvPrecision::kAuto && !spectrum->float_resolves) {
+      info.float_rejected = true;
+      spectrum.reset();
+    }
+  }
+  if (!spectrum) spectrum = solve_spectrum<double>(w, subset, vl, rcond);
+  info.precision = spectrum->precision;
+  info.eigensolver = spectrum->eigensolver;
+  info.float_resolves = spectrum->float_resolves;
+  const Index found = spectrum->lambda.size();
+  if (found == 0) return Vector::Zero(w.rows());  // λ_max = 0: nothing above the cut
+  // Rounding can leave λ slightly < 0.
+  const Vector sigma = spectrum->lambda.cwiseMax(0.0).cwiseSqrt();
+  info.sigma_max = sigma(found - 1);
+  info.rank = (sigma.array() > rcond * info.sigma_max).count();
+  info.sigma_min_kept = info.rank > 0 ? sigma(found - info.rank) : 0.0;
+  const auto kept = spectrum->vectors.rightCols(info.rank);
+  Vector c = kept.transpose() * x;
+  c.array() *= sigma.tail(info.rank).array().pow(-1 - options.kappa);
+  return kept * c;
 }
 
 // A Aᵀ (gram = true) or Aᵀ A by dsyrk: the lower triangle, the upper left zero.
@@ -136,16 +310,36 @@ void check_square(const Matrix& w, const char* form) {
 }  // namespace
 
 std::string to_string(PinvBackend backend) {
-  const std::string_view name = name_of(kBackendNames, backend);
-  if (name.empty()) {
-    throw Error("to_string: invalid PinvBackend value " +
-                std::to_string(static_cast<int>(backend)));
-  }
-  return std::string(name);
+  return checked_name(kBackendNames, backend, "PinvBackend");
 }
 
 PinvBackend parse_pinv_backend(const std::string& name) {
   return value_named(kBackendNames, name, "pinv backend");
+}
+
+std::string to_string(PinvPrecision precision) {
+  return checked_name(kPrecisionNames, precision, "PinvPrecision");
+}
+
+PinvPrecision parse_pinv_precision(const std::string& name) {
+  return value_named(kPrecisionNames, name, "pinv precision");
+}
+
+std::string to_string(PinvEigensolver eigensolver) {
+  return checked_name(kEigensolverNames, eigensolver, "PinvEigensolver");
+}
+
+PinvEigensolver parse_pinv_eigensolver(const std::string& name) {
+  return value_named(kEigensolverNames, name, "pinv eigensolver");
+}
+
+double kept_condition(const PowerPinvInfo& info) {
+  return info.rank > 0 && info.sigma_min_kept > 0 ? info.sigma_max / info.sigma_min_kept : 0.0;
+}
+
+bool float_resolves_spectrum(const Vector& lambda, Index n, double rcond) {
+  if (lambda.size() == 0) return true;
+  return FloatBounds(n, lambda.maxCoeff(), rcond).resolves(lambda);
 }
 
 PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions& options) {
@@ -192,14 +386,14 @@ Vector power_pinv_apply(const JacobianOperator& j, const Vector& g,
       Matrix gram = timed(time.forming_seconds, [&] { return j.gram(); });
       check_square(gram, "J Jᵀ");
       return timed(time.inversion_seconds, [&] {
-        return j.apply_transpose(eigen_apply(gram, g, options.kappa, out));
+        return j.apply_transpose(eigen_apply(gram, g, options, out));
       });
     }
     case PinvBackend::kNormal: {
       JacobianOperator::Normal normal = timed(time.forming_seconds, [&] { return j.normal(g); });
       check_square(normal.matrix, "JᵀJ");
       return timed(time.inversion_seconds,
-                   [&] { return eigen_apply(normal.matrix, normal.rhs, options.kappa, out); });
+                   [&] { return eigen_apply(normal.matrix, normal.rhs, options, out); });
     }
     default: {
       Matrix formed = timed(time.forming_seconds, [&] { return j.materialize(); });

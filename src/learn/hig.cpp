@@ -1,6 +1,7 @@
 #include "physgrad/learn/hig.hpp"
 
 #include "physgrad/error.hpp"
+#include "physgrad/io/serialize.hpp"
 
 namespace physgrad {
 
@@ -14,6 +15,13 @@ const OptionList<HigOptions>& HigOptions::descriptors() {
       rule_option("backend", &HigOptions::backend,
                   {PinvBackend::kAuto, PinvBackend::kSvd, PinvBackend::kGram, PinvBackend::kNormal},
                   "how J^{−κ} is computed (inversion/power_pinv.hpp)"),
+      rule_option("precision", &HigOptions::precision,
+                  {PinvPrecision::kDouble, PinvPrecision::kFloat, PinvPrecision::kAuto},
+                  "precision of the eigendecomposition (auto: float where the last spectrum "
+                  "allows it)"),
+      rule_option("eigensolver", &HigOptions::eigensolver,
+                  {PinvEigensolver::kAuto, PinvEigensolver::kFull, PinvEigensolver::kSubset},
+                  "all eigenpairs (full) or only the kept ones (subset); auto by the last step"),
   };
   return options;
 }
@@ -21,6 +29,50 @@ const OptionList<HigOptions>& HigOptions::descriptors() {
 HigUpdate::HigUpdate(Options options) : options_(options) { check_options(id(), options_); }
 
 nlohmann::json HigUpdate::params() const { return option_values(options_); }
+
+nlohmann::json HigUpdate::state() const {
+  if (info_.backend == PinvBackend::kAuto) return nullptr;
+  return {{"backend", to_string(info_.backend)},
+          {"rank", info_.rank},
+          {"sigma_max", info_.sigma_max},
+          {"sigma_min_kept", info_.sigma_min_kept},
+          {"rcond_used", info_.rcond_used},
+          {"precision", to_string(info_.precision)},
+          {"eigensolver", to_string(info_.eigensolver)},
+          {"float_rejected", info_.float_rejected},
+          {"float_resolves", info_.float_resolves}};
+}
+
+void HigUpdate::restore(const nlohmann::json& state, Index /*parameter_count*/) {
+  info_ = {};
+  if (state.is_null()) return;
+  const auto flag = [&state](const char* key) {
+    if (!state.contains(key) || !state.at(key).is_boolean()) {
+      throw Error(std::string("checkpoint field '") + key + "': expected true or false");
+    }
+    return state.at(key).get<bool>();
+  };
+  PowerPinvInfo info;
+  info.backend = parse_pinv_backend(string_from_json(state, "backend"));
+  info.rank = static_cast<Index>(integer_from_json(state, "rank"));
+  info.sigma_max = real_from_json(state, "sigma_max");
+  info.sigma_min_kept = real_from_json(state, "sigma_min_kept");
+  info.rcond_used = real_from_json(state, "rcond_used");
+  info.precision = parse_pinv_precision(string_from_json(state, "precision"));
+  info.eigensolver = parse_pinv_eigensolver(string_from_json(state, "eigensolver"));
+  info.float_rejected = flag("float_rejected");
+  info.float_resolves = flag("float_resolves");
+  info_ = info;
+}
+
+nlohmann::json HigUpdate::step_info() const {
+  if (info_.backend == PinvBackend::kAuto) return nlohmann::json::object();  // no step yet
+  return {{"pinv_path", to_string(info_.backend)},
+          {"pinv_precision", to_string(info_.precision)},
+          {"pinv_eigensolver", to_string(info_.eigensolver)},
+          {"kept_directions", info_.rank},
+          {"kept_condition", kept_condition(info_)}};
+}
 
 void HigUpdate::set_learning_rate(double lr) {
   Options changed = options_;
@@ -31,9 +83,19 @@ void HigUpdate::set_learning_rate(double lr) {
 Step HigUpdate::step(const BatchState& batch) {
   if (batch.jacobian == nullptr) throw Error(id() + ": the batch has no stacked Jacobian");
   PowerPinvTiming timing;
+  // The previous step's spectrum guides the auto choices when it came from the same path.
+  const PowerPinvInfo previous = info_;
+  const bool same_path =
+      previous.backend == resolve_pinv_backend(batch.jacobian->rows(), batch.jacobian->cols(),
+                                               {.rcond = options_.rcond, .backend = options_.backend});
   Step step;
   step.delta = -options_.lr * power_pinv_apply(*batch.jacobian, batch.loss_gradient_y,
-                                               {options_.kappa, options_.rcond, options_.backend},
+                                               {.kappa = options_.kappa,
+                                                .rcond = options_.rcond,
+                                                .backend = options_.backend,
+                                                .precision = options_.precision,
+                                                .eigensolver = options_.eigensolver,
+                                                .previous = same_path ? &previous : nullptr},
                                                &info_, &timing);
   step.jacobian_seconds = timing.forming_seconds;
   step.inversion_seconds = timing.inversion_seconds;

@@ -13,9 +13,8 @@ namespace physgrad {
 
 ShardedJacobian::ShardedJacobian(const Network& network, const NetworkCache& cache,
                                  const Simulator& physics, Shard shard, Index batch,
-                                 Matrix own_inputs, Matrix own_x, Matrix own_context,
-                                 std::vector<Matrix> own_cotangents, Matrix whole_x,
-                                 Matrix whole_context)
+                                 Matrix own_inputs, Matrix own_x,
+                                 std::vector<Matrix> own_cotangents, Matrix whole_x)
     : network_(&network),
       cache_(&cache),
       physics_(&physics),
@@ -24,14 +23,12 @@ ShardedJacobian::ShardedJacobian(const Network& network, const NetworkCache& cac
       own_(shard_.columns(batch)),
       own_inputs_(std::move(own_inputs)),
       own_x_(std::move(own_x)),
-      own_context_(std::move(own_context)),
       own_cotangents_(std::move(own_cotangents)),
-      whole_x_(std::move(whole_x)),
-      whole_context_(std::move(whole_context)) {}
+      whole_x_(std::move(whole_x)) {}
 
 const LocalJacobian& ShardedJacobian::whole() const {
   if (!whole_) {
-    whole_.emplace(*network_, *cache_, *physics_, whole_x_, whole_context_,
+    whole_.emplace(*network_, *cache_, *physics_, whole_x_,
                    shard_.gather_columns(own_cotangents_, network_->output_dim(), batch_));
   }
   return *whole_;
@@ -40,7 +37,7 @@ const LocalJacobian& ShardedJacobian::whole() const {
 Vector ShardedJacobian::apply_transpose(const Vector& c) const {
   const Matrix weights = c.reshaped(batch_, outputs()).transpose();
   const Matrix gx = own_.count > 0
-                        ? physics_->vjp_batch(own_x_, own_context_,
+                        ? weighted_cotangents(own_cotangents_,
                                               weights.middleCols(own_.begin, own_.count))
                         : Matrix(network_->output_dim(), 0);
   return network_->backward(*cache_,
@@ -77,6 +74,7 @@ std::optional<Vector> ShardedJacobian::shared_gram_apply(const Vector& g,
   shard_.sum(x);  // U Σ^{−1−κ} Uᵀ g, the same bits on every rank
   out.rank = power.kept;
   out.sigma_max = power.sigma_max;
+  out.sigma_min_kept = power.sigma_min_kept;
   Vector result = apply_transpose(x);
   if (timing != nullptr) {
     timing->forming_seconds += forming;
@@ -100,7 +98,7 @@ JacobianOperator::Normal ShardedJacobian::normal(const Vector& g) const {
     for (Index k = 0; k < outputs(); ++k) {
       own_g.segment(k * own_.count, own_.count) = g.segment(k * batch_ + own_.begin, own_.count);
     }
-    own = LocalJacobian(*network_, *cache, *physics_, own_x_, own_context_, own_cotangents_)
+    own = LocalJacobian(*network_, *cache, *physics_, own_x_, own_cotangents_)
               .normal(own_g);
   }
   std::vector<double> packed;

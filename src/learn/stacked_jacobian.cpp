@@ -53,6 +53,21 @@ std::vector<Matrix> output_cotangents(const Simulator& physics, const Matrix& x,
                                       const Matrix& context) {
   const Index outputs = physics.output_dim(), batch = x.cols();
   std::vector<Matrix> cotangents(static_cast<std::size_t>(outputs));
+  if (physics.has_jacobian()) {
+    // Row k of sample i's Jacobian is (∂P/∂x)ᵀ e_k for that sample: one jacobian() per sample,
+    // worker t taking the samples i ≡ t (mod threads), each writing only its own columns.
+    for (Matrix& c : cotangents) c.resize(x.rows(), batch);
+    on_threads(std::min<Index>(jacobian_threads(), batch), [&](Index first, Index stride) {
+      for (Index i = first; i < batch; i += stride) {
+        const Matrix j = physics.jacobian(x.col(i), context.size() == 0 ? Vector()
+                                                                        : Vector(context.col(i)));
+        for (Index k = 0; k < outputs; ++k) {
+          cotangents[static_cast<std::size_t>(k)].col(i) = j.row(k).transpose();
+        }
+      }
+    });
+    return cotangents;
+  }
   // Worker t takes the outputs k ≡ t (mod threads).
   on_threads(std::min<Index>(jacobian_threads(), outputs), [&](Index first, Index stride) {
     Matrix unit(outputs, batch);
@@ -67,16 +82,13 @@ std::vector<Matrix> output_cotangents(const Simulator& physics, const Matrix& x,
 
 LocalJacobian::LocalJacobian(const Network& network, const NetworkCache& cache,
                              const Simulator& physics, Matrix x, Matrix context)
-    : LocalJacobian(network, cache, physics, x, context, output_cotangents(physics, x, context)) {}
+    : LocalJacobian(network, cache, physics, x, output_cotangents(physics, x, context)) {}
 
 LocalJacobian::LocalJacobian(const Network& network, const NetworkCache& cache,
-                             const Simulator& physics, Matrix x, Matrix context,
-                             std::vector<Matrix> cotangents)
+                             const Simulator& physics, Matrix x, std::vector<Matrix> cotangents)
     : network_(&network),
       cache_(&cache),
-      physics_(&physics),
       x_(std::move(x)),
-      context_(std::move(context)),
       output_cotangents_(std::move(cotangents)) {
   if (outputs() != physics.output_dim()) {
     throw Error("LocalJacobian: " + std::to_string(outputs()) +
@@ -98,10 +110,19 @@ Matrix LocalJacobian::gram_columns(const std::vector<Index>& columns) const {
   return network_->per_sample_gram_columns(*cache_, output_cotangents_, columns);
 }
 
+Matrix weighted_cotangents(const std::vector<Matrix>& cotangents, const Matrix& weights) {
+  if (cotangents.empty()) return Matrix(0, weights.cols());
+  Matrix gx = Matrix::Zero(cotangents.front().rows(), weights.cols());
+  for (std::size_t k = 0; k < cotangents.size(); ++k) {
+    gx += cotangents[k] * weights.row(static_cast<Index>(k)).asDiagonal();
+  }
+  return gx;
+}
+
 Vector LocalJacobian::apply_transpose(const Vector& c) const {
   // Σ_{i,k} c_{k·B+i} ∂y_ik/∂θ = ∇θ of Σ_i C_iᵀ y_i with C (m × B) holding c output by output.
   const Matrix weights = c.reshaped(batch(), outputs()).transpose();
-  return network_->backward(*cache_, physics_->vjp_batch(x_, context_, weights));
+  return network_->backward(*cache_, weighted_cotangents(output_cotangents_, weights));
 }
 
 Matrix LocalJacobian::materialize() const {

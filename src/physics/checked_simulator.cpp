@@ -67,6 +67,7 @@ CheckedSimulator::CheckedSimulator(const Simulator& inner)
       n_(simulator_dim(inner, inner.input_dim(), "input_dim", 1)),
       m_(simulator_dim(inner, inner.output_dim(), "output_dim", 1)),
       context_dim_(simulator_dim(inner, inner.context_dim(), "context_dim", 0)),
+      has_jacobian_(inner.has_jacobian()),
       has_inverse_(inner.has_inverse()),
       has_time_reversal_(inner.has_time_reversal()) {}
 

@@ -215,6 +215,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                           {"test_loss", r.test_loss}};
     for (const auto& [key, value] : params.items()) row[key] = value;
     for (const auto& [key, value] : r.extras.items()) row[key] = value;
+    for (const auto& [key, value] : r.step.items()) row[key] = value;
     context_.add_metrics_row(std::move(row));
   }
   const TrainingSummary& s = result.summary;

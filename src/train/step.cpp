@@ -183,8 +183,8 @@ BatchState evaluate_batch(const Network& network, const LearningProblem& problem
                         : std::vector<Matrix>(static_cast<std::size_t>(outputs),
                                               Matrix(network.output_dim(), 0));
       state.jacobian = std::make_shared<ShardedJacobian>(
-          network, cache, physics, shard, global, mine.inputs, std::move(x), mine.context,
-          std::move(cotangents), std::move(whole_x), batch.context);
+          network, cache, physics, shard, global, mine.inputs, std::move(x), std::move(cotangents),
+          std::move(whole_x));
       break;
     }
   }

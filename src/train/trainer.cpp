@@ -244,6 +244,7 @@ bool TrainingRun::evaluate() {
     return false;
   }
   if (options_.on_evaluate) options_.on_evaluate(network_, record);
+  if (summary_.iterations > 0) record.step = update_.step_info();
   summary_.history.push_back(record);
   last_evaluated_ = network_.parameters();
   evaluated_ = true;

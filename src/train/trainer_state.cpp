@@ -18,7 +18,8 @@ nlohmann::json finite_or_null(double value) {
 nlohmann::json record_to_json(const TrainingRecord& r) {
   return {{"iteration", r.iteration},         {"epoch", r.epoch},
           {"train_seconds", r.train_seconds}, {"train_loss", finite_or_null(r.train_loss)},
-          {"test_loss", finite_or_null(r.test_loss)}, {"extras", r.extras}};
+          {"test_loss", finite_or_null(r.test_loss)}, {"extras", r.extras},
+          {"step", r.step}};
 }
 
 TrainingRecord record_from_json(const nlohmann::json& document) {
@@ -29,6 +30,7 @@ TrainingRecord record_from_json(const nlohmann::json& document) {
   r.train_loss = real_from_json(document, "train_loss");
   r.test_loss = real_from_json(document, "test_loss", true);
   r.extras = object_from_json(document, "extras");
+  if (document.contains("step")) r.step = object_from_json(document, "step");
   return r;
 }
 

@@ -94,7 +94,8 @@ class MpiRun : public ::testing::Test {
   }
 
   // The one-process run and the `ranks`-rank run of `args`: every metrics.csv cell equal, the
-  // numeric ones (losses and experiment figures) to 1e-10 relative, wall-clock columns skipped.
+  // numeric ones (losses and experiment figures) to 1e-10 relative, wall-clock and
+  // kept_condition columns skipped.
   // Prints and returns the largest relative difference of the losses per update rule.
   std::map<std::string, double> expect_same_losses(const std::string& args, int ranks) const {
     EXPECT_EQ(run(0, args + " --out single"), 0) << args;
@@ -123,7 +124,10 @@ class MpiRun : public ::testing::Test {
       EXPECT_EQ(a.size(), b.size());
       for (std::size_t c = 0; c < std::min(a.size(), b.size()); ++c) {
         const std::string& name = single.header[c];
-        if (name == "wall_seconds") continue;
+        // kept_condition = σ_max/σ_min,kept is a diagnostic of the solve: the smallest kept σ²
+        // can sit at 1e-12·σ_max², where the rounding of another summation order or eigensolver
+        // moves it by far more than 1e-10.
+        if (name == "wall_seconds" || name == "kept_condition") continue;
         char* end_a = nullptr;
         char* end_b = nullptr;
         const double x = std::strtod(a[c].c_str(), &end_a);

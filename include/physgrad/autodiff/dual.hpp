@@ -237,6 +237,7 @@ class AutoDiffSimulator : public Simulator {
     check_batch(x, context, "jacobian");
     return dual_jacobian(x, context);
   }
+  bool has_jacobian() const override { return true; }
 
  private:
   static Vector column(const Matrix& context, Index b) {

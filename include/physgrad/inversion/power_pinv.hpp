@@ -30,10 +30,45 @@ PinvBackend parse_pinv_backend(const std::string& name);
 // this value there, and makes kAuto choose the SVD.
 inline constexpr double kMinGramRcond = 1e-7;
 
+// The arithmetic of the eigensolve on the Gram and normal paths (the SVD is always double).
+//   kDouble: the symmetric matrix W = J Jᵀ or JᵀJ as formed, LAPACK dsyevd / dsyevr.
+//   kFloat:  W rounded to float, ssyevd / ssyevr: about twice as fast, but every eigenvalue
+//            λᵢ = σᵢ² carries an error of up to δ = √n·ε_f·λ_max (ε_f = 2⁻²³ ≈ 1.2e-7).
+//   kAuto:   float where the spectrum allows it (float_resolves_spectrum() on the float
+//            eigenvalues; the result is then within ~(1+κ)/kFloatAccuracy relative of the double
+//            one), else double; with `previous` set, float is tried only when the previous
+//            spectrum allowed it, so that a spectrum that does not costs no float attempt.
+enum class PinvPrecision { kAuto, kDouble, kFloat };
+std::string to_string(PinvPrecision precision);  // "auto", "double", "float"
+PinvPrecision parse_pinv_precision(const std::string& name);
+
+// Which eigenpairs the Gram and normal paths compute.
+//   kFull:   all n (dsyevd, divide and conquer).
+//   kSubset: only λ above the cut (dsyevr by value range, from a lower bound of λ_max by power
+//            iteration): saves the back-transformation of the dropped directions.
+//   kAuto:   kSubset when `previous` kept at most kSubsetKeptFraction of n directions, else kFull.
+enum class PinvEigensolver { kAuto, kFull, kSubset };
+std::string to_string(PinvEigensolver eigensolver);  // "auto", "full", "subset"
+PinvEigensolver parse_pinv_eigensolver(const std::string& name);
+
+// Float is accepted when every kept eigenvalue is at least this many times its error δ (so its
+// relative error is ≤ 1e-3) and no eigenvalue lies within δ of the cut.
+inline constexpr double kFloatAccuracy = 1e3;
+// kAuto picks the subset eigensolver below this kept fraction (bench/learning_step_bench.cpp,
+// BM_GramEigensolve, measures where dsyevr overtakes dsyevd).
+inline constexpr double kSubsetKeptFraction = 0.1;
+
+struct PowerPinvInfo;
+
 struct PowerPinvOptions {
   double kappa = 1.0;    // exponent: 1 = pseudo-inverse (Gauss-Newton, IG), 0.5 = HIG, −1 = Jᵀ
   double rcond = 1e-10;  // keep σᵢ > rcond·σ_max (strictly); 0 ≤ rcond < 1
   PinvBackend backend = PinvBackend::kAuto;
+  PinvPrecision precision = PinvPrecision::kDouble;
+  PinvEigensolver eigensolver = PinvEigensolver::kAuto;
+  // What the previous call on a matrix like this one did (the last step of the same rule): the
+  // auto choices above follow it; nullptr: no history.
+  const PowerPinvInfo* previous = nullptr;
 };
 
 // What a call did.
@@ -41,8 +76,23 @@ struct PowerPinvInfo {
   PinvBackend backend = PinvBackend::kAuto;  // the path taken (never kAuto after a call)
   Index rank = 0;                            // number of kept singular values
   double sigma_max = 0;                      // largest singular value of J
+  double sigma_min_kept = 0;                 // smallest kept one (0 when none is kept)
   double rcond_used = 0;                     // the cutoff applied (rcond, or the Gram floor)
+  // The eigensolve that gave the result (Gram and normal paths; the SVD reports double, full).
+  PinvPrecision precision = PinvPrecision::kDouble;
+  PinvEigensolver eigensolver = PinvEigensolver::kFull;
+  bool float_rejected = false;  // kAuto solved in float first; the spectrum sent it to double
+  bool float_resolves = false;  // this spectrum passes the float check (next kAuto tries float)
 };
+
+// σ_max / σ_min,kept, the condition number of the kept part of J (0 when nothing is kept).
+double kept_condition(const PowerPinvInfo& info);
+
+// The float check: with δ = √n·ε_f·λ_max, every eigenvalue λᵢ of the n × n matrix is either
+// kept clearly and accurately, λᵢ ≥ max(kFloatAccuracy·δ, cut² + δ), or dropped clearly,
+// λᵢ ≤ cut² − δ (cut² = (rcond·σ_max)² = rcond²·λ_max). Eigenvalues within δ of these true
+// values then keep the same directions, each λ to 1/kFloatAccuracy relative.
+bool float_resolves_spectrum(const Vector& lambda, Index n, double rcond);
 
 // Where the time of a call went.
 struct PowerPinvTiming {

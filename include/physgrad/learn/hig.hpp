@@ -16,6 +16,11 @@ struct HigOptions {
   double kappa = 0.5;   // ½: HIG; 1: Gauss-Newton (id "gn")
   double rcond = 1e-6;  // relative truncation τ, in [0, 1)
   PinvBackend backend = PinvBackend::kAuto;
+  // The eigensolve of the Gram and normal paths (inversion/power_pinv.hpp); each step's auto
+  // choice follows the previous step's spectrum. Double by default: float changes a step by up to
+  // ~1e-3 relative, which the bit-level agreement of data-parallel runs does not allow.
+  PinvPrecision precision = PinvPrecision::kDouble;
+  PinvEigensolver eigensolver = PinvEigensolver::kAuto;
 
   // Each option once: name, member, range, help (params(), settings by name, validation).
   static const OptionList<HigOptions>& descriptors();
@@ -33,8 +38,14 @@ class HigUpdate final : public LearningUpdate {
   double learning_rate() const override { return options_.lr; }
   void set_learning_rate(double lr) override;
   bool steps_can_be_halved() const override { return true; }
-  // Backend and kept rank of the last step.
+  // The last step's inversion info (the auto choices of the next step follow it; null before
+  // the first step), so that a resumed run chooses as an uninterrupted one.
+  void reset() override { info_ = {}; }
+  nlohmann::json state() const override;
+  void restore(const nlohmann::json& state, Index parameter_count) override;
+  // What the last step's inversion did: path, kept rank, σ_max/σ_min,kept, precision, eigensolver.
   const PowerPinvInfo& last_info() const { return info_; }
+  nlohmann::json step_info() const override;
 
  private:
   Options options_;

@@ -63,6 +63,9 @@ class LearningUpdate {
   // True when a step may be scaled down after the fact without changing the rule's state, so a
   // step that leads to a non-finite batch can be retried at half its length.
   virtual bool steps_can_be_halved() const { return false; }
+  // What the last step did beyond Δθ, as named numbers and words for the metrics of an
+  // evaluation (hig: the inversion's path, kept directions, …); empty when there is nothing.
+  virtual nlohmann::json step_info() const { return nlohmann::json::object(); }
 };
 
 }  // namespace physgrad

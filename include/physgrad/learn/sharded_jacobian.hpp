@@ -28,11 +28,11 @@ namespace physgrad {
 class ShardedJacobian final : public StackedJacobian {
  public:
   // `cache` is the network on the whole batch (every rank runs the cheap network on all B
-  // samples); `own_inputs`, `own_x`, `own_context` and `own_cotangents` ([k]: n × share) are
-  // this rank's columns shard.columns(B). References must outlive the Jacobian unchanged.
+  // samples); `own_inputs`, `own_x` and `own_cotangents` ([k]: n × share) are this rank's
+  // columns shard.columns(B). References must outlive the Jacobian unchanged.
   ShardedJacobian(const Network& network, const NetworkCache& cache, const Simulator& physics,
-                  Shard shard, Index batch, Matrix own_inputs, Matrix own_x, Matrix own_context,
-                  std::vector<Matrix> own_cotangents, Matrix whole_x, Matrix whole_context);
+                  Shard shard, Index batch, Matrix own_inputs, Matrix own_x,
+                  std::vector<Matrix> own_cotangents, Matrix whole_x);
 
   Index batch() const override { return batch_; }
   Index outputs() const override { return physics_->output_dim(); }
@@ -55,9 +55,9 @@ class ShardedJacobian final : public StackedJacobian {
   Shard shard_;
   Index batch_;
   ColumnRange own_;
-  Matrix own_inputs_, own_x_, own_context_;
+  Matrix own_inputs_, own_x_;
   std::vector<Matrix> own_cotangents_;
-  Matrix whole_x_, whole_context_;
+  Matrix whole_x_;
   mutable std::optional<LocalJacobian> whole_;
 };
 

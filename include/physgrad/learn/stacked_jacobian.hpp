@@ -21,21 +21,22 @@ class StackedJacobian : public JacobianOperator {
 };
 
 // J of one process's batch. For a dense network J Jᵀ comes from the layer factors (the
-// network's per_sample_gram) and J is never formed; Jᵀc is one physics VJP and one backward.
+// network's per_sample_gram) and J is never formed; Jᵀc is one backward of the output
+// cotangents weighted by c (weighted_cotangents()), without another physics call.
 //
-// Holds references to the network, its cache (from forward() on this batch) and the simulator,
-// which must outlive it unchanged; x and the context are copied.
+// Holds references to the network and its cache (from forward() on this batch), which must
+// outlive it unchanged; the simulator is called only in the constructor.
 class LocalJacobian final : public StackedJacobian {
  public:
-  // m batched VJPs through the physics (one per output k) give each sample's cotangent at the
-  // network output, on jacobian_threads() threads (threads.hpp); an exception from a VJP is
-  // rethrown here.
+  // output_cotangents() gives each sample's cotangents at the network output (m batched VJPs
+  // through the physics, or one jacobian() per sample), on jacobian_threads() threads
+  // (threads.hpp); an exception from the simulator is rethrown here.
   LocalJacobian(const Network& network, const NetworkCache& cache, const Simulator& physics,
                 Matrix x, Matrix context);
   // Same, with the m output cotangents (∂P/∂x)ᵀ e_k (n × B each) given, e.g. gathered from the
   // ranks of a data-parallel run. Throws Error on a count or shape that does not fit.
   LocalJacobian(const Network& network, const NetworkCache& cache, const Simulator& physics,
-                Matrix x, Matrix context, std::vector<Matrix> output_cotangents);
+                Matrix x, std::vector<Matrix> output_cotangents);
 
   Index batch() const override { return x_.cols(); }
   Index outputs() const override { return static_cast<Index>(output_cotangents_.size()); }
@@ -50,16 +51,18 @@ class LocalJacobian final : public StackedJacobian {
  private:
   const Network* network_;
   const NetworkCache* cache_;
-  const Simulator* physics_;
   Matrix x_;
-  Matrix context_;
   std::vector<Matrix> output_cotangents_;  // [k]: n × B, (∂P/∂x)ᵀ e_k for every sample
 };
 
 // (∂P/∂x)ᵀ e_k of every sample for each physics output k (n × B each): m batched VJPs on
-// jacobian_threads() threads; output k's VJP writes only its own matrix, so the result does
-// not depend on the thread count.
+// jacobian_threads() threads, or B calls of jacobian() when the simulator has_jacobian(); each
+// call writes only its own entries, so the result does not depend on the thread count.
 std::vector<Matrix> output_cotangents(const Simulator& physics, const Matrix& x,
                                       const Matrix& context);
+
+// (∂P/∂x)ᵀ W per sample from the output cotangents: column i is Σ_k W_ki·cotangents[k].col(i)
+// (n × B for W m × B); no simulator call.
+Matrix weighted_cotangents(const std::vector<Matrix>& cotangents, const Matrix& weights);
 
 }  // namespace physgrad

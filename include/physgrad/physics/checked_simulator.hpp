@@ -74,6 +74,7 @@ class CheckedSimulator final : public Simulator {
   Matrix forward_batch(const Matrix& x, const Matrix& context) const override;
   Matrix vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const override;
   Matrix jacobian(const Vector& x, const Vector& context = {}) const override;
+  bool has_jacobian() const override { return has_jacobian_; }
   Matrix weighted_hessian(const Vector& x, const Vector& context, const Vector& w) const override;
   bool has_inverse() const override { return has_inverse_; }
   Vector inverse(const Vector& y, const Vector& x0, const Vector& context = {}) const override;
@@ -90,7 +91,7 @@ class CheckedSimulator final : public Simulator {
 
   const Simulator* inner_;
   Index n_, m_, context_dim_;
-  bool has_inverse_, has_time_reversal_;
+  bool has_jacobian_, has_inverse_, has_time_reversal_;
   mutable std::atomic<long long> forward_{0}, vjp_{0}, jacobians_{0}, hessians_{0}, reversals_{0},
       inverses_{0}, passes_{0};
   mutable std::vector<const SimulatorBudget*> budgets_;  // open budgets, innermost last

@@ -19,6 +19,7 @@ class DiagonalScale final : public Simulator {
   Matrix forward_batch(const Matrix& x, const Matrix& context) const override;
   Matrix vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const override;
   Matrix jacobian(const Vector& x, const Vector& context = {}) const override;
+  bool has_jacobian() const override { return true; }
   Matrix weighted_hessian(const Vector& x, const Vector& context, const Vector& w) const override;
 
   bool has_inverse() const override { return true; }

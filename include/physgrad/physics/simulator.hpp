@@ -25,6 +25,10 @@ class Simulator {
 
   // J = ∂P/∂x at one sample (m×n). Default: one batched VJP with the m unit cotangents.
   virtual Matrix jacobian(const Vector& x, const Vector& context = {}) const;
+  // True when jacobian() is the simulator's own (forward-mode duals, a closed form), cheaper
+  // than the m VJPs of the default: the stacked Jacobian of a learning step
+  // (learn/stacked_jacobian.hpp) then asks it once per sample instead of making m batched VJPs.
+  virtual bool has_jacobian() const { return false; }
 
   // Σ_k w_k ∂²P_k/∂x² at one sample (n×n), the simulator's part of the exact Hessian of
   // L(P(x)). Default: central differences of the VJP (error O(h²)); simulators with a

@@ -34,6 +34,9 @@ struct TrainingRecord {
   double train_loss = 0;     // mean loss over the training set
   double test_loss = 0;      // mean loss over the test set (NaN without one)
   nlohmann::json extras = nlohmann::json::object();  // filled by TrainerOptions::on_evaluate
+  // What the rule's last step did (LearningUpdate::step_info(): hig's inversion path, kept
+  // directions, …); empty before the first step and for rules that report nothing.
+  nlohmann::json step = nlohmann::json::object();
 };
 
 // What train() did, shaped like minimize()'s MinimizeSummary (optim/minimize.hpp).
