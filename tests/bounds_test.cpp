@@ -146,7 +146,10 @@ TEST(Bounds, EveryRuleStaysInTheBoxAndReachesTheConstrainedLeastSquaresOptimum) 
   for (const Vector& scale : {Vector(), Vector{{0.5, 2.0, 0.1}}}) {
     for (const RuleCase& c : least_squares_cases()) {
       std::string what = c.id;
-      if (c.settings.contains("inverse")) what += " " + c.settings.at("inverse").get<std::string>();
+      if (c.settings.contains("inverse")) {
+        what += ' ';
+        what += c.settings.at("inverse").get<std::string>();
+      }
       if (scale.size() != 0) what += " (x_scale)";
       // Adam's step is per component, so its step size is in z when x_scale is set.
       const auto optimizer = make_optimizer(c.id, c.settings);

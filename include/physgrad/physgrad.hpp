@@ -10,6 +10,7 @@
 #include "physgrad/stop.hpp"
 #include "physgrad/text.hpp"
 #include "physgrad/threads.hpp"
+#include "physgrad/timing.hpp"
 #include "physgrad/types.hpp"
 
 #include "physgrad/io/atomic_file.hpp"
