@@ -244,6 +244,32 @@ TEST_F(Cli, LearningMetricsRecordTheInversionOfEachEvaluation) {
   EXPECT_EQ(hig_rows, 2 * hig_runs);  // the evaluations after iterations 10 and 20
 }
 
+// --precision and --eigensolver reach gn and hig (their choices come from the rules' description)
+// and the metrics say what ran; another value is a one-line error naming it.
+TEST_F(Cli, PrecisionAndEigensolverOptionsReachTheInversion) {
+  const Outcome outcome = run(
+      "run hig-toy --seeds 1 --lambda 1 --iters 10 --eval-every 10 --optimizers hig "
+      "--precision float --eigensolver full --out f");
+  ASSERT_EQ(outcome.exit_code, 0) << outcome.err;
+  const physgrad::CsvData metrics = physgrad::parse_csv(read_file(dir_ / "f" / "metrics.csv"));
+  const std::size_t iteration = metrics.column("iteration"),
+                    precision = metrics.column("pinv_precision"),
+                    eigensolver = metrics.column("pinv_eigensolver");
+  ASSERT_LT(precision, metrics.columns.size());
+  int stepped = 0;
+  for (const auto& row : metrics.rows) {
+    if (row[iteration] == "0") continue;
+    ++stepped;
+    EXPECT_EQ(row[precision], "float");
+    EXPECT_EQ(row[eigensolver], "full");
+  }
+  EXPECT_EQ(stepped, 1);
+  const Outcome bad = run("run hig-toy --precision quad --iters 5");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_EQ(bad.err,
+            "physgrad: error: --precision: unknown value 'quad' (known: double, float, auto)\n");
+}
+
 // bench: one JSON line with the step time, its split, the shape of J, the backend and the
 // reference eigendecomposition of a B·m × B·m matrix; bad names and numbers are one-line errors.
 TEST_F(Cli, BenchPrintsOneJsonLineAndRejectsBadInput) {

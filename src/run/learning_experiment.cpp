@@ -83,6 +83,8 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
                      "outputs (about two minutes)")
           .at_least(1),
       rule_option_spec("rcond", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("precision", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("eigensolver", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
       integer_option("epochs", "", "epochs per run (at most 10⁹, as --iters)")
           .at_least(1)
           .at_most(1e9),

@@ -1,8 +1,9 @@
 // Learning experiment — the base of the experiments that train a network through a simulator. It
-// declares the learning options once (--batch, --rcond, --epochs, --time, --eval-every and the
-// checkpoint options), offers every learning rule, checks before a run that it is limited and
-// that its Jacobian steps and evaluations fit, and gives the experiment's problem at one batch
-// (its reference case) to `physgrad bench` and the micro-benchmarks.
+// declares the learning options once (--batch, --rcond, --precision, --eigensolver, --epochs,
+// --time, --eval-every and the checkpoint options), offers every learning rule, checks before a
+// run that it is limited and that its Jacobian steps and evaluations fit, and gives the
+// experiment's problem at one batch (its reference case) to `physgrad bench` and the
+// micro-benchmarks.
 #pragma once
 
 #include <cstdint>
