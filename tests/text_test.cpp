@@ -91,8 +91,13 @@ TEST(Text, UnknownNamesAreRefusedWithTheKnownOnes) {
   EXPECT_EQ(unknown_name_text("rule", "", {}), "unknown rule '' (known: )");
   EXPECT_EQ(comma_list({"a", "b", "c"}), "a, b, c");
   EXPECT_EQ(value_named(kColours, "blue", "colour"), Colour::kBlue);
-  EXPECT_EQ(name_of(kColours, Colour::kRed), "red");
-  EXPECT_EQ(name_of(kColours, static_cast<Colour>(7)), "");
+  EXPECT_EQ(name_of(kColours, Colour::kRed, "Colour"), "red");
+  try {
+    name_of(kColours, static_cast<Colour>(7), "Colour");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "to_string: invalid Colour value 7");
+  }
   try {
     value_named(kColours, "green", "colour");
     ADD_FAILURE() << "no error";

@@ -78,13 +78,15 @@ Error unknown_name_error(std::string_view what, std::string_view name,
 template <class Enum, std::size_t N>
 using NameTable = std::array<std::pair<Enum, const char*>, N>;
 
-// The name of `value`; empty when the table has none.
+// The name of `value`; throws Error "to_string: invalid WHAT value 7" for a value the table lacks
+// (a number cast to the enum).
 template <class Enum, std::size_t N>
-std::string_view name_of(const NameTable<Enum, N>& names, Enum value) {
+std::string name_of(const NameTable<Enum, N>& names, Enum value, std::string_view what) {
   for (const auto& [candidate, name] : names) {
     if (candidate == value) return name;
   }
-  return {};
+  throw Error("to_string: invalid " + std::string(what) + " value " +
+              std::to_string(static_cast<long long>(value)));
 }
 
 // The value named `text`; throws unknown_name_error(what, text, every name of the table).

@@ -102,8 +102,7 @@ LocalInverseResult numerical(const Simulator& simulator, InverseMethod method, c
 }  // namespace
 
 std::string to_string(InverseMethod method) {
-  const std::string_view name = name_of(kMethodNames, method);
-  return name.empty() ? "unknown" : std::string(name);
+  return name_of(kMethodNames, method, "InverseMethod");
 }
 
 InverseMethod parse_inverse_method(const std::string& text) {

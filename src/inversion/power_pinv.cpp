@@ -37,17 +37,6 @@ constexpr NameTable<PinvEigensolver, 3> kEigensolverNames{{
     {PinvEigensolver::kSubset, "subset"},
 }};
 
-// The name of `value` in `names`; Error naming the enum `what` for a value not in the table.
-template <typename Enum, std::size_t N>
-std::string checked_name(const NameTable<Enum, N>& names, Enum value, const char* what) {
-  const std::string_view name = name_of(names, value);
-  if (name.empty()) {
-    throw Error(std::string("to_string: invalid ") + what + " value " +
-                std::to_string(static_cast<int>(value)));
-  }
-  return std::string(name);
-}
-
 void check_rcond(double rcond) {
   if (!(rcond >= 0 && rcond < 1)) {
     std::ostringstream msg;
@@ -310,7 +299,7 @@ void check_square(const Matrix& w, const char* form) {
 }  // namespace
 
 std::string to_string(PinvBackend backend) {
-  return checked_name(kBackendNames, backend, "PinvBackend");
+  return name_of(kBackendNames, backend, "PinvBackend");
 }
 
 PinvBackend parse_pinv_backend(const std::string& name) {
@@ -318,7 +307,7 @@ PinvBackend parse_pinv_backend(const std::string& name) {
 }
 
 std::string to_string(PinvPrecision precision) {
-  return checked_name(kPrecisionNames, precision, "PinvPrecision");
+  return name_of(kPrecisionNames, precision, "PinvPrecision");
 }
 
 PinvPrecision parse_pinv_precision(const std::string& name) {
@@ -326,7 +315,7 @@ PinvPrecision parse_pinv_precision(const std::string& name) {
 }
 
 std::string to_string(PinvEigensolver eigensolver) {
-  return checked_name(kEigensolverNames, eigensolver, "PinvEigensolver");
+  return name_of(kEigensolverNames, eigensolver, "PinvEigensolver");
 }
 
 PinvEigensolver parse_pinv_eigensolver(const std::string& name) {

@@ -43,11 +43,7 @@ void check_shape(const char* what, const Eigen::Ref<const Eigen::ArrayXXd>& z,
 }  // namespace
 
 std::string to_string(Activation activation) {
-  if (const std::string_view name = name_of(kNames, activation); !name.empty()) {
-    return std::string(name);
-  }
-  throw Error(std::string("to_string: unknown Activation value ") +
-              std::to_string(static_cast<int>(activation)));
+  return name_of(kNames, activation, "Activation");
 }
 
 Activation parse_activation(const std::string& text) {

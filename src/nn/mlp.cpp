@@ -97,11 +97,7 @@ void backpropagate(const Mlp& mlp, const MlpCache& cache, const Matrix& gy, Visi
 }  // namespace
 
 std::string to_string(Init init) {
-  if (const std::string_view name = name_of(kInitNames, init); !name.empty()) {
-    return std::string(name);
-  }
-  throw Error(std::string("to_string: unknown Init value ") +
-              std::to_string(static_cast<int>(init)));
+  return name_of(kInitNames, init, "Init");
 }
 
 Init parse_init(const std::string& text) { return value_named(kInitNames, text, "init"); }

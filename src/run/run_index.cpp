@@ -331,6 +331,35 @@ std::vector<std::string> varying_keys(const std::vector<const IndexedRun*>& runs
   return keys;
 }
 
+// A group of runs as a table row shows it: its medians (NaN when none) and how the runs ended.
+struct RunGroup {
+  double metric, loss, test_loss, iterations, seconds;
+  std::string ended;    // the distinct terminations, in the order first seen
+  bool failed = false;  // a run stopped on a non-finite value or diverged
+};
+
+RunGroup summarize(const std::vector<const IndexedRun*>& runs) {
+  std::vector<double> metric, loss, test, iterations, seconds;
+  std::vector<std::string> ends;
+  bool failed = false;
+  for (const IndexedRun* run : runs) {
+    metric.push_back(run->metric);
+    loss.push_back(run->loss);
+    test.push_back(run->test_loss);
+    iterations.push_back(run->iterations);
+    seconds.push_back(run->seconds);
+    if (std::find(ends.begin(), ends.end(), run->termination) == ends.end()) {
+      ends.push_back(run->termination);
+    }
+    failed = failed || run->termination == "numerical_failure" || run->termination == "diverged";
+  }
+  return {median(metric), median(loss), median(test), median(iterations), median(seconds),
+          comma_list(ends), failed};
+}
+
+// A table cell: "–" for NaN.
+std::string cell(double value) { return std::isnan(value) ? std::string("–") : text_of(value); }
+
 // One row per run folder and run label with its setting (the parameters that vary among that
 // label's runs, seeds aside); the figures are medians over the seeds. Linear in the runs (up to
 // the logarithms of the maps).
@@ -367,26 +396,13 @@ HtmlTable every_run_table(const std::vector<IndexedFolder>& folders) {
     }
     for (const auto& key : groups) {
       const std::vector<const IndexedRun*>& runs = members[key];
-      std::vector<double> loss, test, iterations, seconds;
-      std::vector<std::string> ends;
-      for (const IndexedRun* run : runs) {
-        loss.push_back(run->loss);
-        test.push_back(run->test_loss);
-        iterations.push_back(run->iterations);
-        seconds.push_back(run->seconds);
-        if (std::find(ends.begin(), ends.end(), run->termination) == ends.end()) {
-          ends.push_back(run->termination);
-        }
-      }
-      std::string ended;
-      for (const std::string& e : ends) ended += (ended.empty() ? "" : ", ") + e;
-      const auto cell = [](double v) { return std::isnan(v) ? std::string("–") : text_of(v); };
-      const auto whole = [&cell](double v) {
+      const RunGroup g = summarize(runs);
+      const auto whole = [](double v) {
         return v == std::round(v) && std::abs(v) < 1e15 ? std::to_string(std::llround(v)) : cell(v);
       };
       table.rows.push_back({folder.name, folder.experiment, key.first, key.second,
-                            std::to_string(runs.size()), cell(median(loss)), cell(median(test)),
-                            whole(median(iterations)), ended, cell(median(seconds))});
+                            std::to_string(runs.size()), cell(g.loss), cell(g.test_loss),
+                            whole(g.iterations), g.ended, cell(g.seconds)});
       table.links.push_back(std::vector<std::string>(table.header.size()));
       if (folder.has_report) table.links.back()[0] = folder.name + "/report.html";
     }
@@ -478,43 +494,27 @@ void add_comparison(HtmlSection& section, const std::vector<const IndexedFolder*
       if (runs.empty()) labels.push_back(run.label);
       runs.push_back(&run);
     }
-    // A rule's median; the lowest among rules none of whose runs failed (a run that stopped on a
+    // The lowest median among rules none of whose runs failed (a run that stopped on a
     // non-finite value or diverged is not the best, whatever its metric reads).
-    std::vector<double> medians;
+    std::vector<RunGroup> groups;
     double lowest = INFINITY;
     for (const std::string& label : labels) {
-      std::vector<double> values;
-      bool failed = false;
-      for (const IndexedRun* run : by_label[label]) {
-        values.push_back(run->metric);
-        failed = failed || run->termination == "numerical_failure" ||
-                 run->termination == "diverged";
-      }
-      medians.push_back(median(values));
-      if (!failed && std::isfinite(medians.back())) lowest = std::min(lowest, medians.back());
+      groups.push_back(summarize(by_label[label]));
+      const RunGroup& g = groups.back();
+      if (!g.failed && std::isfinite(g.metric)) lowest = std::min(lowest, g.metric);
     }
     for (std::size_t k = 0; k < labels.size(); ++k) {
       const std::vector<const IndexedRun*>& runs = by_label[labels[k]];
-      std::vector<double> values, seconds;
-      std::vector<std::string> ends;
-      for (const IndexedRun* run : runs) {
-        values.push_back(run->metric);
-        seconds.push_back(run->seconds);
-        if (std::find(ends.begin(), ends.end(), run->termination) == ends.end()) {
-          ends.push_back(run->termination);
-        }
-      }
-      std::string ended;
-      for (const std::string& e : ends) ended += (ended.empty() ? "" : ", ") + e;
-      const double m = medians[k];
+      std::vector<double> values;
+      for (const IndexedRun* run : runs) values.push_back(run->metric);
+      const double m = groups[k].metric;
       const std::string multiple = !std::isfinite(m) ? "–"
                                    : m == lowest     ? "best"
                                    : lowest > 0      ? text_of(m / lowest) + "×"
                                                      : "–";
-      const double s = median(seconds);
       table.rows.push_back({folder->name, options, labels[k], std::to_string(runs.size()),
-                            median_with_range(values), multiple, ended,
-                            std::isnan(s) ? "–" : text_of(s)});
+                            median_with_range(values), multiple, groups[k].ended,
+                            cell(groups[k].seconds)});
       table.links.push_back(std::vector<std::string>(table.header.size()));
       if (folder->has_report) table.links.back()[0] = folder->name + "/report.html";
       table.colours.push_back(std::vector<std::string>(table.header.size()));

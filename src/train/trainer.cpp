@@ -341,8 +341,7 @@ void TrainingRun::checkpoint() {
 }  // namespace
 
 std::string to_string(TrainingTermination termination) {
-  const std::string_view name = name_of(kTerminationNames, termination);
-  return name.empty() ? "unknown" : std::string(name);
+  return name_of(kTerminationNames, termination, "TrainingTermination");
 }
 
 TrainingTermination parse_training_termination(const std::string& text) {
