@@ -69,9 +69,9 @@ std::optional<Vector> ShardedJacobian::shared_gram_apply(const Vector& g,
   out.backend = PinvBackend::kGram;
   out.rcond_used = std::max(options.rcond, kMinGramRcond);
   DistributedPowerInfo power;
-  Vector x = distributed_power_part(*solver, std::move(columns), n, g, options.kappa,
-                                    out.rcond_used, &power);
-  shard_.sum(x);  // U Σ^{−1−κ} Uᵀ g, the same bits on every rank
+  // U Σ^{−1−κ} Uᵀ g, the same bits on every rank.
+  const Vector x = distributed_truncated_power(*solver, std::move(columns), n, g, options.kappa,
+                                               out.rcond_used, &power);
   out.rank = power.kept;
   out.sigma_max = power.sigma_max;
   out.sigma_min_kept = power.sigma_min_kept;

@@ -1,7 +1,6 @@
 #include "physgrad/parallel/distributed_eigen.hpp"
 
 #include <atomic>
-#include <cmath>
 #include <string>
 
 #include "physgrad/error.hpp"
@@ -26,30 +25,24 @@ std::vector<Index> block_cyclic_columns(Index n, Index block, int rank, int size
   return columns;
 }
 
-Vector distributed_power_part(DistributedEigensolver& solver, Matrix local, Index n,
-                              const Vector& g, double kappa, double rcond,
-                              DistributedPowerInfo* info) {
+Vector distributed_truncated_power(DistributedEigensolver& solver, Matrix local, Index n,
+                                   const Vector& g, double kappa, double rcond,
+                                   DistributedPowerInfo* info) {
+  const auto columns =
+      static_cast<Index>(block_cyclic_columns(n, solver.block(), solver.rank(), solver.size()).size());
+  if (local.rows() != n || local.cols() != columns || g.size() != n) {
+    throw Error("distributed truncated power: rank " + std::to_string(solver.rank()) + " holds " +
+                std::to_string(local.rows()) + "×" + std::to_string(local.cols()) +
+                " of an n = " + std::to_string(n) + " matrix (expected " + std::to_string(n) +
+                "×" + std::to_string(columns) + ") and a vector of " + std::to_string(g.size()));
+  }
   if (!all_finite(local) || !all_finite(g)) {
-    throw NumericalError("distributed_power_part: non-finite entry in the matrix or the vector");
+    throw NumericalError("distributed truncated power: non-finite entry in the matrix or the vector");
   }
-  const Vector lambda = solver.decompose(local, n);
-  const Vector sigma = lambda.cwiseMax(0.0).cwiseSqrt();  // rounding can leave λ slightly < 0
   DistributedPowerInfo out;
-  out.sigma_max = n > 0 ? sigma(n - 1) : 0.0;
-  out.kept = (sigma.array() > rcond * out.sigma_max).count();
-  out.sigma_min_kept = out.kept > 0 ? sigma(n - out.kept) : 0.0;
-  // Kept pairs are the trailing indices (ascending eigenvalues).
-  const std::vector<Index> columns =
-      block_cyclic_columns(n, solver.block(), solver.rank(), solver.size());
-  Vector part = Vector::Zero(n);
-  for (std::size_t s = 0; s < columns.size(); ++s) {
-    const Index i = columns[s];
-    if (i < n - out.kept) continue;
-    const auto u = local.col(static_cast<Index>(s));
-    part += u * (u.dot(g) * std::pow(sigma(i), -1 - kappa));
-  }
+  Vector x = solver.truncated_power(std::move(local), n, g, kappa, rcond, &out);
   if (info != nullptr) *info = out;
-  return part;
+  return x;
 }
 
 void set_distributed_gram_rows(Index rows) {

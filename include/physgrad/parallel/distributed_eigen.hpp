@@ -1,6 +1,6 @@
-// DistributedEigensolver — the eigendecomposition of a symmetric n × n matrix whose columns are
-// spread over the ranks (1 × K block-cyclic: column c lives on rank ⌊c / b⌋ mod K), and the
-// truncated power it serves: x = Σ_{σᵢ > τ·σ_max} uᵢ σᵢ^{−1−κ} (uᵢᵀ g), σᵢ² the eigenvalues.
+// DistributedEigensolver — the truncated power x = Σ_{σᵢ > τ·σ_max} uᵢ σᵢ^{−1−κ} (uᵢᵀ g) of a
+// symmetric n × n matrix U diag(σᵢ²) Uᵀ whose columns are spread over the ranks (1 × K
+// block-cyclic: column c lives on rank ⌊c / b⌋ mod K), without forming U.
 #pragma once
 
 #include <string>
@@ -14,8 +14,19 @@ namespace physgrad {
 // layout with blocks of `block` columns, ascending. Throws Error on block < 1 or a bad rank.
 std::vector<Index> block_cyclic_columns(Index n, Index block, int rank, int size);
 
-// Implemented over MPI by ScaLAPACK (pdsyevd; library physgrad_mpi, when CMake finds ScaLAPACK).
-// Every rank calls decompose() with the same n (a collective).
+// What a truncated power over a distributed matrix did.
+struct DistributedPowerInfo {
+  Index kept = 0;         // σᵢ > cut
+  double sigma_max = 0;   // √λ_max
+  double sigma_min_kept = 0;
+};
+
+// Implemented over MPI with ScaLAPACK (library physgrad_mpi, when CMake finds ScaLAPACK):
+// the matrix is reduced to a tridiagonal T = Qᵀ A Q together (pdsytrd), every rank takes the
+// eigenvalues of T (dsterf) and the eigenvectors S of its share of the kept ones (dstemr), and
+// x = Q S σ^{−1−κ} Sᵀ Qᵀ g (pdormtr, one sum of n doubles). Neither U nor any n × n matrix
+// beyond each rank's own columns is held. Every rank calls truncated_power() with the same
+// n, g, κ and τ (a collective).
 class DistributedEigensolver {
  public:
   virtual ~DistributedEigensolver() = default;
@@ -24,26 +35,17 @@ class DistributedEigensolver {
   virtual int rank() const = 0;
   virtual int size() const = 0;
   // `local` holds this rank's columns block_cyclic_columns(n, block(), rank(), size()) of the
-  // symmetric matrix (n × count; the lower triangle is read). Returns all n eigenvalues,
-  // ascending, the same on every rank, and overwrites `local` with the eigenvectors of the same
-  // indices (local column s: the eigenvector of eigenvalue columns[s]). Throws NumericalError
-  // when the solver fails.
-  virtual Vector decompose(Matrix& local, Index n) = 0;
+  // symmetric matrix (n × count, full columns; consumed). Returns x, the same bits on every
+  // rank. Throws NumericalError when a ScaLAPACK or LAPACK routine fails.
+  virtual Vector truncated_power(Matrix local, Index n, const Vector& g, double kappa,
+                                 double rcond, DistributedPowerInfo* info) = 0;
 };
 
-// What a truncated power over a distributed matrix did.
-struct DistributedPowerInfo {
-  Index kept = 0;         // σᵢ > cut
-  double sigma_max = 0;   // √λ_max
-  double sigma_min_kept = 0;
-};
-
-// This rank's part of Σ_{σᵢ > rcond·σ_max} uᵢ σᵢ^{−1−κ} (uᵢᵀ g) for the symmetric matrix
-// U diag(σᵢ²) Uᵀ held as in DistributedEigensolver::decompose (`local` is consumed); the sum of
-// the parts over the ranks is the result. Throws NumericalError on non-finite entries.
-Vector distributed_power_part(DistributedEigensolver& solver, Matrix local, Index n,
-                              const Vector& g, double kappa, double rcond,
-                              DistributedPowerInfo* info = nullptr);
+// solver.truncated_power() after checking the sizes (Error) and that `local` and `g` are finite
+// (NumericalError).
+Vector distributed_truncated_power(DistributedEigensolver& solver, Matrix local, Index n,
+                                   const Vector& g, double kappa, double rcond,
+                                   DistributedPowerInfo* info = nullptr);
 
 // From how many rows (B·m) a data-parallel Gram path hands its eigendecomposition to the
 // ranks' DistributedEigensolver instead of repeating it on every rank; 0 = never. Process-wide;

@@ -1,5 +1,5 @@
 // ScaLAPACK's DistributedEigensolver over MPI_COMM_WORLD (library physgrad_mpi, built when CMake
-// finds ScaLAPACK): a 1 × K BLACS process grid, blocks of 64 columns, pdsyevd.
+// finds ScaLAPACK): a 1 × K BLACS process grid, blocks of 64 columns, pdsytrd + dstemr + pdormtr.
 #pragma once
 
 #include <memory>
