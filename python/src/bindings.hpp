@@ -6,13 +6,24 @@
 
 #include <nlohmann/json.hpp>
 
+#include "physgrad/catalogue.hpp"
+#include "physgrad/physics/checked_simulator.hpp"
+
 namespace physgrad::python {
 
 void bind_direct(pybind11::module_& m);       // minimize, local_inverse, rules (direct.cpp)
-void bind_learning(pybind11::module_& m);     // the Jacobian step of HIG and GN (learning.cpp)
+void bind_learning(pybind11::module_& m);     // HIG/GN steps, SIP's targets (learning.cpp)
 void bind_experiments(pybind11::module_& m);  // experiments and run folders (experiments.cpp)
 
 // A JSON value as the Python value json.loads would give.
 pybind11::object to_python(const nlohmann::json& value);
+
+// Rule options given by keyword (**options), as RuleSettings: numbers and names, as params()
+// reports them; Error for any other value. The catalogue then refuses an unknown name and a value
+// outside the option's range. (direct.cpp)
+RuleSettings rule_settings(const pybind11::dict& given);
+
+// The simulator's work by kind, {"passes": …, "forward": …, …}. (direct.cpp)
+pybind11::dict counts_dict(const SimulatorCounts& counts);
 
 }  // namespace physgrad::python

@@ -12,10 +12,6 @@
 
 namespace physgrad::python {
 
-namespace {
-
-// The rule options minimize() takes by name (**options): numbers and names, as params() reports
-// them; the catalogue refuses a name no direct rule has and a value outside the option's range.
 RuleSettings rule_settings(const py::dict& given) {
   RuleSettings settings;
   for (const auto& [key, value] : given) {
@@ -39,6 +35,19 @@ RuleSettings rule_settings(const py::dict& given) {
   }
   return settings;
 }
+
+py::dict counts_dict(const SimulatorCounts& c) {
+  static const std::pair<const char*, long long SimulatorCounts::*> kinds[] = {
+      {"passes", &SimulatorCounts::passes},       {"forward", &SimulatorCounts::forward},
+      {"vjp", &SimulatorCounts::vjp},             {"jacobians", &SimulatorCounts::jacobians},
+      {"hessians", &SimulatorCounts::hessians},   {"reversals", &SimulatorCounts::reversals},
+      {"inverses", &SimulatorCounts::inverses}};
+  py::dict d;
+  for (const auto& [name, member] : kinds) d[name] = c.*member;
+  return d;
+}
+
+namespace {
 
 Vector optional_vector(const py::object& value, const char* name) {
   return value.is_none() ? Vector() : to_vector(value, "minimize", name);
@@ -101,18 +110,6 @@ MinimizeSummary run_minimize(const py::object& sim, const py::object& x0_value,
   } catch (const CallbackFailed&) {
     raise_kept(errors, "rule " + rule + ", iteration " + std::to_string(errors.iteration));
   }
-}
-
-// The simulator's work by kind, {"passes": …, "forward": …, …}.
-py::dict counts_dict(const SimulatorCounts& c) {
-  static const std::pair<const char*, long long SimulatorCounts::*> kinds[] = {
-      {"passes", &SimulatorCounts::passes},       {"forward", &SimulatorCounts::forward},
-      {"vjp", &SimulatorCounts::vjp},             {"jacobians", &SimulatorCounts::jacobians},
-      {"hessians", &SimulatorCounts::hessians},   {"reversals", &SimulatorCounts::reversals},
-      {"inverses", &SimulatorCounts::inverses}};
-  py::dict d;
-  for (const auto& [name, member] : kinds) d[name] = c.*member;
-  return d;
 }
 
 py::dict run_local_inverse(const py::object& sim, const py::object& y_value,

@@ -65,6 +65,29 @@ Vector to_vector(const py::handle& value, const std::string& who, const char* me
   return Eigen::Map<const Vector>(array.data(), array.size());
 }
 
+Matrix to_columns(const py::handle& value, const std::string& who, const char* name) {
+  DoubleArray array;
+  try {
+    array = DoubleArray::ensure(value);
+  } catch (py::error_already_set&) {
+  }
+  if (!array) {
+    throw Error(who + ": " + name + " is a " +
+                std::string(py::str(py::type::handle_of(value).attr("__name__"))) +
+                ", expected an array of numbers");
+  }
+  if (array.ndim() != 2) {
+    std::string shape;
+    for (py::ssize_t d = 0; d < array.ndim(); ++d) {
+      shape += (d == 0 ? "" : ", ") + std::to_string(array.shape(d));
+    }
+    throw Error(who + ": " + name + " has shape (" + shape +
+                "), expected (B, k): one sample a row");
+  }
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  return Eigen::Map<const RowMajor>(array.data(), array.shape(0), array.shape(1)).transpose();
+}
+
 PythonSimulator::PythonSimulator(py::object simulator, Index n, Index m, const Vector& x0,
                                  CallbackErrors& errors)
     : object_(std::move(simulator)), errors_(&errors), n_(n), m_(m) {

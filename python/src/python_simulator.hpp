@@ -53,6 +53,9 @@ py::array_t<double> to_numpy(const Matrix& m);  // row-major copy, shape (rows, 
 // `value` as a vector (any array-like of numbers, flattened when 1 × n or n × 1); throws Error
 // "WHO: METHOD returned ..." for anything else.
 Vector to_vector(const py::handle& value, const std::string& who, const char* method);
+// An argument `name` of shape (B, k) (any array-like of numbers) as the k × B matrix of its rows,
+// one sample per column; throws Error "WHO: NAME has shape …, expected (B, k)" otherwise.
+Matrix to_columns(const py::handle& value, const std::string& who, const char* name);
 
 class PythonSimulator final : public Simulator {
  public:
