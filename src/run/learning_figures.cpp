@@ -181,8 +181,7 @@ void LearningSweep::set_time_message(const std::string& tag, const std::string& 
                                      const std::string& what) const {
   const std::string sentence = lowest_value_sentence(
       final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }), what);
-  context_.set_message("loss_vs_time_" + file_tag + ".svg",
-                       sentence.substr(0, sentence.size() - 1) + ", after the same budget.",
+  context_.set_message("loss_vs_time_" + file_tag + ".svg", "After the same budget, " + sentence,
                        {"test_loss", what, labels(tag)});
 }
 
@@ -223,18 +222,23 @@ std::string lowest_value_sentence(const std::vector<LearningSweep::RuleValue>& v
             [](const auto& a, const auto& b) { return a.value < b.value; });
   if (finite.empty()) return "No rule ended with a finite " + what + ".";
   const auto& best = finite.front();
-  std::string out = best.label + "'s " + what;
+  std::string out = best.label + "'s " + what + " is ";
   if (finite.size() == 1) {
-    out += " is " + format_value(best.value);
-    for (const auto& v : values) {
-      if (!std::isfinite(v.value)) out += "; " + v.label + "'s is not finite";
-    }
-    return out + ".";
+    out += format_value(best.value);
+  } else {
+    const auto& next = finite[1];
+    const std::string ratio = best.value > 0 ? format_value(next.value / best.value) : "∞";
+    out += ratio + "× below " + next.label + "'s (" + format_value(best.value) + " vs " +
+           format_value(next.value) + ")";
   }
-  const auto& next = finite[1];
-  const std::string ratio = best.value > 0 ? format_value(next.value / best.value) : "∞";
-  return out + " is " + ratio + "× below " + next.label + "'s (" + format_value(best.value) +
-         " vs " + format_value(next.value) + ").";
+  // Every other rule: the finite values upwards, then those that are not finite.
+  for (std::size_t k = 2; k < finite.size(); ++k) {
+    out += "; " + finite[k].label + "'s is " + format_value(finite[k].value);
+  }
+  for (const auto& v : values) {
+    if (!std::isfinite(v.value)) out += "; " + v.label + "'s is not finite";
+  }
+  return out + ".";
 }
 
 void LearningSweep::add_tables() const {

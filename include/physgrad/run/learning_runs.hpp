@@ -99,7 +99,8 @@ class LearningSweep {
   std::vector<RuleValue> final_medians(
       const std::string& tag, const std::function<double(const TrainingRecord&)>& value) const;
   // Makes the test loss vs training time figure of `tag` (add_loss_figures) the message: which
-  // rule's median final `what` is lowest within the same budget, and by how much.
+  // rule's median final `what` is lowest within the same budget, by how much, and the others'
+  // (lowest_value_sentence).
   void set_time_message(const std::string& tag, const std::string& file_tag,
                         const std::string& what = "final test loss") const;
   // Makes figure `file` the message for a metric other than the loss, the record's extra
@@ -131,9 +132,10 @@ class LearningSweep {
   std::deque<LearningResult> results_;  // stable addresses
 };
 
-// One sentence naming the rule with the lowest finite value and the ratio to the next:
-// "HIG's <what> is 191× below Adam's (0.000596 vs 0.114)" (no second finite value: "HIG's
-// <what> is 0.000596; Adam's is not finite").
+// One sentence naming the rule with the lowest finite value and the ratio to the next, then the
+// value of every other rule: "HIG's <what> is 191× below Adam's (0.000596 vs 0.114); Adam→HIG's
+// is 0.2; Gauss-Newton's is not finite." (no second finite value: "HIG's <what> is 0.000596;
+// Adam's is not finite.").
 std::string lowest_value_sentence(const std::vector<LearningSweep::RuleValue>& values,
                                   const std::string& what);
 
