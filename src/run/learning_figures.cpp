@@ -12,10 +12,6 @@ namespace physgrad::experiments {
 
 namespace {
 
-std::string rule_label(const std::string& id) {
-  return find_rule(RuleKind::kLearning, id).label;
-}
-
 double final_test_loss(const LearningResult& r) { return r.summary.history.back().test_loss; }
 
 std::string milliseconds(double seconds, long long steps) {
@@ -103,6 +99,7 @@ RunContext::Figure LearningSweep::metric_figure(
     Series s = median_band(first.label + (n > 1 ? ", median of " + std::to_string(n) : ""),
                            curves, color_for(first.id), log_y);
     s.markers = true;
+    s.dashed = !pretrained_rule(first.id).empty();  // and a colour of its own (color_for)
     // Over time the seeds are evaluated at different moments: each holds its last value, so
     // median and band change in steps.
     s.steps = n > 1 && progress == Progress::kTime;
@@ -172,7 +169,7 @@ std::vector<LearningSweep::RuleValue> LearningSweep::final_medians(
       const double v = value(run->summary.history.back());
       finals.push_back(std::isfinite(v) ? v : NAN);
     }
-    out.push_back({rule_label(group.front()->id), median(finals)});
+    out.push_back({learning_run_label(group.front()->id), median(finals)});
   }
   return out;
 }
@@ -275,7 +272,8 @@ void LearningSweep::add_tables() const {
     losses.header.insert(losses.header.end(), {"median", "worst", "median / lowest"});
     std::vector<double> medians;
     for (const std::string& id : ids) {
-      std::vector<std::string> row = {rule_label(id)}, saturated = {rule_label(id)};
+      const std::string label = learning_run_label(id);
+      std::vector<std::string> row = {label}, saturated = {label};
       std::vector<double> values;
       for (const long long seed : seeds) {
         const LearningResult* r = find(tag, id, seed);
@@ -317,7 +315,8 @@ void LearningSweep::add_tables() const {
 
   RunContext::Table timing{"Time per training step in milliseconds, mean over seeds: the "
                            "forward pass of network, physics and loss; the gradient or stacked "
-                           "Jacobian; the inversion inside gn/hig; the rest of the update",
+                           "Jacobian; the inversion inside gn/hig; the rest of the update (a "
+                           "pretrained run: over its Adam and its rule's steps together)",
                            {"rule", "setting", "forward (ms)", "gradient or Jacobian (ms)",
                             "inversion (ms)", "update (ms)", "total (ms)"},
                            {}};
@@ -334,7 +333,8 @@ void LearningSweep::add_tables() const {
         total.train_seconds += r.summary.train_seconds;
       }
       const long long steps = total.iterations;
-      timing.rows.push_back({rule_label(id), tag, milliseconds(total.forward_seconds, steps),
+      timing.rows.push_back({learning_run_label(id), tag,
+                             milliseconds(total.forward_seconds, steps),
                              milliseconds(total.derivative_seconds, steps),
                              milliseconds(total.inversion_seconds, steps),
                              milliseconds(total.update_seconds, steps),
