@@ -161,7 +161,7 @@ class HeatInverse final : public LearningExperiment {
     LearningSweep sweep(settings, context, kDefaults);
     std::vector<std::pair<const LearningResult*, Mlp>> trained;
     const Index size = physics.input_dim();
-    for (const std::string& id : settings.texts("optimizers")) {
+    for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
       // tanh with Glorot weights: after 10 s the test x loss was ~1.3 (SIP) and ~1.8 (Adam),
       // against ~8 and ~21 with ReLU and He weights, whose larger start leaves more error in
       // the modes diffusion erases and L cannot see. The same start for every rule.
@@ -268,7 +268,7 @@ class HeatInverse final : public LearningExperiment {
       std::string losses;
       for (const auto& [run, network] : trained) {
         const Vector x = network.forward(test.set.inputs.col(k)).col(0);
-        panels.push_back({find_rule(RuleKind::kLearning, run->id).label, grid(x)});
+        panels.push_back({learning_run_label(run->id), grid(x)});
         losses += (losses.empty() ? "" : ", ") + run->label + " " +
                   format_value(0.5 * (x - test.truth.col(k)).squaredNorm());
       }

@@ -123,7 +123,7 @@ class HigToy final : public LearningExperiment {
           record.extras["y1"] = y(0);
           record.extras["y2"] = y(1);
         };
-        for (const std::string& id : settings.texts("optimizers")) {
+        for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
           Mlp network = make_network(seed);
           sweep.run(id, tag, {{"lambda", lambda}, {"seed", seed}}, network, problem, train_set,
                     &test_set, observe);

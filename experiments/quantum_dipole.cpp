@@ -186,7 +186,7 @@ class QuantumDipoleExperiment final : public LearningExperiment {
     LearningSweep sweep(settings, context, rule_defaults());
     const std::string tag = "Nt=" + std::to_string(config.steps);
     std::vector<std::pair<const LearningResult*, Mlp>> trained;
-    for (const std::string& id : settings.texts("optimizers")) {
+    for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
       Mlp network = make_network(physics, seed);
       const LearningResult& r =
           sweep.run(id, tag, {{"seed", seed}}, network, problem, train_set, &test_set);

@@ -116,7 +116,7 @@ class SinRotationExperiment final : public LearningExperiment {
           record.extras["tracked_x1"] = x(0);
           record.extras["tracked_x2"] = x(1);
         };
-        for (const std::string& id : settings.texts("optimizers")) {
+        for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
           Mlp network(kWidths, Activation::kRelu);
           network.initialize(seed, Init::kHeUniform);  // the same start for every rule
           const LearningResult& r = sweep.run(id, tag, {{"xi", xi}, {"phi", phi}, {"seed", seed}},
@@ -154,8 +154,12 @@ class SinRotationExperiment final : public LearningExperiment {
         "solution; lr is each rule's step size, training s its time without evaluations",
         {"ξ", "rule", "lr", "iterations", "training s", "test loss", "x-distance"},
         {}};
+    std::vector<std::string> ids;  // the runs' rules (and pretrained runs) in the order they ran
+    for (const Row& row : rows) {
+      if (std::find(ids.begin(), ids.end(), row.id) == ids.end()) ids.push_back(row.id);
+    }
     for (const double xi : xis) {
-      for (const std::string& id : settings.texts("optimizers")) {
+      for (const std::string& id : ids) {
         std::vector<double> loss, distance, seconds, iterations;
         double lr = 0;
         for (const Row& row : rows) {

@@ -112,6 +112,25 @@ const RuleInfo& find_rule(Kind kind, const std::string& id) {
                            rule_ids(kind));
 }
 
+std::string pretrained_run_id(const std::string& rule) {
+  return std::string(kPretrainingRule) + "-" + rule;
+}
+
+std::string pretrained_rule(const std::string& id) {
+  const std::string prefix = pretrained_run_id("");
+  if (id.size() <= prefix.size() || id.compare(0, prefix.size(), prefix) != 0) return {};
+  const std::string rule = id.substr(prefix.size());
+  const std::vector<std::string> ids = rule_ids(Kind::kLearning);
+  return std::find(ids.begin(), ids.end(), rule) != ids.end() ? rule : std::string();
+}
+
+std::string learning_run_label(const std::string& id) {
+  const std::string rule = pretrained_rule(id);
+  if (rule.empty()) return find_rule(Kind::kLearning, id).label;
+  return find_rule(Kind::kLearning, kPretrainingRule).label + "→" +
+         find_rule(Kind::kLearning, rule).label;
+}
+
 std::vector<OptionDescription> rule_options(const RuleInfo& rule) {
   return std::visit([](const auto& o) { return descriptions(o); }, rule.defaults);
 }

@@ -2,6 +2,8 @@
 // method lowers the loss it starts from, except Gauss-Newton, whose failures are reported.
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include "experiment_runs.hpp"
 
 namespace physgrad::experiments {
@@ -53,6 +55,56 @@ TEST(PoissonExperiment, AdamHigAndSipLowerTheLoss) {
       run("poisson", {{"optimizers", "adam,hig,sip"}, {"grid", "4"}, {"train-size", "128"},
                       {"test-size", "32"}, {"iters", "30"}});
   EXPECT_EQ(expect_every_run_improves(context), 3u);
+}
+
+// --pretrain 6: next to the HIG run, one that Adam trains for 6 iterations first. Up to the switch
+// its metrics are the Adam run's to the bit; after it, HIG's steps report their inversion; its
+// summary entry names the switch and Adam's settings, and the message compares all three runs.
+TEST(PoissonExperiment, PretrainedRunFollowsTheAdamRunThenInvertsTheJacobian) {
+  const RunContext context =
+      run("poisson", {{"optimizers", "adam,hig"}, {"grid", "4"}, {"train-size", "128"},
+                      {"test-size", "32"}, {"iters", "12"}, {"eval-every", "2"},
+                      {"pretrain", "6"}});
+  ASSERT_EQ(context.runs().size(), 3u);
+  const nlohmann::json& entry = context.runs()[2];
+  EXPECT_EQ(entry["label"], "Adam→HIG (4x4)");
+  EXPECT_EQ(entry["optimizer"], "adam-hig");
+  EXPECT_EQ(entry["iterations"], 12);
+  EXPECT_EQ(entry["params"]["pretrain_iterations"], 6);
+  EXPECT_EQ(entry["params"]["pretrain_batch"], 64);  // the Adam run's
+  EXPECT_EQ(entry["params"]["pretrain_lr"], context.runs()[0]["params"]["lr"]);
+  EXPECT_EQ(entry["params"]["lr"], context.runs()[1]["params"]["lr"]);  // the HIG run's
+  EXPECT_EQ(entry["params"]["batch"], 16);
+
+  std::map<long long, const nlohmann::json*> adam;
+  for (const nlohmann::json& row : context.metrics()) {
+    if (row["optimizer"] == "adam") adam[row["iteration"].get<long long>()] = &row;
+  }
+  std::size_t before = 0, after = 0;
+  for (const nlohmann::json& row : context.metrics()) {
+    if (row["optimizer"] != "adam-hig") continue;
+    const long long iteration = row["iteration"];
+    if (iteration <= 6) {
+      ASSERT_TRUE(adam.count(iteration)) << iteration;
+      EXPECT_EQ(row["test_loss"], (*adam[iteration])["test_loss"]) << iteration;
+      EXPECT_EQ(row["train_loss"], (*adam[iteration])["train_loss"]) << iteration;
+      EXPECT_EQ(row["x_l1"], (*adam[iteration])["x_l1"]) << iteration;
+      EXPECT_FALSE(row.contains("pinv_path")) << iteration;
+      ++before;
+    } else {
+      EXPECT_FALSE(row.value("pinv_path", "").empty()) << iteration;
+      EXPECT_GE(row.value("kept_directions", 0), 1) << iteration;
+      ++after;
+    }
+  }
+  EXPECT_EQ(before, 4u);  // iterations 0, 2, 4 and 6
+  EXPECT_EQ(after, 3u);   // 8, 10 and 12
+  // Each rule named once, after a space (so that "HIG's" is not found in "Adam→HIG's").
+  for (const std::string rule : {"Adam", "HIG", "Adam→HIG"}) {
+    EXPECT_NE(context.message().find(" " + rule + "'s "), std::string::npos)
+        << rule << ": " << context.message();
+  }
+  EXPECT_EQ(context.message_metric().labels.size(), 3u);
 }
 
 }  // namespace

@@ -84,6 +84,34 @@ TEST_F(Resume, KilledRunContinuesFromItsLastPeriodicCheckpoint) {
   EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 2);
 }
 
+// A run Adam pretrains for 40 iterations before HIG takes over (--pretrain), killed just after
+// its checkpoint in the Adam part, at the switch and in the HIG part (the 7th, 8th and 9th
+// checkpoint: the HIG run before it writes five and its finished entry), continues to the
+// metrics and networks of the uninterrupted run.
+TEST_F(Resume, PretrainedRunContinuesFromItsAdamPartOrItsRulePart) {
+  const std::string pretrained =
+      "run hig-toy --seeds 1 --lambda 0.01 --optimizers hig --pretrain 40 --iters 100 "
+      "--eval-every 10 --checkpoint-every 20 --out ";
+  ASSERT_EQ(run(pretrained + "whole").exit_code, 0);
+  for (const auto& [kill, iteration] : {std::pair{7, 20}, {8, 40}, {9, 60}}) {
+    const std::string folder = "part" + std::to_string(kill);
+    ASSERT_EQ(run(pretrained + folder, "PHYSGRAD_FAULT=kill@checkpoint:" + std::to_string(kill))
+                  .exit_code,
+              128 + SIGKILL);
+    const std::string saved = read_file(dir_ / folder / "checkpoint.pgc");
+    const nlohmann::json current =
+        nlohmann::json::parse(saved.substr(saved.find('\n') + 1))["current"];  // past the header
+    EXPECT_EQ(current["key"]["optimizer"], "adam-hig");
+    EXPECT_EQ(current["state"]["summary"]["iterations"], iteration);
+    const Outcome resumed = run("resume " + folder);
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    EXPECT_EQ(metrics_without_time(dir_ / folder), metrics_without_time(dir_ / "whole")) << kill;
+    EXPECT_EQ(read_file(dir_ / folder / "networks.json"),
+              read_file(dir_ / "whole" / "networks.json"))
+        << kill;
+  }
+}
+
 TEST_F(Resume, DamagedCheckpointOrConfigIsOneLineAndChangesNothing) {
   ASSERT_TRUE(WIFEXITED(interrupt("part", SIGTERM)));
   const fs::path folder = dir_ / "part";

@@ -56,6 +56,17 @@ std::vector<std::string> rule_ids(RuleKind kind);
 // Throws Error naming the id and the known ones of that kind.
 const RuleInfo& find_rule(RuleKind kind, const std::string& id);
 
+// A learning run that Adam pretrains before its rule takes over (TrainerOptions::pretraining, the
+// HIG paper's Adam→HIG) has the id "adam-<rule>" and the label "Adam→<the rule's label>".
+inline constexpr const char* kPretrainingRule = "adam";
+std::string pretrained_run_id(const std::string& rule);  // "adam-hig" for "hig"
+// The learning rule that takes over in the pretrained run `id` ("hig" for "adam-hig"); empty
+// when `id` is not a pretrained run's.
+std::string pretrained_rule(const std::string& id);
+// The label of learning run `id`: its rule's ("HIG"), or "Adam→HIG" for "adam-hig". Throws Error
+// like find_rule for an id that is neither.
+std::string learning_run_label(const std::string& id);
+
 // Overrides of rules' options by name, e.g. {{"lr", 0.5}, {"inverse", "lbfgs"}} or from the
 // command line; values as params() reports them (numbers; names for the choices). A name replaces
 // the default of every rule that has that option and a rule without it ignores it (so one

@@ -37,7 +37,7 @@ std::string interpolate(const std::array<Rgb, N>& stops, double t) {
 }  // namespace
 
 std::string color_for(std::string_view key) {
-  static constexpr std::array<std::pair<std::string_view, const char*>, 13> kFixed{{
+  static constexpr std::array<std::pair<std::string_view, const char*>, 15> kFixed{{
       {"gd", "#1f77b4"},
       {"sgd", "#6baed6"},
       {"momentum", "#17becf"},
@@ -51,6 +51,8 @@ std::string color_for(std::string_view key) {
       {"pg", "#bcbd22"},
       {"hig", "#00633a"},
       {"sip", "#000000"},
+      {"adam-gn", "#c51b7d"},  // learning runs pretrained with Adam (catalogue.hpp)
+      {"adam-hig", "#7b3294"},
   }};
   for (const auto& [id, color] : kFixed) {
     if (id == key) return color;

@@ -62,9 +62,14 @@ void require_learning_sizes(const Settings& settings, Index outputs,
         settings.has("iters")
             ? static_cast<double>(settings.integer("iters"))
             : static_cast<double>(settings.integer("epochs")) * std::ceil(train_size / batch);
-    const double runs = settings.has("optimizers")
-                            ? static_cast<double>(settings.texts("optimizers").size())
-                            : 1.0;
+    // A pretrained run (--pretrain) next to each gn or hig run.
+    double runs = 1;
+    if (settings.has("optimizers")) {
+      const std::vector<std::string> ids = settings.texts("optimizers");
+      const bool pretrained = settings.has("pretrain") && settings.integer("pretrain") > 0;
+      runs = static_cast<double>(ids.size());
+      for (const std::string& id : ids) runs += pretrained && (id == "gn" || id == "hig") ? 1 : 0;
+    }
     const long long every = settings.integer("eval-every");
     require_memory(1024 * runs * (iterations / static_cast<double>(every) + 2),
                    "--eval-every: " + std::to_string(every) + " (" + format_value(iterations) +
@@ -104,6 +109,16 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
       real_option("checkpoint-seconds", "60",
                   "save a checkpoint of the run in progress at least this often (wall seconds)")
           .above(0),
+      integer_option("pretrain", defaults.pretrain,
+                     "N > 0: each gn or hig run gets a twin that Adam trains for its first N "
+                     "iterations (Adam→GN, Adam→HIG; Adam with the settings and batch of the Adam "
+                     "run) before the rule continues from that network; --iters, --epochs and "
+                     "--time count the whole run, and with --iters ≤ N there is no such run; "
+                     "0: none" +
+                         std::string(defaults.pretrain.empty() ? " (default)" : ""))
+          .at_least(0)
+          .at_most(1e9)
+          .quick("1"),
   };
 }
 

@@ -12,10 +12,6 @@ namespace physgrad::experiments {
 
 namespace {
 
-std::string rule_label(const std::string& id) {
-  return find_rule(RuleKind::kLearning, id).label;
-}
-
 double final_test_loss(const LearningResult& r) { return r.summary.history.back().test_loss; }
 
 std::string milliseconds(double seconds, long long steps) {
@@ -103,6 +99,7 @@ RunContext::Figure LearningSweep::metric_figure(
     Series s = median_band(first.label + (n > 1 ? ", median of " + std::to_string(n) : ""),
                            curves, color_for(first.id), log_y);
     s.markers = true;
+    s.dashed = !pretrained_rule(first.id).empty();  // and a colour of its own (color_for)
     // Over time the seeds are evaluated at different moments: each holds its last value, so
     // median and band change in steps.
     s.steps = n > 1 && progress == Progress::kTime;
@@ -172,7 +169,7 @@ std::vector<LearningSweep::RuleValue> LearningSweep::final_medians(
       const double v = value(run->summary.history.back());
       finals.push_back(std::isfinite(v) ? v : NAN);
     }
-    out.push_back({rule_label(group.front()->id), median(finals)});
+    out.push_back({learning_run_label(group.front()->id), median(finals)});
   }
   return out;
 }
@@ -181,8 +178,7 @@ void LearningSweep::set_time_message(const std::string& tag, const std::string& 
                                      const std::string& what) const {
   const std::string sentence = lowest_value_sentence(
       final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }), what);
-  context_.set_message("loss_vs_time_" + file_tag + ".svg",
-                       sentence.substr(0, sentence.size() - 1) + ", after the same budget.",
+  context_.set_message("loss_vs_time_" + file_tag + ".svg", "After the same budget, " + sentence,
                        {"test_loss", what, labels(tag)});
 }
 
@@ -223,18 +219,23 @@ std::string lowest_value_sentence(const std::vector<LearningSweep::RuleValue>& v
             [](const auto& a, const auto& b) { return a.value < b.value; });
   if (finite.empty()) return "No rule ended with a finite " + what + ".";
   const auto& best = finite.front();
-  std::string out = best.label + "'s " + what;
+  std::string out = best.label + "'s " + what + " is ";
   if (finite.size() == 1) {
-    out += " is " + format_value(best.value);
-    for (const auto& v : values) {
-      if (!std::isfinite(v.value)) out += "; " + v.label + "'s is not finite";
-    }
-    return out + ".";
+    out += format_value(best.value);
+  } else {
+    const auto& next = finite[1];
+    const std::string ratio = best.value > 0 ? format_value(next.value / best.value) : "∞";
+    out += ratio + "× below " + next.label + "'s (" + format_value(best.value) + " vs " +
+           format_value(next.value) + ")";
   }
-  const auto& next = finite[1];
-  const std::string ratio = best.value > 0 ? format_value(next.value / best.value) : "∞";
-  return out + " is " + ratio + "× below " + next.label + "'s (" + format_value(best.value) +
-         " vs " + format_value(next.value) + ").";
+  // Every other rule: the finite values upwards, then those that are not finite.
+  for (std::size_t k = 2; k < finite.size(); ++k) {
+    out += "; " + finite[k].label + "'s is " + format_value(finite[k].value);
+  }
+  for (const auto& v : values) {
+    if (!std::isfinite(v.value)) out += "; " + v.label + "'s is not finite";
+  }
+  return out + ".";
 }
 
 void LearningSweep::add_tables() const {
@@ -271,7 +272,8 @@ void LearningSweep::add_tables() const {
     losses.header.insert(losses.header.end(), {"median", "worst", "median / lowest"});
     std::vector<double> medians;
     for (const std::string& id : ids) {
-      std::vector<std::string> row = {rule_label(id)}, saturated = {rule_label(id)};
+      const std::string label = learning_run_label(id);
+      std::vector<std::string> row = {label}, saturated = {label};
       std::vector<double> values;
       for (const long long seed : seeds) {
         const LearningResult* r = find(tag, id, seed);
@@ -313,7 +315,8 @@ void LearningSweep::add_tables() const {
 
   RunContext::Table timing{"Time per training step in milliseconds, mean over seeds: the "
                            "forward pass of network, physics and loss; the gradient or stacked "
-                           "Jacobian; the inversion inside gn/hig; the rest of the update",
+                           "Jacobian; the inversion inside gn/hig; the rest of the update (a "
+                           "pretrained run: over its Adam and its rule's steps together)",
                            {"rule", "setting", "forward (ms)", "gradient or Jacobian (ms)",
                             "inversion (ms)", "update (ms)", "total (ms)"},
                            {}};
@@ -330,7 +333,8 @@ void LearningSweep::add_tables() const {
         total.train_seconds += r.summary.train_seconds;
       }
       const long long steps = total.iterations;
-      timing.rows.push_back({rule_label(id), tag, milliseconds(total.forward_seconds, steps),
+      timing.rows.push_back({learning_run_label(id), tag,
+                             milliseconds(total.forward_seconds, steps),
                              milliseconds(total.derivative_seconds, steps),
                              milliseconds(total.inversion_seconds, steps),
                              milliseconds(total.update_seconds, steps),

@@ -111,17 +111,41 @@ LearningSweep::LearningSweep(const Settings& settings, RunContext& context,
   RunContext::RunPlan& plan = context_.run_plan();
   if (plan.started >= 0) return;
   plan.started = steady_seconds();
-  if (settings_.has("optimizers")) plan_runs(settings_.texts("optimizers").size());
+  if (settings_.has("optimizers")) plan_runs(settings_.texts("optimizers"));
+  if (settings_.has("pretrain") && settings_.integer("pretrain") > 0 &&
+      pretraining_iterations() == 0) {
+    context_.add_note("No run is pretrained with Adam: --pretrain " +
+                      std::to_string(settings_.integer("pretrain")) +
+                      " would leave none of the --iters " +
+                      std::to_string(settings_.integer("iters")) + " to the rule taking over.");
+  }
 }
 
-void LearningSweep::plan_runs(std::size_t rules) {
+long long LearningSweep::pretraining_iterations() const {
+  const long long n = settings_.has("pretrain") ? settings_.integer("pretrain") : 0;
+  return n > 0 && !(settings_.has("iters") && n >= settings_.integer("iters")) ? n : 0;
+}
+
+std::vector<std::string> LearningSweep::run_ids(const std::vector<std::string>& rules) const {
+  std::vector<std::string> ids;
+  for (const std::string& id : rules) {
+    ids.push_back(id);
+    if (pretraining_iterations() > 0 &&
+        make_learning_update(id)->need() == UpdateNeed::kStackedJacobian) {
+      ids.push_back(pretrained_run_id(id));
+    }
+  }
+  return ids;
+}
+
+void LearningSweep::plan_runs(const std::vector<std::string>& rules) {
   RunContext::RunPlan& plan = context_.run_plan();
   if (plan.runs > 0) return;
   long long runs = settings_.has("seeds") ? settings_.integer("seeds") : 1;
   for (const auto& [name, value] : settings_.json().items()) {
     if (value.is_array() && name != "optimizers") runs *= static_cast<long long>(value.size());
   }
-  plan.runs = runs * static_cast<long long>(rules);
+  plan.runs = runs * static_cast<long long>(run_ids(rules).size());
   std::string line = context_.experiment_name() + ": " + std::to_string(plan.runs) +
                      (plan.runs == 1 ? " run" : " runs") + " (rules × settings × seeds)";
   if (settings_.has("time")) {
@@ -140,21 +164,29 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                                          const LearningProblem& problem,
                                          const Dataset& train_set, const Dataset* test_set,
                                          std::function<void(const Mlp&, TrainingRecord&)> observe) {
-  const auto found = defaults_.find(id);
-  const RuleDefaults defaults = found == defaults_.end() ? RuleDefaults{} : found->second;
-  RuleSettings rule = defaults.settings;
-  for (const auto& [name, value] : rule_settings(settings_, RuleKind::kLearning)) rule[name] = value;
-  const std::unique_ptr<LearningUpdate> update = make_learning_update(id, rule);
+  // A pretrained run: its Adam part as the Adam run of this sweep, then its rule.
+  const std::string pretrained = pretrained_rule(id);
+  const std::string rule = pretrained.empty() ? id : pretrained;
+  const std::unique_ptr<LearningUpdate> update = make_update(rule);
+  std::unique_ptr<LearningUpdate> pretraining;
 
   LearningResult result;
   result.id = id;
   result.tag = tag;
-  result.label = find_rule(RuleKind::kLearning, id).label + " (" + tag + ")";
+  result.label = learning_run_label(id) + " (" + tag + ")";
   result.seed = params.value("seed", 0LL);
 
   TrainerOptions options;
-  options.batch_size = settings_.has("batch") ? settings_.integer("batch")
-                                               : defaults.batch.value_or(options.batch_size);
+  options.batch_size = batch_size(rule);
+  if (!pretrained.empty()) {
+    if (pretraining_iterations() == 0) {
+      throw Error(context_.experiment_name() + ": run '" + id +
+                  "' needs --pretrain N, below the --iters limit if one is given");
+    }
+    pretraining = make_update(kPretrainingRule);
+    options.pretraining =
+        Pretraining{pretraining.get(), batch_size(kPretrainingRule), pretraining_iterations()};
+  }
   if (settings_.has("iters")) options.max_iterations = settings_.integer("iters");
   if (settings_.has("epochs")) options.max_epochs = settings_.integer("epochs");
   if (settings_.has("time")) options.time_budget_seconds = settings_.real("time");
@@ -206,6 +238,12 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
 
   nlohmann::json run_params = update->params();
   run_params["batch"] = options.batch_size;
+  if (options.pretraining) {  // the iteration after which the rule took over, and Adam's settings
+    run_params["pretrain_iterations"] = options.pretraining->iterations;
+    run_params["pretrain_batch"] = options.pretraining->batch_size;
+    const nlohmann::json adam = pretraining->params();
+    for (const auto& [key, value] : adam.items()) run_params["pretrain_" + key] = value;
+  }
   result.params = run_params;
   for (const auto& [key, value] : params.items()) run_params[key] = value;
   for (const TrainingRecord& r : result.summary.history) {
@@ -240,6 +278,22 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                                           {"update", s.update_seconds}}}});
   results_.push_back(std::move(result));
   return results_.back();
+}
+
+std::unique_ptr<LearningUpdate> LearningSweep::make_update(const std::string& rule) const {
+  const auto found = defaults_.find(rule);
+  RuleSettings options = found == defaults_.end() ? RuleSettings{} : found->second.settings;
+  for (const auto& [name, value] : rule_settings(settings_, RuleKind::kLearning)) {
+    options[name] = value;
+  }
+  return make_learning_update(rule, options);
+}
+
+Index LearningSweep::batch_size(const std::string& rule) const {
+  if (settings_.has("batch")) return settings_.integer("batch");
+  const auto found = defaults_.find(rule);
+  const std::optional<Index> own = found == defaults_.end() ? std::nullopt : found->second.batch;
+  return own.value_or(TrainerOptions{}.batch_size);
 }
 
 TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Mlp& network,

@@ -410,12 +410,13 @@ HtmlTable every_run_table(const std::vector<IndexedFolder>& folders) {
   return table;
 }
 
-// The colour rule `id` has in every figure (the catalogue's), or a palette colour for an id that
-// names no rule.
+// The colour rule `id` has in every figure (the catalogue's; a pretrained run's, color_for's),
+// or a palette colour for an id that names no rule.
 std::string rule_colour(const std::string& id, std::size_t fallback) {
   for (const RuleInfo& rule : rule_catalogue()) {
     if (rule.id == id) return rule.colour;
   }
+  if (!pretrained_rule(id).empty()) return color_for(id);
   return palette_color(fallback);
 }
 

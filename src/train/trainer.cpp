@@ -1,10 +1,12 @@
 #include "physgrad/train/trainer.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numeric>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <utility>
 
 #include "physgrad/error.hpp"
@@ -26,11 +28,17 @@ constexpr NameTable<TrainingTermination, 5> kTerminationNames{{
     {TrainingTermination::kInterrupted, "interrupted"},
 }};
 
-// Iterations · batch size / samples.
+// Samples seen / training samples: iterations · batch size / samples, the pretraining's
+// updates at its batch size.
 double epochs(const TrainingSummary& s) {
-  return s.samples > 0 ? static_cast<double>(s.iterations) * static_cast<double>(s.batch_size) /
-                             static_cast<double>(s.samples)
-                       : 0.0;
+  if (s.samples <= 0) return 0.0;
+  const long long pretrained =
+      s.pretraining ? std::min(s.iterations, s.pretraining->iterations) : 0;
+  const double seen =
+      static_cast<double>(pretrained) *
+          static_cast<double>(s.pretraining ? s.pretraining->batch_size : 0) +
+      static_cast<double>(s.iterations - pretrained) * static_cast<double>(s.batch_size);
+  return seen / static_cast<double>(s.samples);
 }
 
 void check_trainer_options(const TrainerOptions& options) {
@@ -61,6 +69,20 @@ void check_trainer_options(const TrainerOptions& options) {
   if (options.max_step_halvings < 0) {
     throw Error("max_step_halvings must be ≥ 0, got " + std::to_string(options.max_step_halvings));
   }
+  if (const std::optional<Pretraining>& p = options.pretraining) {
+    if (p->update == nullptr) throw Error("pretraining: no update rule");
+    if (p->batch_size < 1) {
+      throw Error("pretraining: batch size must be ≥ 1, got " + std::to_string(p->batch_size));
+    }
+    if (p->iterations < 1) {
+      throw Error("pretraining: iterations must be ≥ 1, got " + std::to_string(p->iterations));
+    }
+    if (options.max_iterations && p->iterations >= *options.max_iterations) {
+      throw Error("pretraining: its " + std::to_string(p->iterations) +
+                  " iterations leave none of the max_iterations " +
+                  std::to_string(*options.max_iterations) + " to the run's rule");
+    }
+  }
 }
 
 // One training run: the loop state between iterations (what a checkpoint holds) around
@@ -76,7 +98,12 @@ class TrainingRun {
         test_set_(test_set),
         options_(options),
         n_(train_set.size()),
-        batch_size_(std::min(options.batch_size, train_set.size())) {
+        run_batch_size_(std::min(options.batch_size, train_set.size())),
+        pretraining_batch_size_(
+            options.pretraining ? std::min(options.pretraining->batch_size, train_set.size()) : 0) {
+    if (options.pretraining && options.pretraining->update == &update) {
+      throw Error("pretraining: its update rule is the run's own; give it another object");
+    }
     step_state_.shard = Shard(options.communicator);
     step_state_.max_step_halvings = options.max_step_halvings;
   }
@@ -84,6 +111,20 @@ class TrainingRun {
   TrainingSummary run();
 
  private:
+  // With a pretraining, its rule makes the updates after fewer than its iterations; the run's
+  // rule makes the others.
+  bool pretrains_after(long long iterations) const {
+    return options_.pretraining && iterations < options_.pretraining->iterations;
+  }
+  LearningUpdate& rule_after(long long iterations) const {
+    return pretrains_after(iterations) ? *options_.pretraining->update : update_;
+  }
+  // Where the data order stands after `iterations` updates: (epoch, start of the next batch).
+  // Every epoch of one rule takes the same number of batches; the run's rule begins a new epoch
+  // when it takes over from a pretraining.
+  std::pair<long long, Index> position(long long iterations) const;
+  // The pretraining's last update was made: the run's rule takes over.
+  void end_pretraining();
   void restore(const TrainerState& state);
   // What happens between two iterations besides the iteration schedule: a stop request, the
   // time budget and an evaluation due by time, agreed by all ranks of a data-parallel run (any
@@ -112,7 +153,12 @@ class TrainingRun {
   const Dataset* test_set_;
   const TrainerOptions& options_;
   const Index n_;
-  const Index batch_size_;
+  const Index run_batch_size_;
+  const Index pretraining_batch_size_;  // 0 without a pretraining
+
+  // The rule making the updates now and its batch size: the pretraining's, then the run's.
+  LearningUpdate* rule_ = nullptr;
+  Index batch_size_ = 0;
 
   TrainingSummary summary_;
   StepState step_state_;
@@ -129,6 +175,9 @@ TrainingSummary TrainingRun::run() {
   std::optional<DeferStopPolls> ranks_stop_together;
   if (step_state_.shard.active()) ranks_stop_together.emplace();
   update_.reset();
+  if (options_.pretraining) options_.pretraining->update->reset();
+  rule_ = &rule_after(0);
+  batch_size_ = pretrains_after(0) ? pretraining_batch_size_ : run_batch_size_;
   if (options_.resume != nullptr) restore(*options_.resume);
   describe_run();
   if (options_.resume == nullptr) evaluate();
@@ -168,14 +217,49 @@ TrainingSummary TrainingRun::run() {
       }
       batch_start_ += batch_size_;
       if (options_.eval_every && summary_.iterations % *options_.eval_every == 0) evaluate();
+      if (rule_ != &rule_after(summary_.iterations)) {
+        if (!evaluated_ && !evaluate()) break;
+        end_pretraining();
+        break;
+      }
     }
     if (ended()) break;
+    if (batch_start_ == 0) continue;  // the run's rule took over: a new epoch has begun
     ++epoch_;
     batch_start_ = 0;
     if (!options_.eval_every) evaluate();
   }
   if (!evaluated_) evaluate();
+  if (rule_ != &update_ && summary_.termination != TrainingTermination::kNumericalFailure) {
+    summary_.message += std::string(summary_.message.empty() ? "" : "; ") +
+                        "ended in the pretraining (" + rule_->id() + "), before " + update_.id() +
+                        " took over";
+  }
   return summary_;
+}
+
+std::pair<long long, Index> TrainingRun::position(long long iterations) const {
+  const auto batches = [this](Index batch_size) {
+    return static_cast<long long>((n_ + batch_size - 1) / batch_size);
+  };
+  long long first_epoch = 0;
+  if (options_.pretraining) {
+    const long long per_epoch = batches(pretraining_batch_size_);
+    if (pretrains_after(iterations)) {
+      return {iterations / per_epoch, (iterations % per_epoch) * pretraining_batch_size_};
+    }
+    const long long pretrained = options_.pretraining->iterations;
+    first_epoch = (pretrained + per_epoch - 1) / per_epoch;
+    iterations -= pretrained;
+  }
+  const long long per_epoch = batches(run_batch_size_);
+  return {first_epoch + iterations / per_epoch, (iterations % per_epoch) * run_batch_size_};
+}
+
+void TrainingRun::end_pretraining() {
+  rule_ = &update_;
+  batch_size_ = run_batch_size_;
+  std::tie(epoch_, batch_start_) = position(summary_.iterations);
 }
 
 void TrainingRun::restore(const TrainerState& state) {
@@ -183,35 +267,42 @@ void TrainingRun::restore(const TrainerState& state) {
   const auto fits = [count](const Vector& v, bool may_be_empty) {
     return v.size() == count || (may_be_empty && v.size() == 0);
   };
+  const long long iterations = state.summary.iterations;
+  const Index batch_size = pretrains_after(iterations) ? pretraining_batch_size_ : run_batch_size_;
   std::string problem;
   if (!fits(state.parameters, false) || !fits(state.last_evaluated, false) ||
       !fits(state.last_step, true) || state.before_last_step.size() != state.last_step.size()) {
     problem = "its vectors do not have the network's " + std::to_string(count) + " weights";
   } else if (state.epoch < 0 || state.batch_start < 0 || state.batch_start >= n_ ||
-             state.batch_start % batch_size_ != 0) {
+             state.batch_start % batch_size != 0) {
     problem = "epoch " + std::to_string(state.epoch) + ", batch start " +
               std::to_string(state.batch_start) + " do not fit " + std::to_string(n_) +
-              " samples in batches of " + std::to_string(batch_size_);
-  } else if (const long long batches = (n_ + batch_size_ - 1) / batch_size_;
-             state.epoch != state.summary.iterations / batches ||
-             state.batch_start / batch_size_ != state.summary.iterations % batches) {
-    // Every epoch takes the same number of batches, so the position follows from the count.
+              " samples in batches of " + std::to_string(batch_size);
+  } else if (iterations < 0 ||
+             position(iterations) != std::make_pair(state.epoch, state.batch_start)) {
+    // The position follows from the count (position()).
     problem = "epoch " + std::to_string(state.epoch) + " and batch start " +
               std::to_string(state.batch_start) + " do not follow from its " +
-              std::to_string(state.summary.iterations) + " iterations (" +
-              std::to_string(batches) + " batches per epoch)";
+              std::to_string(iterations) + " iterations in batches of " +
+              std::to_string(batch_size) + " of " + std::to_string(n_) + " samples" +
+              (options_.pretraining ? " after a pretraining of " +
+                                          std::to_string(options_.pretraining->iterations)
+                                    : "");
   } else if (state.summary.history.empty() || state.summary.termination) {
     problem = "it has no history or belongs to a finished run";
   }
   if (!problem.empty()) throw Error("cannot resume training from this state: " + problem);
+  rule_ = &rule_after(iterations);
+  batch_size_ = batch_size;
   network_.set_parameters(state.parameters);
-  update_.restore(state.update_state, count);
+  rule_->restore(state.update_state, count);
   summary_ = state.summary;
   epoch_ = state.epoch;
   batch_start_ = state.batch_start;
   step_state_.last_step = state.last_step;
   step_state_.before_last_step = state.before_last_step;
-  step_state_.last_step_halvable = update_.steps_can_be_halved();
+  step_state_.last_step_halvable =
+      iterations > 0 && rule_after(iterations - 1).steps_can_be_halved();
   last_evaluated_ = state.last_evaluated;
   evaluated_ = summary_.history.back().iteration == summary_.iterations &&
                network_.parameters() == last_evaluated_;
@@ -244,7 +335,7 @@ bool TrainingRun::evaluate() {
     return false;
   }
   if (options_.on_evaluate) options_.on_evaluate(network_, record);
-  if (summary_.iterations > 0) record.step = update_.step_info();
+  if (summary_.iterations > 0) record.step = rule_->step_info();
   summary_.history.push_back(record);
   last_evaluated_ = network_.parameters();
   evaluated_ = true;
@@ -255,7 +346,7 @@ bool TrainingRun::evaluate() {
 // One update on the samples `batch`; false when training must stop. Every rank of a
 // data-parallel run sees the same combined numbers and takes the same branches.
 bool TrainingRun::step(const std::vector<Index>& batch) {
-  const StepReport report = train_step(network_, update_, problem_, train_set_.select(batch),
+  const StepReport report = train_step(network_, *rule_, problem_, train_set_.select(batch),
                                        step_state_);
   summary_.forward_seconds += report.forward_seconds;
   summary_.derivative_seconds += report.derivative_seconds;
@@ -264,7 +355,7 @@ bool TrainingRun::step(const std::vector<Index>& batch) {
   summary_.counts += report.counts;
   evaluated_ = evaluated_ && !report.applied() && !report.undone && report.halvings == 0;
   if (!report.applied()) {
-    stop_for_numbers(update_.id() + ": " + describe_failure(report, summary_.iterations));
+    stop_for_numbers(rule_->id() + ": " + describe_failure(report, summary_.iterations));
     return false;
   }
   summary_.update_seconds += report.update_seconds;
@@ -311,7 +402,12 @@ void TrainingRun::describe_run() {
   summary_.params = update_.params();
   summary_.parameters = network_.num_parameters();
   summary_.samples = n_;
-  summary_.batch_size = batch_size_;
+  summary_.batch_size = run_batch_size_;
+  summary_.pretraining.reset();
+  if (const std::optional<Pretraining>& p = options_.pretraining) {
+    summary_.pretraining = TrainingSummary::Pretraining{p->update->id(), p->update->params(),
+                                                        pretraining_batch_size_, p->iterations};
+  }
   summary_.limits.clear();
   const auto limit = [this](const char* name, const auto& value) {
     if (value) summary_.limits.emplace_back(name, static_cast<double>(*value));
@@ -330,7 +426,7 @@ void TrainingRun::checkpoint() {
     state.last_step = step_state_.last_step;
     state.before_last_step = step_state_.before_last_step;
     state.last_evaluated = last_evaluated_;
-    state.update_state = update_.state();
+    state.update_state = rule_->state();
     state.summary = summary_;
     options_.on_checkpoint(state);
   }
@@ -351,7 +447,12 @@ TrainingTermination parse_training_termination(const std::string& text) {
 std::string brief_report(const TrainingSummary& s) {
   const double initial = s.history.empty() ? NAN : s.history.front().train_loss;
   const double final_loss = s.history.empty() ? NAN : s.history.back().train_loss;
-  return s.update + ": " + std::to_string(s.iterations) + " iterations (" +
+  std::string pretrained;
+  if (s.pretraining) {
+    pretrained = " after " + std::to_string(std::min(s.iterations, s.pretraining->iterations)) +
+                 " iterations of " + s.pretraining->update;
+  }
+  return s.update + pretrained + ": " + std::to_string(s.iterations) + " iterations (" +
          report_number(epochs(s)) + " epochs), " + std::to_string(s.counts.passes) +
          " simulator passes, train loss " + report_number(initial) + " → " +
          report_number(final_loss) + ", " +
@@ -365,8 +466,18 @@ std::string full_report(const TrainingSummary& s) {
   out += report_row("batch size", std::to_string(s.batch_size));
   out += "\nRule\n";
   out += report_row("update", s.update);
-  for (const auto& [name, value] : s.params.items()) {
-    out += report_row(name, value.is_string() ? value.get<std::string>() : value.dump());
+  const auto add_params = [&out](const nlohmann::json& params) {
+    for (const auto& [name, value] : params.items()) {
+      out += report_row(name, value.is_string() ? value.get<std::string>() : value.dump());
+    }
+  };
+  add_params(s.params);
+  if (s.pretraining) {
+    out += "\nPretraining (its rule makes the first updates)\n";
+    out += report_row("update", s.pretraining->update);
+    out += report_row("iterations", std::to_string(s.pretraining->iterations));
+    out += report_row("batch size", std::to_string(s.pretraining->batch_size));
+    add_params(s.pretraining->params);
   }
   out += "\nLimits\n";
   for (const auto& [name, value] : s.limits) out += report_row(name, report_number(value));

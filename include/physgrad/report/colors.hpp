@@ -9,7 +9,8 @@
 namespace physgrad {
 
 // A fixed colour for each optimizer id (gd, momentum, adam, newton, bfgs, lbfgs, gn, lm, ig,
-// pg, sgd, hig, sip) and a palette colour chosen by a hash of the key otherwise; "#rrggbb".
+// pg, sgd, hig, sip) and pretrained learning run (adam-gn, adam-hig), and a palette colour
+// chosen by a hash of the key otherwise; "#rrggbb".
 std::string color_for(std::string_view key);
 // The index-th colour of a ten-colour categorical palette (cycling).
 std::string palette_color(std::size_t index);

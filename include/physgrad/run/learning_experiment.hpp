@@ -1,8 +1,8 @@
 // Learning experiment — the base of the experiments that train a network through a simulator. It
 // declares the learning options once (--batch, --rcond, --precision, --eigensolver, --epochs,
-// --time, --eval-every and the checkpoint options), offers every learning rule, checks before a
-// run that it is limited and that its Jacobian steps and evaluations fit, and gives the
-// experiment's problem at one batch (its reference case) to `physgrad bench` and the
+// --time, --eval-every, the checkpoint options and --pretrain), offers every learning rule,
+// checks before a run that it is limited and that its Jacobian steps and evaluations fit, and
+// gives the experiment's problem at one batch (its reference case) to `physgrad bench` and the
 // micro-benchmarks.
 #pragma once
 
@@ -43,6 +43,7 @@ struct LearningDefaults {
   std::string eval_every{};  // --eval-every
   // The help of --eval-every, for an experiment whose default depends on other options.
   std::string eval_every_help{};
+  std::string pretrain{};  // --pretrain, Adam iterations
 };
 
 class LearningExperiment : public Experiment {

@@ -21,17 +21,19 @@ namespace physgrad::experiments {
 struct RunKey;
 
 struct LearningResult {
-  std::string id;     // update rule id
+  std::string id;     // update rule id, or a pretrained run's ("adam-hig", catalogue.hpp)
   std::string tag;    // the setting, e.g. "λ=0.01"
-  std::string label;  // "HIG (λ=0.01)"
+  std::string label;  // "HIG (λ=0.01)", "Adam→HIG (λ=0.01)"
   long long seed = 0;
-  nlohmann::json params;  // the rule's params() and the batch size
+  // The rule's params() and the batch size; for a pretrained run also pretrain_iterations (after
+  // which its rule took over), pretrain_batch and Adam's params() as pretrain_<name>.
+  nlohmann::json params;
   TrainingSummary summary;
 };
 
 // An experiment's choices for one rule where they differ from the catalogue's defaults, and its
 // mini-batch size (unset: TrainerOptions' default); --lr, --rcond and --batch override them for
-// every rule.
+// every rule (the Adam part of a pretrained run included).
 struct RuleDefaults {
   RuleSettings settings;
   std::optional<Index> batch;
@@ -51,12 +53,20 @@ class LearningSweep {
   LearningSweep(const Settings& settings, RunContext& context,
                 std::map<std::string, RuleDefaults> defaults);
 
-  // The number of rules the experiment runs when --optimizers is not given (it chose them):
-  // the run count the progress lines plan with. The first call counts.
-  void plan_runs(std::size_t rules);
+  // The rules the experiment runs when --optimizers is not given (it chose them): their runs
+  // (run_ids) are the run count the progress lines plan with. The first call counts.
+  void plan_runs(const std::vector<std::string>& rules);
+
+  // The runs of `rules`, in order: each rule, and after each rule that inverts the stacked
+  // Jacobian (gn, hig), when --pretrain N is given (N > 0 and below the --iters limit), its run
+  // pretrained with Adam ("adam-hig"). An experiment trains each of these ids.
+  std::vector<std::string> run_ids(const std::vector<std::string>& rules) const;
 
   // Trains `network` with rule `id` and records it; `params` (e.g. {"lambda", "seed"}) are
-  // added to the summary entry and to every metrics row.
+  // added to the summary entry and to every metrics row. For a pretrained run ("adam-hig") the
+  // first --pretrain iterations are Adam's, with the settings and batch size of this sweep's
+  // Adam run, and the rule continues from that network to the end of the run's limits (which
+  // count the whole run); its history is one curve.
   const LearningResult& run(const std::string& id, const std::string& tag,
                             const nlohmann::json& params, Mlp& network,
                             const LearningProblem& problem, const Dataset& train_set,
@@ -99,7 +109,8 @@ class LearningSweep {
   std::vector<RuleValue> final_medians(
       const std::string& tag, const std::function<double(const TrainingRecord&)>& value) const;
   // Makes the test loss vs training time figure of `tag` (add_loss_figures) the message: which
-  // rule's median final `what` is lowest within the same budget, and by how much.
+  // rule's median final `what` is lowest within the same budget, by how much, and the others'
+  // (lowest_value_sentence).
   void set_time_message(const std::string& tag, const std::string& file_tag,
                         const std::string& what = "final test loss") const;
   // Makes figure `file` the message for a metric other than the loss, the record's extra
@@ -124,6 +135,12 @@ class LearningSweep {
   TrainingSummary train_or_resume(const RunKey& key, Mlp& network, LearningUpdate& update,
                                   const LearningProblem& problem, const Dataset& train_set,
                                   const Dataset* test_set, TrainerOptions options);
+  // Learning rule `rule` as this sweep runs it: the experiment's choices with the settings given
+  // for every rule (--lr, --rcond, …), and its batch size.
+  std::unique_ptr<LearningUpdate> make_update(const std::string& rule) const;
+  Index batch_size(const std::string& rule) const;
+  // --pretrain when it makes pretrained runs (> 0 and below the --iters limit), else 0.
+  long long pretraining_iterations() const;
 
   const Settings& settings_;
   RunContext& context_;
@@ -131,9 +148,10 @@ class LearningSweep {
   std::deque<LearningResult> results_;  // stable addresses
 };
 
-// One sentence naming the rule with the lowest finite value and the ratio to the next:
-// "HIG's <what> is 191× below Adam's (0.000596 vs 0.114)" (no second finite value: "HIG's
-// <what> is 0.000596; Adam's is not finite").
+// One sentence naming the rule with the lowest finite value and the ratio to the next, then the
+// value of every other rule: "HIG's <what> is 191× below Adam's (0.000596 vs 0.114); Adam→HIG's
+// is 0.2; Gauss-Newton's is not finite." (no second finite value: "HIG's <what> is 0.000596;
+// Adam's is not finite.").
 std::string lowest_value_sentence(const std::vector<LearningSweep::RuleValue>& values,
                                   const std::string& what);
 

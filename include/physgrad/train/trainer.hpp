@@ -56,13 +56,22 @@ struct TrainingSummary {
   SimulatorCounts counts;  // this process's simulator work in the steps (evaluations excluded)
 
   // What ran, set by train(): the rule and its settings, the weights |θ|, the training samples,
-  // the batch size and the limits set (name, value).
+  // the batch size and the limits set (name, value); with a pretraining
+  // (TrainerOptions::pretraining) its rule, settings, batch size and the iteration after which
+  // `update` took over.
   std::string update;
   nlohmann::json params;
   Index parameters = 0;
   Index samples = 0;
   Index batch_size = 0;
   std::vector<std::pair<std::string, double>> limits;
+  struct Pretraining {
+    std::string update;
+    nlohmann::json params;
+    Index batch_size = 0;
+    long long iterations = 0;
+  };
+  std::optional<Pretraining> pretraining;
 };
 
 // Everything a run needs to continue exactly where it was, taken between two iterations. The
@@ -77,6 +86,14 @@ struct TrainerState {
   Vector last_evaluated;     // θ at the last evaluation (whose losses were finite)
   nlohmann::json update_state;  // LearningUpdate::state()
   TrainingSummary summary;      // the history and timings so far
+};
+
+// The first part of a run made by another rule, as the HIG paper trains with Adam before HIG
+// (TrainerOptions::pretraining).
+struct Pretraining {
+  LearningUpdate* update = nullptr;  // not the run's rule
+  Index batch_size = 32;
+  long long iterations = 1;  // the updates it makes, ≥ 1 and below max_iterations
 };
 
 struct TrainerOptions {
@@ -119,6 +136,14 @@ struct TrainerOptions {
   // For rules whose steps can be halved (gn, hig): how often a step that led to a non-finite
   // batch is retried at half its length before training stops.
   int max_step_halvings = 10;
+  // The first pretraining->iterations updates are made by pretraining->update on batches of its
+  // batch size; the network is evaluated there and the run's rule takes over from that θ, with
+  // a state of its own (reset) and its batch size, at the start of a new epoch. The iteration
+  // count, the training time, the history and the limits run on across the switch, which
+  // depends on the iteration count alone: a resumed or data-parallel run switches where an
+  // uninterrupted one does. A checkpoint holds the state of the rule making the updates then.
+  // max_epochs counts the pretraining's epochs too, its last (perhaps partial) one whole.
+  std::optional<Pretraining> pretraining;
 };
 
 // Trains `network` in place. Throws Error on mismatched dimensions, invalid options, a
