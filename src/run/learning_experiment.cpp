@@ -46,10 +46,17 @@ void require_learning_sizes(const Settings& settings, Index outputs,
     // The matrix with the eigendecomposition's copy and workspace; the rows when they are
     // formed (the normal path, rows > weights).
     require_memory(8 * (3 * k * k + (rows > parameters ? rows * parameters : 0)), what);
-    const double work = rows * parameters * k + k * k * k;
+    // The Gram path (rows ≤ weights) forms J Jᵀ from the layer factors, an entry costing
+    // Σ_l (w_l + w_{l+1} + 1) multiply-adds (nn/dense_layer_gram.hpp); the normal path forms J
+    // and Jᵀ J (rows·weights² multiply-adds). Then the k × k eigendecomposition.
+    double entry = 0;
+    for (std::size_t i = 0; i + 1 < widths.size(); ++i) {
+      entry += static_cast<double>(widths[i] + widths[i + 1] + 1);
+    }
+    const double work = (rows <= parameters ? rows * rows * entry : rows * parameters * k) + k * k * k;
     if (work > kMaxStepMultiplyAdds) {
       throw Error(what + " takes " + format_value(work) + " multiply-adds, more than the " +
-                  format_value(kMaxStepMultiplyAdds) + " (about two minutes) a step may take");
+                  format_value(kMaxStepMultiplyAdds) + " (a few minutes on one core) a step may take");
     }
   }
   // Each evaluation keeps a record and a metrics row per run (about 1 KiB).
@@ -84,8 +91,8 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
   return {
       integer_option("batch", "",
                      "mini-batch size for every rule (default: each rule's own); with gn or hig "
-                     "one step may take at most 10¹² multiply-adds, B·m·|θ|·min(B·m, |θ|) for m "
-                     "outputs (about two minutes)")
+                     "one step may take at most 10¹² multiply-adds (docs/cli.md, forming J Jᵀ "
+                     "and its eigendecomposition; a few minutes)")
           .at_least(1),
       rule_option_spec("rcond", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
       rule_option_spec("precision", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),

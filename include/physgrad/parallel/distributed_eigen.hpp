@@ -47,11 +47,12 @@ Vector distributed_truncated_power(DistributedEigensolver& solver, Matrix local,
                                    const Vector& g, double kappa, double rcond,
                                    DistributedPowerInfo* info = nullptr);
 
-// From how many rows (B·m) a data-parallel Gram path hands its eigendecomposition to the
-// ranks' DistributedEigensolver instead of repeating it on every rank; 0 = never. Process-wide;
-// the default is kDefaultDistributedGramRows (docs/distributed.md: below it two ranks on one
-// machine were slower than one). Throws Error on a negative value.
-inline constexpr Index kDefaultDistributedGramRows = 2048;
+// From how many rows (B·m) a data-parallel Gram path hands its truncated power to the ranks'
+// DistributedEigensolver instead of repeating the eigendecomposition on every rank; 0 = never.
+// Process-wide; the default is kDefaultDistributedGramRows (docs/distributed.md: from there two
+// ranks on one machine were faster than one, and the MPI equality tests' configurations stay
+// below it). Throws Error on a negative value.
+inline constexpr Index kDefaultDistributedGramRows = 1024;
 void set_distributed_gram_rows(Index rows);
 Index distributed_gram_rows();
 

@@ -91,8 +91,9 @@ OptionSpec sample_count_option(std::string name, std::string default_text, std::
 // The bytes one sample needs at least: its `data_values` doubles (inputs, targets, context) and
 // the activations of a network of `widths` kept for the backward pass.
 double sample_bytes(const std::vector<Index>& widths, Index data_values);
-// A Jacobian step forms a k × k matrix, k = min(B·m, |θ|), from B·m rows of |θ| entries: about
-// B·m·|θ|·k + k³ multiply-adds, at most this many (about two minutes on one core).
+// A Jacobian step forms a k × k matrix, k = min(B·m, |θ|), from B·m rows of |θ| entries — J Jᵀ
+// from the layer factors, (B·m)²·Σ_l (w_l + w_{l+1} + 1) multiply-adds, or J and Jᵀ J,
+// B·m·|θ|² — and decomposes it (k³): at most this many (a few minutes on one core).
 inline constexpr double kMaxStepMultiplyAdds = 1e12;
 
 }  // namespace physgrad::experiments
