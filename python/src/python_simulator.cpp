@@ -40,15 +40,16 @@ namespace {
 
 using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
-DoubleArray as_array(const py::handle& value, const std::string& who, const char* method) {
+// `value` as a C-ordered double array; otherwise an Error "<lead> <its type>, expected an array
+// of numbers".
+DoubleArray as_array(const py::handle& value, const std::string& lead) {
   DoubleArray array;
   try {
     array = DoubleArray::ensure(value);
   } catch (py::error_already_set&) {
   }
   if (!array) {
-    throw Error(who + ": " + method + " returned " +
-                std::string(py::str(py::type::handle_of(value).attr("__name__"))) +
+    throw Error(lead + " " + std::string(py::str(py::type::handle_of(value).attr("__name__"))) +
                 ", expected an array of numbers");
   }
   return array;
@@ -57,7 +58,7 @@ DoubleArray as_array(const py::handle& value, const std::string& who, const char
 }  // namespace
 
 Vector to_vector(const py::handle& value, const std::string& who, const char* method) {
-  const DoubleArray array = as_array(value, who, method);
+  const DoubleArray array = as_array(value, who + ": " + method + " returned");
   if (array.ndim() > 2 || (array.ndim() == 2 && array.shape(0) != 1 && array.shape(1) != 1)) {
     throw_wrong_result(who, method, array.ndim() >= 1 ? array.shape(0) : 1,
                        array.ndim() >= 2 ? array.shape(1) : -1, array.size(), -1);
@@ -66,16 +67,7 @@ Vector to_vector(const py::handle& value, const std::string& who, const char* me
 }
 
 Matrix to_columns(const py::handle& value, const std::string& who, const char* name) {
-  DoubleArray array;
-  try {
-    array = DoubleArray::ensure(value);
-  } catch (py::error_already_set&) {
-  }
-  if (!array) {
-    throw Error(who + ": " + name + " is a " +
-                std::string(py::str(py::type::handle_of(value).attr("__name__"))) +
-                ", expected an array of numbers");
-  }
+  const DoubleArray array = as_array(value, who + ": " + name + " is a");
   if (array.ndim() != 2) {
     std::string shape;
     for (py::ssize_t d = 0; d < array.ndim(); ++d) {
@@ -149,7 +141,7 @@ Matrix PythonSimulator::jacobian(const Vector& x, const Vector& context) const {
   if (!has_jacobian_) return finite_difference(x);
   return call_python(*errors_, "jacobian", [&] {
     const py::object out = object_.attr("jacobian")(to_numpy(x));
-    const DoubleArray array = as_array(out, "simulator '" + name_ + "'", "jacobian");
+    const DoubleArray array = as_array(out, "simulator '" + name_ + "': jacobian returned");
     if (array.ndim() != 2 || array.shape(0) != m_ || array.shape(1) != n_) {
       throw_wrong_result("simulator '" + name_ + "'", "jacobian",
                          array.ndim() >= 1 ? array.shape(0) : 0,

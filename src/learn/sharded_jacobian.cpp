@@ -8,6 +8,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
 #include "physgrad/parallel/distributed_eigen.hpp"
+#include "physgrad/timing.hpp"
 
 namespace physgrad {
 
@@ -57,9 +58,6 @@ std::optional<Vector> ShardedJacobian::shared_gram_apply(const Vector& g,
                 std::to_string(g.size()) + " entries");
   }
   using Clock = std::chrono::steady_clock;
-  const auto seconds_since = [](Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-  };
   auto start = Clock::now();
   Matrix columns =
       whole().gram_columns(block_cyclic_columns(n, solver->block(), solver->rank(), solver->size()));
