@@ -123,24 +123,30 @@ class SymmetricOperator final : public JacobianOperator {
   const Matrix* g_;
 };
 
-// The eigensolve modes the benchmarks compare: 0 dsyevd (all pairs), 1 dsyevr (pairs above the
-// cutoff), 2 ssyevd, 3 ssyevr (the same in float), 4 auto precision and eigensolver.
+// The eigensolve modes the benchmarks compare, by index: 0 dsyevd (all pairs), 1 dsyevr (pairs
+// above the cutoff), 2 ssyevd, 3 ssyevr (the same in float), 4 auto precision and eigensolver,
+// 5 dsytrd + QL rotations applied to the vector (the tridiagonal eigensolver), 6 ssytrd + QL.
+struct EigensolveMode {
+  PinvPrecision precision;
+  PinvEigensolver eigensolver;
+  const char* label;
+};
+constexpr EigensolveMode kEigensolveModes[] = {
+    {PinvPrecision::kDouble, PinvEigensolver::kFull, "dsyevd"},
+    {PinvPrecision::kDouble, PinvEigensolver::kSubset, "dsyevr above cutoff"},
+    {PinvPrecision::kFloat, PinvEigensolver::kFull, "ssyevd"},
+    {PinvPrecision::kFloat, PinvEigensolver::kSubset, "ssyevr above cutoff"},
+    {PinvPrecision::kAuto, PinvEigensolver::kAuto, "auto"},
+    {PinvPrecision::kDouble, PinvEigensolver::kTridiagonal, "dsytrd + QL"},
+    {PinvPrecision::kFloat, PinvEigensolver::kTridiagonal, "ssytrd + QL"},
+};
+
 PowerPinvOptions eigensolve_options(std::int64_t mode, double kappa, double rcond) {
-  PowerPinvOptions options{.kappa = kappa, .rcond = rcond};
-  options.precision = mode == 4   ? PinvPrecision::kAuto
-                      : mode >= 2 ? PinvPrecision::kFloat
-                                  : PinvPrecision::kDouble;
-  options.eigensolver = mode == 4         ? PinvEigensolver::kAuto
-                        : mode % 2 == 1   ? PinvEigensolver::kSubset
-                                          : PinvEigensolver::kFull;
-  return options;
+  const EigensolveMode& m = kEigensolveModes[mode];
+  return {.kappa = kappa, .rcond = rcond, .precision = m.precision, .eigensolver = m.eigensolver};
 }
 
-const char* eigensolve_label(std::int64_t mode) {
-  static const char* const labels[] = {"dsyevd", "dsyevr above cutoff", "ssyevd",
-                                       "ssyevr above cutoff", "auto"};
-  return labels[mode];
-}
+const char* eigensolve_label(std::int64_t mode) { return kEigensolveModes[mode].label; }
 
 Vector eigen_product(const Matrix& gram, const Vector& g, double kappa, double rcond,
                      std::int64_t mode, PowerPinvInfo* info = nullptr,
@@ -169,10 +175,9 @@ GramCase gram_case(std::int64_t which, Index batch) {
 }
 
 // The eigen part of the HIG Gram path on the Gram matrix of a reference configuration at batch
-// range(1) in mode range(2) (eigensolve_options(): 0 dsyevd, what power_pinv uses by default,
-// 1 dsyevr above the cutoff, 2 ssyevd, 3 ssyevr, 4 auto after one call that sets `previous`).
+// range(1) in mode range(2) (kEigensolveModes; auto after one call that sets `previous`).
 // Counters: n, the kept rank, σ_max/σ_min,kept, whether float resolves the spectrum, what auto
-// ran (precision 1 float; eigensolver 1 subset), and rel_diff: the distance to the dsyevd result
+// ran (float 1; subset 1, tridiagonal 1), and rel_diff: the distance to the dsyevd result
 // relative to it (for mode 0 that of dsyevr).
 void eigen_route(benchmark::State& state) {
   const std::int64_t mode = state.range(2);
@@ -191,6 +196,7 @@ void eigen_route(benchmark::State& state) {
   state.counters["float_resolves"] = previous.float_resolves ? 1 : 0;
   state.counters["float"] = info.precision == PinvPrecision::kFloat ? 1 : 0;
   state.counters["subset"] = info.eigensolver == PinvEigensolver::kSubset ? 1 : 0;
+  state.counters["tridiagonal"] = info.eigensolver == PinvEigensolver::kTridiagonal ? 1 : 0;
   state.counters["rel_diff"] = (result - other).norm() / other.norm();
   state.SetLabel(std::string(case_spec(state.range(0)).label) + " " + eigensolve_label(mode));
 }
@@ -290,8 +296,8 @@ void learning_step(benchmark::State& state) {
 }
 
 // The HIG step on configuration range(0) with the eigensolve of mode range(1)
-// (eigensolve_options()); auto modes follow the previous step, as in training. Counters as
-// time_steps() plus what ran (float 1 / double 0, subset 1 / full 0) and σ_max/σ_min,kept.
+// (kEigensolveModes); auto modes follow the previous step, as in training. Counters as
+// time_steps() plus what ran (float 1 / double 0; subset 1, tridiagonal 1) and σ_max/σ_min,kept.
 void learning_step_precision(benchmark::State& state) {
   ReferenceCase c = make_case(state.range(0));
   const nlohmann::json params = c.update("hig")->params();
@@ -304,6 +310,8 @@ void learning_step_precision(benchmark::State& state) {
   time_steps(state, c, update);
   state.counters["float"] = update.last_info().precision == PinvPrecision::kFloat ? 1 : 0;
   state.counters["subset"] = update.last_info().eigensolver == PinvEigensolver::kSubset ? 1 : 0;
+  state.counters["tridiagonal"] =
+      update.last_info().eigensolver == PinvEigensolver::kTridiagonal ? 1 : 0;
   state.counters["kept_condition"] = kept_condition(update.last_info());
   state.SetLabel(std::string(case_spec(state.range(0)).label) + " hig " +
                  eigensolve_label(state.range(1)));
@@ -409,13 +417,13 @@ BENCHMARK(power_pinv_backend)
     ->Args({1024, 24896, static_cast<int>(PinvBackend::kGram)})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(eigen_route)
-    ->ArgsProduct({{1}, {64, 128, 256}, {0, 1, 2, 3, 4}})
-    ->ArgsProduct({{2}, {4, 16}, {0, 1, 2, 3, 4}})
-    ->ArgsProduct({{4}, {16, 64}, {0, 1, 2, 3, 4}})
+    ->ArgsProduct({{1}, {64, 128, 256}, {0, 1, 2, 3, 4, 5, 6}})
+    ->ArgsProduct({{2}, {4, 16}, {0, 1, 2, 3, 4, 5, 6}})
+    ->ArgsProduct({{4}, {16, 64}, {0, 1, 2, 3, 4, 5, 6}})
     ->Unit(benchmark::kMillisecond);
 // n = 4096: seconds per call, one each.
 BENCHMARK(eigen_route)
-    ->ArgsProduct({{2}, {64}, {0, 1, 2, 3, 4}})
+    ->ArgsProduct({{2}, {64}, {0, 1, 2, 3, 4, 5, 6}})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(lanczos_route)
@@ -429,10 +437,10 @@ BENCHMARK(learning_step)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(learning_step)->Args({3, 2})->Iterations(2)->Unit(benchmark::kMillisecond);
 BENCHMARK(learning_step_precision)
-    ->ArgsProduct({{1, 2}, {0, 1, 2, 3, 4}})
+    ->ArgsProduct({{1, 2}, {0, 1, 2, 3, 4, 5, 6}})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(learning_step_precision)
-    ->ArgsProduct({{3}, {0, 2, 4}})
+    ->ArgsProduct({{3}, {0, 2, 4, 5, 6}})
     ->Iterations(2)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(autodiff_step)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);

@@ -239,7 +239,7 @@ TEST_F(Cli, LearningMetricsRecordTheInversionOfEachEvaluation) {
     ++hig_rows;
     EXPECT_EQ(row[step_columns[0]], "normal");  // 256 rows > 30 columns
     EXPECT_EQ(row[step_columns[1]], "double");
-    EXPECT_TRUE(row[step_columns[2]] == "full" || row[step_columns[2]] == "subset");
+    EXPECT_TRUE(row[step_columns[2]] == "tridiagonal" || row[step_columns[2]] == "subset");
     EXPECT_GT(std::stod(row[step_columns[3]]), 0.0);
     EXPECT_GE(std::stod(row[step_columns[4]]), 1.0);
   }

@@ -71,7 +71,7 @@ TEST(HigUpdate, TheLastStepsInversionIsItsStateAndStepInfo) {
   EXPECT_EQ(info.at("kept_directions"), hig.last_info().rank);
   EXPECT_EQ(info.at("kept_condition"), kept_condition(hig.last_info()));
   EXPECT_EQ(info.at("pinv_precision"), to_string(hig.last_info().precision));
-  EXPECT_EQ(info.at("pinv_eigensolver"), "full");  // no previous step
+  EXPECT_EQ(info.at("pinv_eigensolver"), "tridiagonal");  // no previous step
   HigUpdate restored({.lr = 0.1,
                       .rcond = 1e-3,
                       .precision = PinvPrecision::kAuto,

@@ -68,6 +68,7 @@
 #include "physgrad/inversion/jacobian_operator.hpp"
 #include "physgrad/inversion/local_inverse.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
+#include "physgrad/inversion/tridiagonal_eigen.hpp"
 #include "physgrad/inversion/y_step.hpp"
 
 #include "physgrad/learn/adam.hpp"

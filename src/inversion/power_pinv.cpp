@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "physgrad/error.hpp"
+#include "physgrad/inversion/tridiagonal_eigen.hpp"
 #include "physgrad/text.hpp"
 
 namespace physgrad {
@@ -31,10 +33,11 @@ constexpr NameTable<PinvPrecision, 3> kPrecisionNames{{
     {PinvPrecision::kDouble, "double"},
     {PinvPrecision::kFloat, "float"},
 }};
-constexpr NameTable<PinvEigensolver, 3> kEigensolverNames{{
+constexpr NameTable<PinvEigensolver, 4> kEigensolverNames{{
     {PinvEigensolver::kAuto, "auto"},
     {PinvEigensolver::kFull, "full"},
     {PinvEigensolver::kSubset, "subset"},
+    {PinvEigensolver::kTridiagonal, "tridiagonal"},
 }};
 
 void check_rcond(double rcond) {
@@ -109,14 +112,45 @@ struct FloatBounds {
   }
 };
 
-// The eigenpairs of a symmetric matrix that the cut may keep, ascending, in double.
+// What an eigensolve of the symmetric n × n matrix W gives the step: every eigenvalue the cut may
+// keep (in double, in the solver's order) and the product Σᵢ weightsᵢ·vᵢvᵢᵀx over their
+// eigenvectors vᵢ, whichever way the solver holds them.
 struct Spectrum {
   Vector lambda;
-  Matrix vectors;  // n × lambda.size()
+  std::function<Vector(const Vector& weights, const Vector& x)> apply;
   PinvPrecision precision = PinvPrecision::kDouble;
   PinvEigensolver eigensolver = PinvEigensolver::kFull;
   bool float_resolves = false;
 };
+
+// The product for eigenvectors held as the columns of `vectors`.
+auto with_vectors(Matrix vectors) {
+  return [v = std::move(vectors)](const Vector& weights, const Vector& x) -> Vector {
+    return v * weights.cwiseProduct(v.transpose() * x);
+  };
+}
+
+// h ← Q h (trans 'N') or Qᵀ h ('T') for W = Q T Qᵀ from sytrd (lower): Q's reflectors below the
+// subdiagonal of `reduced`, their factors in `tau`.
+void apply_reflectors(const Matrix& reduced, const Vector& tau, Vector& h, char trans) {
+  const lapack_int n = lapack_dim(reduced.rows());
+  check_lapack(LAPACKE_dormtr(LAPACK_COL_MAJOR, 'L', 'L', trans, n, 1, reduced.data(), n,
+                              tau.data(), h.data(), n),
+               "dormtr");
+}
+
+// The product for W = Q T Qᵀ and T = S Λ Sᵀ (S as rotations): Q S diag(weights) Sᵀ Qᵀ x,
+// O(n²) — no eigenvector is formed.
+auto with_tridiagonal(Matrix reduced, Vector tau, TridiagonalEigen t) {
+  return [q = std::move(reduced), tau = std::move(tau), t = std::move(t)](
+             const Vector& weights, const Vector& x) -> Vector {
+    Vector h = x;
+    apply_reflectors(q, tau, h, 'T');
+    h = t.apply(t.apply_transpose(std::move(h)).cwiseProduct(weights));
+    apply_reflectors(q, tau, h, 'N');
+    return h;
+  };
+}
 
 // LAPACK's symmetric eigensolvers for one scalar type: all pairs (syevd), or those with
 // λ in (vl, ∞) (syevr by value range), lower triangle of the n × n `a` (overwritten).
@@ -143,18 +177,29 @@ lapack_int syevr(lapack_int n, float* a, float vl, lapack_int* found, float* w, 
   return LAPACKE_ssyevr(LAPACK_COL_MAJOR, 'V', 'V', 'L', n, a, n, vl,
                         std::numeric_limits<float>::max(), 0, 0, 0.0f, found, w, z, n, support);
 }
+// The reduction W = Q T Qᵀ (lower triangle of `a`, overwritten by Q's reflectors): T's diagonal
+// d (n), subdiagonal e (n − 1) and the reflectors' factors tau (n − 1).
+lapack_int sytrd(lapack_int n, double* a, double* d, double* e, double* tau) {
+  return LAPACKE_dsytrd(LAPACK_COL_MAJOR, 'L', n, a, n, d, e, tau);
+}
+lapack_int sytrd(lapack_int n, float* a, float* d, float* e, float* tau) {
+  return LAPACKE_ssytrd(LAPACK_COL_MAJOR, 'L', n, a, n, d, e, tau);
+}
 
-// The spectrum of the symmetric `w` (lower triangle) in Scalar arithmetic: all pairs, or with
-// `subset` those with λ > vl. A double full solve works in place on `w`; the others on copies.
+// The spectrum of the symmetric `w` (lower triangle, consumed) in Scalar arithmetic by
+// `eigensolver` (kSubset: the pairs with λ > vl). Double full and tridiagonal solves work in
+// place on `w`; the others on copies. The tridiagonal form of a float solve is kept in double
+// (its reflectors and T rounded to float), so only the reduction runs in float.
 template <typename Scalar>
-Spectrum solve_spectrum(Matrix& w, bool subset, double vl, double rcond) {
+Spectrum solve_spectrum(Matrix& w, PinvEigensolver eigensolver, double vl, double rcond) {
   using ScalarMatrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
   using ScalarVector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
   constexpr bool kIsFloat = std::is_same_v<Scalar, float>;
   const lapack_int n = lapack_dim(w.rows());
+  const bool subset = eigensolver == PinvEigensolver::kSubset;
   Spectrum out;
   out.precision = kIsFloat ? PinvPrecision::kFloat : PinvPrecision::kDouble;
-  out.eigensolver = subset ? PinvEigensolver::kSubset : PinvEigensolver::kFull;
+  out.eigensolver = eigensolver;
   ScalarMatrix copy;
   Scalar* a = nullptr;
   if constexpr (kIsFloat) {
@@ -164,24 +209,41 @@ Spectrum solve_spectrum(Matrix& w, bool subset, double vl, double rcond) {
     if (subset) copy = w;
     a = subset ? copy.data() : w.data();
   }
-  ScalarVector lambda(n);
-  if (!subset) {
-    check_lapack(syevd(n, a, lambda.data()), kIsFloat ? "ssyevd" : "dsyevd");
-    out.lambda = lambda.template cast<double>();
+  // The matrix a's solve left behind, in double (w itself when it was solved in place).
+  const auto solved = [&]() -> Matrix {
     if constexpr (kIsFloat) {
-      out.vectors = copy.template cast<double>();
+      return copy.template cast<double>();
     } else {
-      out.vectors = std::move(w);
+      return std::move(w);
     }
-  } else {
-    ScalarMatrix z(n, n);
-    std::vector<lapack_int> support(2 * static_cast<std::size_t>(n));
-    lapack_int found = 0;
-    check_lapack(syevr(n, a, static_cast<Scalar>(vl), &found, lambda.data(), z.data(),
-                       support.data()),
-                 kIsFloat ? "ssyevr" : "dsyevr");
-    out.lambda = lambda.head(found).template cast<double>();
-    out.vectors = z.leftCols(found).template cast<double>();
+  };
+  ScalarVector lambda(n);
+  switch (eigensolver) {
+    case PinvEigensolver::kSubset: {
+      ScalarMatrix z(n, n);
+      std::vector<lapack_int> support(2 * static_cast<std::size_t>(n));
+      lapack_int found = 0;
+      check_lapack(syevr(n, a, static_cast<Scalar>(vl), &found, lambda.data(), z.data(),
+                         support.data()),
+                   kIsFloat ? "ssyevr" : "dsyevr");
+      out.lambda = lambda.head(found).template cast<double>();
+      out.apply = with_vectors(z.leftCols(found).template cast<double>());
+      break;
+    }
+    case PinvEigensolver::kTridiagonal: {
+      const Index off = std::max<Index>(n - 1, 1);
+      ScalarVector e(off), tau(off);
+      check_lapack(sytrd(n, a, lambda.data(), e.data(), tau.data()),
+                   kIsFloat ? "ssytrd" : "dsytrd");
+      TridiagonalEigen t(lambda.template cast<double>(), e.head(n - 1).template cast<double>());
+      out.lambda = t.eigenvalues();
+      out.apply = with_tridiagonal(solved(), tau.template cast<double>(), std::move(t));
+      break;
+    }
+    default:
+      check_lapack(syevd(n, a, lambda.data()), kIsFloat ? "ssyevd" : "dsyevd");
+      out.lambda = lambda.template cast<double>();
+      out.apply = with_vectors(solved());
   }
   // Eigenvalues ≤ vl that a subset left out must lie clearly below the cut for the check.
   if (out.lambda.size() > 0) {
@@ -210,13 +272,12 @@ double lambda_max_lower_bound(const Matrix& w) {
 }
 
 // The precision and eigensolver `options` ask for on an n × n matrix.
-bool wants_subset(const PowerPinvOptions& options, Index n) {
-  if (options.eigensolver != PinvEigensolver::kAuto) {
-    return options.eigensolver == PinvEigensolver::kSubset;
-  }
-  return options.previous != nullptr &&
-         static_cast<double>(options.previous->rank) <=
-             kSubsetKeptFraction * static_cast<double>(n);
+PinvEigensolver chosen_eigensolver(const PowerPinvOptions& options, Index n) {
+  if (options.eigensolver != PinvEigensolver::kAuto) return options.eigensolver;
+  const bool few_kept = options.previous != nullptr &&
+                        static_cast<double>(options.previous->rank) <=
+                            kSubsetKeptFraction * static_cast<double>(n);
+  return few_kept ? PinvEigensolver::kSubset : PinvEigensolver::kTridiagonal;
 }
 bool tries_float(const PowerPinvOptions& options) {
   if (options.precision != PinvPrecision::kAuto) return options.precision == PinvPrecision::kFloat;
@@ -224,40 +285,45 @@ bool tries_float(const PowerPinvOptions& options) {
 }
 
 // W Σ^{−1−κ} Wᵀ x for the symmetric w = W Σ² Wᵀ (lower triangle used, consumed) over the kept
-// σ, which are the trailing ones (the eigensolvers sort ascending).
+// σ > rcond·σ_max.
 Vector eigen_apply(Matrix& w, const Vector& x, const PowerPinvOptions& options,
                    PowerPinvInfo& info) {
   if (!all_finite(w) || !all_finite(x)) {
     throw NumericalError("power_pinv_apply: J Jᵀ, JᵀJ or Jᵀg overflows (non-finite entry)");
   }
+  const Index n = w.rows();
   const double rcond = info.rcond_used;
-  const bool subset = wants_subset(options, w.rows());
+  const PinvEigensolver eigensolver = chosen_eigensolver(options, n);
   // Below a lower bound of the cut² = rcond²·λ_max, with room to spare: the pairs dsyevr finds
   // include every kept one.
-  const double vl = subset ? 0.5 * rcond * rcond * lambda_max_lower_bound(w) : 0.0;
+  const double vl = eigensolver == PinvEigensolver::kSubset
+                        ? 0.5 * rcond * rcond * lambda_max_lower_bound(w)
+                        : 0.0;
   std::optional<Spectrum> spectrum;
   if (tries_float(options)) {
-    spectrum = solve_spectrum<float>(w, subset, vl, rcond);
+    spectrum = solve_spectrum<float>(w, eigensolver, vl, rcond);
     if (options.precision == PinvPrecision::kAuto && !spectrum->float_resolves) {
       info.float_rejected = true;
       spectrum.reset();
     }
   }
-  if (!spectrum) spectrum = solve_spectrum<double>(w, subset, vl, rcond);
+  if (!spectrum) spectrum = solve_spectrum<double>(w, eigensolver, vl, rcond);
   info.precision = spectrum->precision;
   info.eigensolver = spectrum->eigensolver;
   info.float_resolves = spectrum->float_resolves;
-  const Index found = spectrum->lambda.size();
-  if (found == 0) return Vector::Zero(w.rows());  // λ_max = 0: nothing above the cut
+  if (spectrum->lambda.size() == 0) return Vector::Zero(n);  // λ_max = 0: nothing above the cut
   // Rounding can leave λ slightly < 0.
   const Vector sigma = spectrum->lambda.cwiseMax(0.0).cwiseSqrt();
-  info.sigma_max = sigma(found - 1);
-  info.rank = (sigma.array() > rcond * info.sigma_max).count();
-  info.sigma_min_kept = info.rank > 0 ? sigma(found - info.rank) : 0.0;
-  const auto kept = spectrum->vectors.rightCols(info.rank);
-  Vector c = kept.transpose() * x;
-  c.array() *= sigma.tail(info.rank).array().pow(-1 - options.kappa);
-  return kept * c;
+  info.sigma_max = sigma.maxCoeff();
+  Vector weights = Vector::Zero(sigma.size());
+  for (Index i = 0; i < sigma.size(); ++i) {
+    if (!(sigma(i) > rcond * info.sigma_max)) continue;
+    weights(i) = std::pow(sigma(i), -1 - options.kappa);
+    info.sigma_min_kept = info.rank == 0 ? sigma(i) : std::min(info.sigma_min_kept, sigma(i));
+    ++info.rank;
+  }
+  if (info.rank == 0) return Vector::Zero(n);
+  return spectrum->apply(weights, x);
 }
 
 // A Aᵀ (gram = true) or Aᵀ A by dsyrk: the lower triangle, the upper left zero.

@@ -20,8 +20,10 @@ const OptionList<HigOptions>& HigOptions::descriptors() {
                   "precision of the eigendecomposition (auto: float where the last spectrum "
                   "allows it)"),
       rule_option("eigensolver", &HigOptions::eigensolver,
-                  {PinvEigensolver::kAuto, PinvEigensolver::kFull, PinvEigensolver::kSubset},
-                  "all eigenpairs (full) or only the kept ones (subset); auto by the last step"),
+                  {PinvEigensolver::kAuto, PinvEigensolver::kTridiagonal, PinvEigensolver::kFull,
+                   PinvEigensolver::kSubset},
+                  "eigenvalues with rotations applied to the one vector (tridiagonal), all "
+                  "eigenpairs (full) or only the kept ones (subset); auto by the last step"),
   };
   return options;
 }

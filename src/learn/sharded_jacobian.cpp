@@ -66,6 +66,8 @@ std::optional<Vector> ShardedJacobian::shared_gram_apply(const Vector& g,
   PowerPinvInfo out;
   out.backend = PinvBackend::kGram;
   out.rcond_used = std::max(options.rcond, kMinGramRcond);
+  // As the one-process tridiagonal eigensolver: J Jᵀ reduced, no eigenvector of it formed.
+  out.eigensolver = PinvEigensolver::kTridiagonal;
   DistributedPowerInfo power;
   // U Σ^{−1−κ} Uᵀ g, the same bits on every rank.
   const Vector x = distributed_truncated_power(*solver, std::move(columns), n, g, options.kappa,

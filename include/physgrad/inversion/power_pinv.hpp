@@ -13,7 +13,7 @@ namespace physgrad {
 // relative; the Gram and normal paths square the spectrum, so theirs is ~ε·(σ_max/σ_min,kept)²
 // and they resolve σ only down to ~√ε·σ_max.
 //   kSvd:    thin SVD of J (LAPACK dgesdd), O(r·c·min(r, c)); any rcond.
-//   kGram:   G = J Jᵀ = U Σ² Uᵀ (dsyrk + dsyevd), result Jᵀ U Σ^{−1−κ} Uᵀ g;
+//   kGram:   G = J Jᵀ = U Σ² Uᵀ (dsyrk + an eigensolve), result Jᵀ U Σ^{−1−κ} Uᵀ g;
 //            O(r²·c + r³) — the fast choice for wide J (r ≤ c).
 //   kNormal: A = Jᵀ J = V Σ² Vᵀ, result V Σ^{−1−κ} Vᵀ (Jᵀ g); O(c²·r + c³) — for tall J.
 //   kAuto:   kGram when r ≤ c, kNormal otherwise; kSvd when rcond < kMinGramRcond.
@@ -31,8 +31,8 @@ PinvBackend parse_pinv_backend(const std::string& name);
 inline constexpr double kMinGramRcond = 1e-7;
 
 // The arithmetic of the eigensolve on the Gram and normal paths (the SVD is always double).
-//   kDouble: the symmetric matrix W = J Jᵀ or JᵀJ as formed, LAPACK dsyevd / dsyevr.
-//   kFloat:  W rounded to float, ssyevd / ssyevr: about twice as fast, but every eigenvalue
+//   kDouble: the symmetric matrix W = J Jᵀ or JᵀJ as formed (LAPACK dsytrd, dsyevd, dsyevr).
+//   kFloat:  W rounded to float (ssytrd, ssyevd, ssyevr): about twice as fast, but every eigenvalue
 //            λᵢ = σᵢ² carries an error of up to δ = √n·ε_f·λ_max (ε_f = 2⁻²³ ≈ 1.2e-7).
 //   kAuto:   float where the spectrum allows it (float_resolves_spectrum() on the float
 //            eigenvalues; the result is then within ~(1+κ)/kFloatAccuracy relative of the double
@@ -42,13 +42,17 @@ enum class PinvPrecision { kAuto, kDouble, kFloat };
 std::string to_string(PinvPrecision precision);  // "auto", "double", "float"
 PinvPrecision parse_pinv_precision(const std::string& name);
 
-// Which eigenpairs the Gram and normal paths compute.
-//   kFull:   all n (dsyevd, divide and conquer).
-//   kSubset: only λ above the cut (dsyevr by value range, from a lower bound of λ_max by power
+// How the Gram and normal paths solve the eigenproblem of the n × n W.
+//   kTridiagonal: W = Q T Qᵀ (sytrd), every eigenvalue of T by the implicit QL iteration with
+//            its rotations S kept (tridiagonal_eigen.hpp), result Q S f(Λ) Sᵀ Qᵀ x: no
+//            eigenvector is formed, O(n²) beyond the reduction's 4n³/3.
+//   kFull:   all n eigenpairs (syevd, divide and conquer), result from the eigenvectors.
+//   kSubset: only λ above the cut (syevr by value range, from a lower bound of λ_max by power
 //            iteration): saves the back-transformation of the dropped directions.
-//   kAuto:   kSubset when `previous` kept at most kSubsetKeptFraction of n directions, else kFull.
-enum class PinvEigensolver { kAuto, kFull, kSubset };
-std::string to_string(PinvEigensolver eigensolver);  // "auto", "full", "subset"
+//   kAuto:   kSubset when `previous` kept at most kSubsetKeptFraction of n directions, else
+//            kTridiagonal.
+enum class PinvEigensolver { kAuto, kFull, kSubset, kTridiagonal };
+std::string to_string(PinvEigensolver eigensolver);  // "auto", "full", "subset", "tridiagonal"
 PinvEigensolver parse_pinv_eigensolver(const std::string& name);
 
 // Float is accepted when every kept eigenvalue is at least this many times its error δ (so its
