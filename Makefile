@@ -14,6 +14,18 @@ TEST_PACKAGES = chromium python3-pytest python3-torch python3-scipy
 
 SANITIZE_DIR ?= build-sanitize
 
+# OpenBLAS chooses its kernels from the CPU models it knows; on a newer one (Debian 12's 0.3.21 on
+# a Sapphire Rapids Xeon) it runs its generic SSE3 kernels, several times slower
+# (docs/performance.md). Unless set already, the targets here ask for the kernels the CPU's
+# AVX-512 or AVX2 can run; programs run outside make print a note instead (blas_core_note()).
+ifeq ($(origin OPENBLAS_CORETYPE),undefined)
+OPENBLAS_CORETYPE := $(shell grep -qw avx512bw /proc/cpuinfo 2>/dev/null && echo SkylakeX || \
+                       { grep -qw avx2 /proc/cpuinfo 2>/dev/null && echo Haswell; })
+endif
+ifneq ($(OPENBLAS_CORETYPE),)
+export OPENBLAS_CORETYPE
+endif
+
 RESULTS_DIR ?= docs/results
 EXPERIMENTS  = scaled-toy sensitivity comparison hig-toy sin-rotation heat-inverse oscillators \
                quantum-dipole poisson time-reversal

@@ -355,6 +355,9 @@ std::string machine_line(const json& context) {
   if (context.contains("load_avg") && !context.at("load_avg").empty()) {
     out << ", load average at the start " << number(context.at("load_avg")[0].get<double>(), "%.2f");
   }
+  if (context.contains("blas_core")) {
+    out << ", OpenBLAS kernels " << context.at("blas_core").get<std::string>();
+  }
   out << "; CPU time per iteration (one BLAS thread).";
   return out.str();
 }

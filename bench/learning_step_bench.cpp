@@ -10,6 +10,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "physgrad/autodiff/dual.hpp"
@@ -456,6 +458,10 @@ BENCHMARK(size_sweep)->ArgsProduct({{64}, {8, 32, 128}})->Iterations(1)->Unit(be
 
 int main(int argc, char** argv) {
   physgrad::set_blas_threads(1);
+  benchmark::AddCustomContext("blas_core", physgrad::blas_core());
+  if (const std::string note = physgrad::blas_core_note(); !note.empty()) {
+    std::fprintf(stderr, "%s\n", note.c_str());
+  }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

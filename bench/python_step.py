@@ -56,7 +56,8 @@ def main():
     theirs = torch_hig_step(j, g, lr, kappa, rcond).numpy()
     agreement = np.linalg.norm(ours - theirs) / np.linalg.norm(ours)
     print(f"HIG step on J {j.shape[0] * j.shape[1]} × {j.shape[2]} (oscillators, B = 128), "
-          f"1 thread, best of {repeats}:")
+          f"1 thread, OpenBLAS kernels {physgrad.blas_core() or '(not OpenBLAS)'}, "
+          f"best of {repeats}:")
     print(f"  from Python (physgrad.torch.HIG): {python * 1e3:8.2f} ms")
     print(f"  from C++ (HigUpdate::step loop):   {cxx * 1e3:8.2f} ms   "
           f"Python / C++ = {python / cxx:.3f}")

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include "physgrad/error.hpp"
 #include "physgrad/threads.hpp"
 
@@ -9,6 +11,17 @@ TEST(BlasThreads, SetAndReadBackWhenTheBlasSupportsIt) {
   EXPECT_EQ(physgrad::blas_threads(), 2);
   EXPECT_TRUE(physgrad::set_blas_threads(1));
   EXPECT_EQ(physgrad::blas_threads(), 1);
+}
+
+// The build links OpenBLAS, which names its kernel set; a note, when there is one, names that
+// set and the variable that overrides it.
+TEST(BlasCore, NamesTheKernelsAndANoteSaysHowToOverrideThem) {
+  const std::string core = physgrad::blas_core();
+  EXPECT_FALSE(core.empty());
+  const std::string note = physgrad::blas_core_note();
+  if (note.empty()) return;
+  EXPECT_NE(note.find(core), std::string::npos) << note;
+  EXPECT_NE(note.find("OPENBLAS_CORETYPE="), std::string::npos) << note;
 }
 
 TEST(JacobianThreads, SetAndReadBack) {

@@ -152,6 +152,7 @@ void BenchCommand::run(std::ostream& out) const {
       {"steps", steps},
       {"warmup", warmup},
       {"threads", threads},
+      {"blas_core", blas_core()},
       {"seconds_per_step", per_step},
       {"split",
        {{"jacobian", median(jacobian)},

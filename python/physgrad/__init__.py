@@ -4,14 +4,15 @@ minimize() runs any direct rule of the library on a simulator written in Python;
 solves P(x) = y near a guess; physgrad.torch holds the learning rules as torch optimizers.
 """
 
-from ._physgrad import (Error, MinimizeResult, NumericalError, direct_rules, experiments,
-                        jacobian_step, learning_rules, open_metrics, open_summary, reference_step,
-                        resume_experiment, run_experiment)
+from ._physgrad import (Error, MinimizeResult, NumericalError, blas_core, blas_core_note,
+                        direct_rules, experiments, jacobian_step, learning_rules, open_metrics,
+                        open_summary, reference_step, resume_experiment, run_experiment)
 from . import _physgrad
 
 __all__ = ["Error", "NumericalError", "MinimizeResult", "minimize", "local_inverse",
            "direct_rules", "learning_rules", "jacobian_step", "reference_step", "experiments",
-           "open_metrics", "open_summary", "run_experiment", "resume_experiment"]
+           "open_metrics", "open_summary", "run_experiment", "resume_experiment", "blas_core",
+           "blas_core_note"]
 
 
 def _bounds(bounds):

@@ -17,6 +17,7 @@
 #include "physgrad/learn/sip.hpp"
 #include "physgrad/run/registry.hpp"
 #include "physgrad/text.hpp"
+#include "physgrad/threads.hpp"
 #include "physgrad/train/step.hpp"
 #include "python_simulator.hpp"
 
@@ -279,6 +280,10 @@ void bind_learning(py::module_& m) {
         py::arg("loss_gradient_y"), py::arg("lr"), py::arg("kappa"), py::arg("rcond"),
         py::arg("repeats"), py::arg("precision") = "double", py::arg("eigensolver") = "auto");
   m.def("_sip_params", &sip_params, py::arg("settings"));
+  m.def("blas_core", &blas_core,
+        "The kernel set OpenBLAS chose for this CPU ('' for another BLAS).");
+  m.def("blas_core_note", &blas_core_note,
+        "A one-line note when OpenBLAS runs generic kernels on a CPU with AVX2, else ''.");
   m.def("_sip_targets", &sip_targets, py::arg("simulator"), py::arg("x"), py::arg("y"),
         py::arg("target"), py::arg("settings"));
   m.def("reference_step", &reference_step, py::arg("name") = "oscillators",

@@ -84,6 +84,7 @@ RunOutcome run_in(const Experiment& experiment, const Settings& settings,
       log(hooks, "warning: the checkpoint was written with " + changed +
                      "; the continued run may differ from an uninterrupted one in the last bits");
     }
+    if (const std::string note = blas_core_note(); !note.empty() && writer) log(hooks, note);
     RunContext context;
     context.set_experiment_name(experiment.name());
     context.set_stop_flag(&stop_flag());
