@@ -15,7 +15,7 @@ TEST_PACKAGES = chromium python3-pytest python3-torch python3-scipy
 SANITIZE_DIR ?= build-sanitize
 
 # OpenBLAS chooses its kernels from the CPU models it knows; on a newer one (Debian 12's 0.3.21 on
-# a Sapphire Rapids Xeon) it runs its generic SSE3 kernels, several times slower
+# a Xeon with AVX-512 FP16) it runs its generic SSE3 kernels, several times slower
 # (docs/performance.md). Unless set already, the targets here ask for the kernels the CPU's
 # AVX-512 or AVX2 can run; programs run outside make print a note instead (blas_core_note()).
 ifeq ($(origin OPENBLAS_CORETYPE),undefined)

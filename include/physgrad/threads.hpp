@@ -19,10 +19,10 @@ int blas_threads();
 std::string blas_core();
 
 // A one-line note when OpenBLAS runs generic kernels on an x86-64 CPU with AVX2 and FMA, else "".
-// OpenBLAS picks its kernels from the CPU model it knows; a model newer than the library (Debian
-// 12's 0.3.21 on a Sapphire Rapids Xeon) falls back to "Prescott" (SSE3), measured 3.4× slower
-// for dsyrk and 1.6× for dsyevd than the kernels the CPU can run. The note names the
-// OPENBLAS_CORETYPE value to set (read when OpenBLAS loads, so before the program starts).
+// OpenBLAS picks its kernels from the CPU models it knows; on a newer one (Debian 12's 0.3.21
+// on a Xeon with AVX-512 FP16) it falls back to "Prescott" (SSE3): dsyrk measured 3.9–6.6× and
+// dsyevd 1.7× slower than with the kernels the CPU can run (docs/performance.md). The note names
+// the OPENBLAS_CORETYPE value to set (read when OpenBLAS loads, so before the program starts).
 std::string blas_core_note();
 
 // Threads that compute the m batched physics VJPs of a StackedJacobian (one per output k, each

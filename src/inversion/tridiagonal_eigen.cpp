@@ -59,15 +59,16 @@ TridiagonalEigen::TridiagonalEigen(Vector diagonal, const Vector& subdiagonal)
   std::frexp(largest, &exponent);
   lambda_ *= std::ldexp(1.0, -exponent);
   e *= std::ldexp(1.0, -exponent);
+  // 1.02–1.11 n² rotations were measured on Gram matrices; a T that needs more grows the vector.
   rotations_.reserve(static_cast<std::size_t>(n) * static_cast<std::size_t>(n) * 5 / 4);
   iterate(e);
   lambda_ *= std::ldexp(1.0, exponent);
 }
 
 // The implicit QL iteration with Wilkinson shifts on lambda_ (the diagonal) and e: for each l,
-// sweeps chase the shift's bulge from the end m of l's unreduced block up to l until e(l)
-// vanishes next to the diagonal (|e(m)| ≤ ε·(|d(m)| + |d(m + 1)|) splits T). Every sweep's
-// rotations are recorded in order; S is their product.
+// sweeps chase the shift's bulge from the end m of l's unreduced block up to l until e(l) is
+// negligible (|e(m)| ≤ ε·(|d(m)| + |d(m + 1)|) splits T there) and d(l) is an eigenvalue. Every
+// sweep's rotations are recorded in order; S is their product.
 void TridiagonalEigen::iterate(Vector& e) {
   Vector& d = lambda_;
   const Index n = d.size();
@@ -89,7 +90,7 @@ void TridiagonalEigen::iterate(Vector& e) {
       double r = std::sqrt(g * g + 1);
       g = d(m) - d(l) + e(l) / (g + std::copysign(r, g));
       double s = 1, c = 1, p = 0;
-      const Sweep sweep{m - 1, rotations_.size(), 0};
+      const std::size_t first = rotations_.size();
       bool split = false;
       for (Index i = m - 1; i >= l; --i) {
         const double f = s * e(i), b = c * e(i);
@@ -110,9 +111,7 @@ void TridiagonalEigen::iterate(Vector& e) {
         g = c * r - b;
         rotations_.push_back({c, s});
       }
-      if (rotations_.size() > sweep.first) {
-        sweeps_.push_back({sweep.top, sweep.first, rotations_.size() - sweep.first});
-      }
+      if (rotations_.size() > first) sweeps_.push_back({m - 1, first, rotations_.size() - first});
       if (split) continue;
       d(l) -= p;
       e(l) = g;

@@ -301,7 +301,7 @@ std::vector<OptionSpec> common_options(const Experiment& experiment) {
           .at_most(256),
       integer_option("distributed-gram-rows", "",
                      "under mpirun, B·m from which the ranks share the Gram step "
-                     "(ScaLAPACK; 0: never; default 1024, docs/distributed.md)")
+                     "(ScaLAPACK; 0: never; default 8192, docs/distributed.md)")
           .at_least(0)
           .at_most(1e9),
       integer_option("seed", "0", "random seed of stochastic parts (data, initialisation)").at_least(0).at_most(4294967295.0),
