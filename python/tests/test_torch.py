@@ -42,6 +42,27 @@ def test_gn_solves_a_linear_least_squares_problem_exactly():
     np.testing.assert_allclose(delta, expected.numpy(), rtol=1e-9, atol=1e-12)
 
 
+def test_every_eigensolver_gives_the_svd_step():
+    # Δθ = −V Σ^{−½} Uᵀ g for a well-conditioned J; auto with no history takes tridiagonal.
+    torch.manual_seed(3)
+    j = torch.randn(8, 4, 50, dtype=torch.float64)
+    g = torch.randn(8, 4, dtype=torch.float64)
+    u, s, vh = torch.linalg.svd(j.reshape(32, 50), full_matrices=False)
+    expected = -(vh.T @ ((u.T @ g.reshape(32)) * s.pow(-0.5))).numpy()
+    for eigensolver in ("tridiagonal", "full", "subset", "auto"):
+        opt = pt.HIG([torch.nn.Parameter(torch.zeros(50))], eigensolver=eigensolver)
+        delta, info = opt.jacobian_step(j, g)
+        assert info["eigensolver"] == ("tridiagonal" if eigensolver == "auto" else eigensolver)
+        np.testing.assert_allclose(delta, expected, rtol=1e-10, atol=1e-12)
+
+
+def test_the_blas_kernels_are_named():
+    core = physgrad.blas_core()
+    assert core  # the build links OpenBLAS
+    note = physgrad.blas_core_note()
+    assert note == "" or (core in note and "OPENBLAS_CORETYPE=" in note)
+
+
 def test_a_non_contiguous_jacobian_is_refused():
     j = torch.randn(20, 2, 4, dtype=torch.float64).transpose(0, 2)
     with pytest.raises(physgrad.Error, match="not C-contiguous"):
