@@ -37,17 +37,18 @@ std::string blas_core() {
 
 std::string blas_core_note() {
 #if defined(__x86_64__) && defined(__GNUC__)
-  std::string core = blas_core();
-  std::transform(core.begin(), core.end(), core.begin(),
+  const std::string core = blas_core();
+  std::string lower = core;
+  std::transform(lower.begin(), lower.end(), lower.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   // OpenBLAS's x86-64 kernel sets that use neither AVX2 nor FMA.
   static const std::array<const char*, 7> kGeneric = {
       "prescott", "core2", "penryn", "dunnington", "nehalem", "atom", "sandybridge"};
-  const bool generic = std::find(kGeneric.begin(), kGeneric.end(), core) != kGeneric.end();
+  const bool generic = std::find(kGeneric.begin(), kGeneric.end(), lower) != kGeneric.end();
   if (!generic || !__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma")) return "";
   const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
                       __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq");
-  return "note: OpenBLAS runs its generic " + blas_core() +
+  return "note: OpenBLAS runs its generic " + core +
          " kernels on this CPU, which has AVX2" + (avx512 ? " and AVX-512" : "") +
          "; OPENBLAS_CORETYPE=" + (avx512 ? "SkylakeX" : "Haswell") +
          " in the environment makes the linear algebra several times faster";

@@ -4,12 +4,12 @@
 
 #include <cmath>
 #include <numbers>
-#include <random>
 #include <utility>
 
 #include "physgrad/autodiff/finite_difference.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/physics/heat_diffusion.hpp"
+#include "test_problems.hpp"
 
 namespace physgrad {
 namespace {
@@ -35,13 +35,7 @@ double kernel_of(const HeatConfig& c, Index m_i, Index m_j) {
   return std::exp(-kTwoPi * kTwoPi * k2 * c.amount);
 }
 
-Vector random_field(Index size, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> normal;
-  Vector x(size);
-  for (Index i = 0; i < size; ++i) x(i) = normal(rng);
-  return x;
-}
+Vector random_field(Index size, unsigned seed) { return testing::random_normal(size, 1, seed); }
 
 TEST(HeatDiffusion, KernelMatchesTheReferenceValuesAndTheForwardMap) {
   const HeatDiffusion heat;                            // 64×64, amount 8

@@ -14,6 +14,7 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
+#include "test_problems.hpp"
 
 namespace physgrad {
 namespace {
@@ -23,17 +24,9 @@ constexpr std::array<PinvBackend, 3> kBackends{PinvBackend::kSvd, PinvBackend::k
 constexpr std::array<double, 3> kKappas{1.0, 0.5, -1.0};
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-Matrix random_matrix(Index rows, Index cols, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> normal;
-  Matrix m(rows, cols);
-  for (Index i = 0; i < m.size(); ++i) m.data()[i] = normal(rng);
-  return m;
-}
-
 // n×k with orthonormal columns: the Q factor of a Householder QR of a random matrix.
 Matrix random_orthonormal(Index n, Index k, unsigned seed) {
-  const Eigen::HouseholderQR<Matrix> qr(random_matrix(n, k, seed));
+  const Eigen::HouseholderQR<Matrix> qr(testing::random_normal(n, k, seed));
   return qr.householderQ() * Matrix::Identity(n, k);
 }
 
@@ -84,7 +77,7 @@ TEST(PowerPinvBackends, MatchFormulaWhenModeratelyConditioned) {
   unsigned seed = 1;
   for (const auto& [rows, cols] : kShapes) {
     const Factored f = factored(rows, cols, log_spaced(40, 1e-3), seed);
-    const Vector g = random_matrix(rows, 1, seed + 2);
+    const Vector g = testing::random_normal(rows, 1, seed + 2);
     seed += 3;
     for (const double kappa : kKappas) {
       const Vector ref = formula(f, g, kappa, 0);
@@ -113,7 +106,7 @@ void expect_within_squaring_bound(const Vector& s, double rcond) {
   unsigned seed = 11;
   for (const auto& [rows, cols] : kShapes) {
     const Factored f = factored(rows, cols, s, seed);
-    const Vector g = random_matrix(rows, 1, seed + 2);
+    const Vector g = testing::random_normal(rows, 1, seed + 2);
     seed += 3;
     for (const double kappa : kKappas) {
       SCOPED_TRACE(std::to_string(rows) + "x" + std::to_string(cols) + " kappa " +
@@ -154,8 +147,8 @@ TEST(PowerPinvBackends, RankDeficientResultHasNoNullComponent) {
     const Matrix u = random_orthonormal(rows, rows, seed++);
     const Matrix v = random_orthonormal(cols, cols, seed++);
     const Matrix j = u.leftCols(10) * s.asDiagonal() * v.leftCols(10).transpose();
-    const Vector g = random_matrix(rows, 1, seed++);
-    const Vector shifted_g = g + u.rightCols(rows - 10) * random_matrix(rows - 10, 1, seed++);
+    const Vector g = testing::random_normal(rows, 1, seed++);
+    const Vector shifted_g = g + u.rightCols(rows - 10) * testing::random_normal(rows - 10, 1, seed++);
     for (const double kappa : {1.0, 0.5}) {
       const Vector ref = apply(j, g, kappa, 1e-10, PinvBackend::kSvd);
       for (const PinvBackend backend : kBackends) {
@@ -205,7 +198,7 @@ TEST(PowerPinvAuto, PicksBackendByShapeAndRcond) {
   const double rcond = std::pow(10.0, -1.95);
   for (const auto& [rows, cols] : kShapes) {
     const Factored f = factored(rows, cols, log_spaced(40, std::pow(10.0, -3.9)), 31);
-    const Vector g = random_matrix(rows, 1, 33);
+    const Vector g = testing::random_normal(rows, 1, 33);
     const PinvBackend squared = rows <= cols ? PinvBackend::kGram : PinvBackend::kNormal;
     PowerPinvInfo info;
     const Vector x = apply(f.j, g, 1.0, rcond, PinvBackend::kAuto, &info);
@@ -230,7 +223,7 @@ TEST(PowerPinvAuto, PicksBackendByShapeAndRcond) {
 TEST(PowerPinvInvariance, RowAndColumnPermutations) {
   for (const auto& [rows, cols] : kShapes) {
     const Factored f = factored(rows, cols, log_spaced(40, 1e-3), 41);
-    const Vector g = random_matrix(rows, 1, 43);
+    const Vector g = testing::random_normal(rows, 1, 43);
     std::vector<Index> row_order(static_cast<size_t>(rows));
     std::vector<Index> col_order(static_cast<size_t>(cols));
     std::iota(row_order.begin(), row_order.end(), 0);
@@ -264,8 +257,8 @@ void expect_error(F f, const std::string& needle) {
 }
 
 TEST(PowerPinvValidation, RejectsBadInputAndNamesBackends) {
-  const Matrix j = random_matrix(3, 4, 51);
-  const Vector g = random_matrix(3, 1, 52);
+  const Matrix j = testing::random_normal(3, 4, 51);
+  const Vector g = testing::random_normal(3, 1, 52);
   expect_error([&] { power_pinv_apply(j, Vector::Ones(4)); }, "3 rows but the vector has 4");
   Matrix nan_j = j;
   nan_j(1, 2) = std::nan("");
@@ -321,8 +314,8 @@ class CountingJacobian final : public JacobianOperator {
 };
 
 TEST(PowerPinv, EachPathAsksTheOperatorForItsOneFormAndAgreesWithTheMatrix) {
-  const Matrix j = random_matrix(6, 9, 11);
-  const Vector g = random_matrix(6, 1, 12).col(0);
+  const Matrix j = testing::random_normal(6, 9, 11);
+  const Vector g = testing::random_normal(6, 1, 12).col(0);
   const std::vector<std::pair<PinvBackend, std::vector<std::string>>> paths = {
       {PinvBackend::kGram, {"gram", "apply_transpose"}},
       {PinvBackend::kNormal, {"normal"}},
@@ -367,7 +360,7 @@ PowerPinvOptions eigensolve(double kappa, double rcond, PinvPrecision precision,
 TEST(PowerPinvPrecision, FloatAgreesWithDoubleWithinItsBoundOnAWellConditionedJ) {
   const Index rows = 200, cols = 500;
   const Factored f = factored(rows, cols, log_spaced(rows, 0.1), 31);
-  const Vector g = random_matrix(rows, 1, 33);
+  const Vector g = testing::random_normal(rows, 1, 33);
   const double cond = 10, bound = std::sqrt(static_cast<double>(rows)) * kFloatEps * cond * cond;
   for (const PinvEigensolver solver :
        {PinvEigensolver::kFull, PinvEigensolver::kSubset, PinvEigensolver::kTridiagonal}) {
@@ -398,7 +391,7 @@ TEST(PowerPinvPrecision, FloatAgreesWithDoubleWithinItsBoundOnAWellConditionedJ)
 TEST(PowerPinvPrecision, AutoFallsBackToDoubleOnAnIllConditionedJ) {
   const Index rows = 200, cols = 500;
   const Factored f = factored(rows, cols, log_spaced(rows, 1e-6), 41);
-  const Vector g = random_matrix(rows, 1, 43);
+  const Vector g = testing::random_normal(rows, 1, 43);
   for (const PinvEigensolver solver : {PinvEigensolver::kFull, PinvEigensolver::kTridiagonal}) {
     SCOPED_TRACE(to_string(solver));
     PowerPinvInfo in_double, in_auto, in_float;
@@ -450,7 +443,7 @@ TEST(PowerPinvEigensolver, SubsetAgreesWithFullAndAutoFollowsThePreviousRank) {
   Vector s = log_spaced(rows, 1e-2);
   s.tail(rows / 2).setConstant(1e-9);
   const Factored f = factored(rows, cols, s, 51);
-  const Vector g = random_matrix(rows, 1, 53);
+  const Vector g = testing::random_normal(rows, 1, 53);
   PowerPinvInfo full, subset;
   const Vector x_full = power_pinv_apply(
       f.j, g, eigensolve(0.5, 1e-6, PinvPrecision::kDouble, PinvEigensolver::kFull), &full);
@@ -490,7 +483,7 @@ TEST(PowerPinvEigensolver, TridiagonalAgreesWithFullAndTheClosedForm) {
   Vector s = log_spaced(rows, 1e-5);
   s.tail(rows / 4).setZero();
   const Factored f = factored(rows, cols, s, 61);
-  const Vector g = random_matrix(rows, 1, 63);
+  const Vector g = testing::random_normal(rows, 1, 63);
   for (const double kappa : {1.0, 0.5, -1.0}) {
     SCOPED_TRACE(kappa);
     PowerPinvInfo full, tridiagonal;
@@ -524,7 +517,7 @@ TEST(PowerPinvEigensolver, TridiagonalAgreesWithFullAndTheClosedForm) {
   EXPECT_LT(error_tridiagonal, 2 * error_full) << "dsyevd's error " << error_full;
 
   const Matrix tall = f.j.transpose();
-  const Vector h = random_matrix(cols, 1, 65);
+  const Vector h = testing::random_normal(cols, 1, 65);
   PowerPinvOptions normal = eigensolve(0.5, 1e-6, PinvPrecision::kDouble,
                                        PinvEigensolver::kTridiagonal);
   normal.backend = PinvBackend::kNormal;

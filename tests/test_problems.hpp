@@ -14,6 +14,15 @@
 
 namespace physgrad::testing {
 
+// Entries drawn from N(0, 1) by std::mt19937 seeded with `seed`, column by column.
+inline Matrix random_normal(Index rows, Index cols, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal;
+  Matrix m(rows, cols);
+  for (Index i = 0; i < m.size(); ++i) m.data()[i] = normal(rng);
+  return m;
+}
+
 // Entries drawn from U[lo, hi) with the top 53 bits of the generator.
 inline Matrix random_uniform(std::mt19937_64& rng, Index rows, Index cols, double lo = 0,
                              double hi = 1) {

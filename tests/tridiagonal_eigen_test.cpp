@@ -2,11 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
-#include <random>
 
 #include "physgrad/error.hpp"
+#include "test_problems.hpp"
 
 namespace physgrad {
 namespace {
@@ -26,22 +27,13 @@ struct Tridiagonal {
   }
 };
 
+// d and then e drawn from N(0, 1).
 Tridiagonal random_tridiagonal(Index n, unsigned seed) {
-  std::mt19937 gen(seed);
-  std::normal_distribution<double> normal;
-  Tridiagonal t{Vector(n), Vector(std::max<Index>(n - 1, 0))};
-  for (Index i = 0; i < n; ++i) t.d(i) = normal(gen);
-  for (Index i = 0; i + 1 < n; ++i) t.e(i) = normal(gen);
-  return t;
+  const Vector entries = testing::random_normal(std::max<Index>(2 * n - 1, 0), 1, seed);
+  return {entries.head(n), entries.tail(std::max<Index>(n - 1, 0))};
 }
 
-Vector random_vector(Index n, unsigned seed) {
-  std::mt19937 gen(seed);
-  std::normal_distribution<double> normal;
-  Vector v(n);
-  for (Index i = 0; i < n; ++i) v(i) = normal(gen);
-  return v;
-}
+Vector random_vector(Index n, unsigned seed) { return testing::random_normal(n, 1, seed); }
 
 // What every decomposition must satisfy, to `tolerance` relative to ‖T‖: its eigenvalues are
 // T's (dense solver), S is orthogonal (S Sᵀ v = v, ‖Sᵀ v‖ = ‖v‖) and S Λ Sᵀ v = T v.
