@@ -5,7 +5,6 @@
 #include <type_traits>
 
 #include "physgrad/error.hpp"
-#include "physgrad/learn/adam.hpp"
 #include "physgrad/text.hpp"
 
 namespace physgrad {
@@ -84,7 +83,8 @@ const std::vector<RuleInfo>& rule_catalogue() {
       {Kind::kDirect, "pg", "PG", "Δx = P⁻¹(y + Δy; x) − x, Δy = η (y* − y)", "#bcbd22",
        PhysicalGradientOptions{}},
       {Kind::kLearning, "sgd", "SGD", "Δθ = −η ∇θL", "#6baed6", SgdOptions{}},
-      {Kind::kLearning, "adam", "Adam", "Δθ = −η m̂/(√v̂ + ε) on ∇θL", "#ff7f0e", AdamOptions{}},
+      {Kind::kLearning, "adam", "Adam", "Δθ = −η m̂/(√v̂ + ε) on ∇θL", "#ff7f0e",
+       LearningAdamOptions{}},
       {Kind::kLearning, "gn", "Gauss-Newton",
        "Δθ = −η J⁺ ∂L/∂y, J the stacked Jacobian, σ ≤ τσ_max dropped", "#8c564b",
        HigOptions{.kappa = 1.0}},

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
+#include <random>
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/nn/mlp.hpp"
@@ -21,15 +23,30 @@ struct NetworkThroughPhysics {
   // Targets y* = P(x*) with x* = (sin 2u, cos 3v) of the input (u, v).
   explicit NetworkThroughPhysics(Index n = 5) {
     network.initialize(3);
-    data.inputs.resize(2, n);
-    Matrix x_star(2, n);
+    Matrix inputs(2, n);
     for (Index j = 0; j < n; ++j) {
-      const double u = std::sin(1.3 * static_cast<double>(j));
-      const double v = std::cos(0.7 * static_cast<double>(j));
-      data.inputs.col(j) << u, v;
-      x_star.col(j) << std::sin(2 * u), std::cos(3 * v);
+      inputs.col(j) << std::sin(1.3 * static_cast<double>(j)), std::cos(0.7 * static_cast<double>(j));
     }
-    data.targets = physics.forward_batch(x_star, Matrix());
+    data = samples(inputs);
+  }
+
+  // The samples of the inputs (u, v) given, one per column.
+  Dataset samples(const Matrix& inputs) const {
+    Matrix x_star(2, inputs.cols());
+    for (Index j = 0; j < inputs.cols(); ++j) {
+      x_star.col(j) << std::sin(2 * inputs(0, j)), std::cos(3 * inputs(1, j));
+    }
+    return {inputs, physics.forward_batch(x_star, Matrix()), Matrix()};
+  }
+
+  // `count` samples with inputs uniform in [−1, 1)² from random stream `stream` (a SampleSource).
+  Dataset draw(std::uint64_t stream, Index count) const {
+    std::mt19937_64 engine(stream);
+    Matrix inputs(2, count);
+    for (Index k = 0; k < inputs.size(); ++k) {
+      inputs.data()[k] = -1 + 2 * static_cast<double>(engine() >> 11) * 0x1.0p-53;
+    }
+    return samples(inputs);
   }
 
   // Stacked outputs y(θ) in the trainer's order (entry k·B + i).

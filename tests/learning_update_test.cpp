@@ -71,9 +71,11 @@ TEST(Catalogue, UnknownIdsAndOptionsOfTheOtherKindAreErrorsNamingThem) {
   EXPECT_THROW(make_optimizer("hig"), Error);
   EXPECT_THROW(make_optimizer(SipOptions{}), Error);
   EXPECT_THROW(make_learning_update(NewtonOptions{}), Error);
-  // AdamOptions make either kind.
-  EXPECT_NE(dynamic_cast<AdamUpdate*>(make_learning_update(AdamOptions{}).get()), nullptr);
+  // Adam's options make the direct Adam; with a schedule, the learning one.
   EXPECT_EQ(make_optimizer(AdamOptions{})->id(), "adam");
+  EXPECT_THROW(make_learning_update(AdamOptions{}), Error);
+  EXPECT_NE(dynamic_cast<AdamUpdate*>(make_learning_update(LearningAdamOptions{}).get()), nullptr);
+  EXPECT_THROW(make_optimizer(LearningAdamOptions{}), Error);
 }
 
 // Every option params() reports can be set by id through RuleSettings.
@@ -86,7 +88,9 @@ TEST(Catalogue, SettingsReachEveryOptionTheRulesReport) {
       {"c1", 1e-3},          {"c2", 0.5},            {"initial_damping", 0.01},
       {"min_damping", 1e-12}, {"inverse", "ig"},     {"inverse_tolerance", 1e-7},
       {"inverse_iterations", 17}, {"inverse_relative_tolerance", 1e-3},
-      {"inverse_function_tolerance", 1e-9}, {"inverse_rcond", 1e-8}, {"y_step", 0.75}};
+      {"inverse_function_tolerance", 1e-9}, {"inverse_rcond", 1e-8}, {"y_step", 0.75},
+      {"schedule", "plateau"}, {"decay", 0.5}, {"min_lr", 1e-6}, {"patience", 3},
+      {"threshold", 0.01}};
   nlohmann::json expected(settings);
   expected["initial_step"] = 0.123;  // bfgs and lbfgs take lr as their first trial step
   for (const RuleInfo& rule : rule_catalogue()) {

@@ -54,7 +54,8 @@ TEST(Trainer, TheSummarySaysWhatRanAndReportsItLikeMinimize) {
   EXPECT_EQ(summary.params, update->params());
   EXPECT_EQ(summary.parameters, s.network.num_parameters());
   EXPECT_EQ(summary.samples, 10);
-  EXPECT_EQ(summary.batch_size, 4);
+  ASSERT_EQ(summary.phases.size(), 1u);
+  EXPECT_EQ(summary.phases[0].batch_size, 4);
   ASSERT_EQ(summary.limits.size(), 1u);
   EXPECT_EQ(summary.limits[0].first, "max_iterations");
   // Two epochs of batches of 4, 4 and 2 samples: each sample once forward and through the m
@@ -267,72 +268,6 @@ TEST(Trainer, UntrainedNetworkWithNonFiniteLossIsAnError) {
   EXPECT_THROW(train(network, *adam, {&physics, &loss}, data, nullptr, limits(5)), Error);
 }
 
-// Interrupts a run when the evaluation after `stop_after` iterations is recorded, continues
-// it from the JSON of its last checkpoint and returns the continuation's summary. A pretraining
-// in `base` is made by a fresh Adam in each part.
-TrainingSummary interrupt_and_resume(const std::string& id, const TrainerOptions& base,
-                                     long long stop_after, Vector& final_theta) {
-  NetworkThroughPhysics s(30);
-  const RuleSettings settings = test_settings(id);
-  std::atomic<bool> stop{false};
-  std::string saved;
-  TrainerOptions options = base;
-  const auto first_adam = make_learning_update("adam"), second_adam = make_learning_update("adam");
-  if (options.pretraining) options.pretraining->update = first_adam.get();
-  options.stop = &stop;
-  options.checkpoint_every = 3;
-  options.on_checkpoint = [&saved](const TrainerState& state) {
-    saved = trainer_state_to_json(state).dump();
-  };
-  options.on_progress = [&](const TrainingRecord& r) {
-    if (r.iteration >= stop_after) stop = true;
-  };
-  const auto first = make_learning_update(id, settings);
-  const TrainingSummary interrupted = train(s.network, *first, s.problem, s.data, &s.data, options);
-  EXPECT_EQ(interrupted.termination, TrainingTermination::kInterrupted) << id;
-
-  // A new process: a fresh network and rule, the state read back from its text.
-  NetworkThroughPhysics t(30);
-  const TrainerState state =
-      trainer_state_from_json(nlohmann::json::parse(saved), t.network.num_parameters());
-  EXPECT_EQ(state.summary.iterations, interrupted.iterations) << id;
-  TrainerOptions resumed = base;
-  resumed.resume = &state;
-  if (resumed.pretraining) resumed.pretraining->update = second_adam.get();
-  const auto second = make_learning_update(id, settings);
-  const TrainingSummary summary = train(t.network, *second, t.problem, t.data, &t.data, resumed);
-  final_theta = t.network.parameters();
-  return summary;
-}
-
-TEST(Trainer, ResumedRunIsBitIdenticalToAnUninterruptedOne) {
-  TrainerOptions by_iterations;  // 30 samples in batches of 8: epochs end mid-way
-  by_iterations.batch_size = 8;
-  by_iterations.max_iterations = 25;
-  by_iterations.eval_every = 4;
-  TrainerOptions by_epochs;  // evaluated once per epoch
-  by_epochs.batch_size = 8;
-  by_epochs.max_epochs = 6;
-  for (const TrainerOptions& options : {by_iterations, by_epochs}) {
-    for (const std::string& id : rule_ids(RuleKind::kLearning)) {
-      NetworkThroughPhysics s(30);
-      const auto update = make_learning_update(id, test_settings(id));
-      const TrainingSummary whole = train(s.network, *update, s.problem, s.data, &s.data, options);
-      Vector theta;
-      const TrainingSummary resumed = interrupt_and_resume(id, options, 9, theta);
-      EXPECT_EQ(resumed.termination, whole.termination) << id;
-      EXPECT_EQ(resumed.iterations, whole.iterations) << id;
-      EXPECT_TRUE(theta == s.network.parameters()) << id;  // every bit
-      ASSERT_EQ(resumed.history.size(), whole.history.size()) << id;
-      for (std::size_t k = 0; k < whole.history.size(); ++k) {
-        EXPECT_EQ(resumed.history[k].iteration, whole.history[k].iteration) << id;
-        EXPECT_EQ(resumed.history[k].train_loss, whole.history[k].train_loss) << id << " " << k;
-        EXPECT_EQ(resumed.history[k].test_loss, whole.history[k].test_loss) << id << " " << k;
-      }
-    }
-  }
-}
-
 TEST(Trainer, StateFromJsonRejectsStatesThatDoNotFit) {
   NetworkThroughPhysics s(12);
   std::string saved;
@@ -372,124 +307,6 @@ TEST(Trainer, StateFromJsonRejectsStatesThatDoNotFit) {
   state.update_state["m"] = nlohmann::json::array({1.0});
   EXPECT_THROW(train(s.network, *adam, s.problem, s.data, nullptr, resume), Error);
 }
-// Adam's first updates, then HIG from that network (the HIG paper's Adam→HIG): the history up to
-// the switch is the plain Adam run's to the bit, the run's rule takes over with its own batch
-// size at a new epoch (evaluated there), and the steps after the switch report HIG's inversion.
-TEST(Trainer, PretrainingMakesTheFirstUpdatesThenTheRuleTakesOver) {
-  // 30 samples: Adam in batches of 8 (4 per epoch), HIG in batches of 4 (8 per epoch).
-  TrainerOptions adam_options = limits(20);
-  adam_options.batch_size = 8;
-  adam_options.eval_every = 3;
-  NetworkThroughPhysics a(30);
-  const auto adam = make_learning_update("adam");
-  const TrainingSummary plain = train(a.network, *adam, a.problem, a.data, &a.data, adam_options);
-
-  for (const long long switch_at : {6LL, 7LL}) {
-    NetworkThroughPhysics s(30);
-    const auto pretraining = make_learning_update("adam");
-    const auto hig = make_learning_update("hig", test_settings("hig"));
-    TrainerOptions options = limits(20);
-    options.batch_size = 4;
-    options.eval_every = 3;
-    options.pretraining = Pretraining{pretraining.get(), 8, switch_at};
-    const TrainingSummary summary = train(s.network, *hig, s.problem, s.data, &s.data, options);
-    EXPECT_EQ(summary.termination, TrainingTermination::kMaxIterations);
-    EXPECT_EQ(summary.iterations, 20);
-    EXPECT_TRUE(summary.message.empty()) << summary.message;
-    std::size_t compared = 0;
-    bool evaluated_at_switch = false;
-    for (const TrainingRecord& r : summary.history) {
-      evaluated_at_switch = evaluated_at_switch || r.iteration == switch_at;
-      if (r.iteration > switch_at) {
-        EXPECT_TRUE(r.step.contains("kept_directions")) << r.iteration << ": " << r.step;
-        continue;
-      }
-      EXPECT_TRUE(r.step.empty()) << r.iteration << ": " << r.step;  // Adam reports nothing
-      const auto same =
-          std::find_if(plain.history.begin(), plain.history.end(),
-                       [&](const TrainingRecord& p) { return p.iteration == r.iteration; });
-      if (same == plain.history.end()) continue;  // the switch off the schedule of 3
-      ++compared;
-      EXPECT_EQ(r.train_loss, same->train_loss) << r.iteration;
-      EXPECT_EQ(r.test_loss, same->test_loss) << r.iteration;
-      EXPECT_EQ(r.epoch, same->epoch) << r.iteration;
-    }
-    EXPECT_EQ(compared, 3u) << switch_at;  // iterations 0, 3 and 6
-    EXPECT_TRUE(evaluated_at_switch) << switch_at;
-    EXPECT_LT(summary.history.back().train_loss, summary.history.front().train_loss);
-    // Samples seen: the switch iteration's batches of 8, then batches of 4.
-    EXPECT_DOUBLE_EQ(summary.history.back().epoch,
-                     static_cast<double>(8 * switch_at + 4 * (20 - switch_at)) / 30.0);
-    ASSERT_TRUE(summary.pretraining.has_value());
-    EXPECT_EQ(summary.pretraining->update, "adam");
-    EXPECT_EQ(summary.pretraining->iterations, switch_at);
-    EXPECT_EQ(summary.pretraining->batch_size, 8);
-    EXPECT_NE(brief_report(summary).find("hig after " + std::to_string(switch_at) +
-                                         " iterations of adam: 20 iterations"),
-              std::string::npos)
-        << brief_report(summary);
-    EXPECT_NE(full_report(summary).find("Pretraining"), std::string::npos);
-  }
-}
-
-// A run limited by epochs or time may end before the rule takes over: the message says so. A
-// pretraining that leaves no iteration to the rule, or is the rule itself, is refused.
-TEST(Trainer, PretrainingThatDoesNotEndIsReportedAndBadOnesAreRefused) {
-  NetworkThroughPhysics s(30);
-  const auto adam = make_learning_update("adam");
-  const auto hig = make_learning_update("hig", test_settings("hig"));
-  TrainerOptions options;
-  options.batch_size = 4;
-  options.max_epochs = 1;
-  options.pretraining = Pretraining{adam.get(), 8, 100};
-  const TrainingSummary summary = train(s.network, *hig, s.problem, s.data, nullptr, options);
-  EXPECT_EQ(summary.termination, TrainingTermination::kMaxEpochs);
-  EXPECT_EQ(summary.iterations, 4);  // one epoch of Adam's batches
-  EXPECT_EQ(summary.message, "ended in the pretraining (adam), before hig took over");
-
-  options = limits(10);
-  options.pretraining = Pretraining{adam.get(), 8, 10};
-  EXPECT_THROW(train(s.network, *hig, s.problem, s.data, nullptr, options), Error);
-  options.pretraining = Pretraining{hig.get(), 8, 5};
-  EXPECT_THROW(train(s.network, *hig, s.problem, s.data, nullptr, options), Error);
-  options.pretraining = Pretraining{nullptr, 8, 5};
-  EXPECT_THROW(train(s.network, *hig, s.problem, s.data, nullptr, options), Error);
-  options.pretraining = Pretraining{adam.get(), 8, 0};
-  EXPECT_THROW(train(s.network, *hig, s.problem, s.data, nullptr, options), Error);
-}
-
-// Interrupted in the pretraining, at the switch or after it, a pretrained run continues to the
-// uninterrupted run's history and weights, bit for bit.
-TEST(Trainer, ResumedPretrainedRunIsBitIdenticalToAnUninterruptedOne) {
-  TrainerOptions options;  // 30 samples: Adam's epochs of 4 batches, the switch mid-epoch
-  options.batch_size = 4;
-  options.max_iterations = 25;
-  options.eval_every = 4;
-  options.pretraining = Pretraining{nullptr, 8, 7};
-  for (const std::string id : {"gn", "hig"}) {
-    NetworkThroughPhysics s(30);
-    const auto adam = make_learning_update("adam");
-    const auto update = make_learning_update(id, test_settings(id));
-    TrainerOptions whole_options = options;
-    whole_options.pretraining->update = adam.get();
-    const TrainingSummary whole =
-        train(s.network, *update, s.problem, s.data, &s.data, whole_options);
-    for (const long long stop_after : {4LL, 7LL, 12LL}) {
-      Vector theta;
-      const TrainingSummary resumed = interrupt_and_resume(id, options, stop_after, theta);
-      EXPECT_EQ(resumed.termination, whole.termination) << id << " " << stop_after;
-      EXPECT_TRUE(theta == s.network.parameters()) << id << " " << stop_after;  // every bit
-      ASSERT_EQ(resumed.history.size(), whole.history.size()) << id << " " << stop_after;
-      for (std::size_t k = 0; k < whole.history.size(); ++k) {
-        EXPECT_EQ(resumed.history[k].iteration, whole.history[k].iteration) << id;
-        EXPECT_EQ(resumed.history[k].train_loss, whole.history[k].train_loss) << id << " " << k;
-        EXPECT_EQ(resumed.history[k].test_loss, whole.history[k].test_loss) << id << " " << k;
-        EXPECT_EQ(resumed.history[k].step, whole.history[k].step) << id << " " << k;
-      }
-    }
-  }
-}
-
 // With eval_seconds, a run limited by time is evaluated at least that much training time apart
 // (besides the iteration schedule, here too sparse to matter), and never does it otherwise.
 TEST(Trainer, EvaluatesByTrainingTimeWhenAsked) {

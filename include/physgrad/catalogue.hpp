@@ -10,6 +10,7 @@
 #include <variant>
 #include <vector>
 
+#include "physgrad/learn/adam.hpp"
 #include "physgrad/learn/hig.hpp"
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/learn/sgd.hpp"
@@ -33,12 +34,12 @@ namespace physgrad {
 enum class RuleKind { kDirect, kLearning };
 
 // Every rule's full options; each struct's member initialisers are the one default of each
-// option (AdamOptions serves the direct and the learning Adam).
+// option.
 using RuleOptions =
     std::variant<GradientDescentOptions, MomentumOptions, AdamOptions, NewtonOptions, BfgsOptions,
                  LbfgsOptions, GaussNewtonOptions, LevenbergMarquardtOptions,
-                 InverseGradientOptions, PhysicalGradientOptions, SgdOptions, HigOptions,
-                 SipOptions>;
+                 InverseGradientOptions, PhysicalGradientOptions, SgdOptions,
+                 LearningAdamOptions, HigOptions, SipOptions>;
 
 struct RuleInfo {
   RuleKind kind;
@@ -107,7 +108,7 @@ std::string rule_table_markdown(RuleKind kind);
 std::unique_ptr<Optimizer> make_optimizer(const RuleOptions& options);
 std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSettings& settings = {});
 
-// The same for learning rules (AdamOptions gives AdamUpdate; the direct-only types are an Error).
+// The same for learning rules (the direct-only types are an Error).
 std::unique_ptr<LearningUpdate> make_learning_update(const RuleOptions& options);
 std::unique_ptr<LearningUpdate> make_learning_update(const std::string& id,
                                                      const RuleSettings& settings = {});

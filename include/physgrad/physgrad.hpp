@@ -75,10 +75,12 @@
 #include "physgrad/learn/hig.hpp"
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/learn/mapped_jacobian.hpp"
+#include "physgrad/learn/schedule.hpp"
 #include "physgrad/learn/sgd.hpp"
 #include "physgrad/learn/sharded_jacobian.hpp"
 #include "physgrad/learn/sip.hpp"
 #include "physgrad/learn/stacked_jacobian.hpp"
+#include "physgrad/learn/switching.hpp"
 
 #include "physgrad/catalogue.hpp"
 

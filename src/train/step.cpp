@@ -215,6 +215,7 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
   const SimulatorCounts counts_at_start = models.physics().counts();
   StepReport report;
   Step step;
+  bool halvable = false;
   // Halving moves θ before the next evaluation; an exception there (a StopRequested from the
   // simulator, say) puts θ and the step back, so the step leaves no trace but the cache.
   Vector whole_last_step;
@@ -234,6 +235,7 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
       if (report.applied()) {
         const auto update_start = Clock::now();
         try {
+          halvable = update.steps_can_be_halved();  // of the part making this step
           step = update.step(evaluated);
           if (step.delta.size() != models.network().num_parameters()) {
             throw Error("learning update '" + update.id() + "': step returned " +
@@ -289,7 +291,7 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
   }
   state.before_last_step = network.parameters();
   state.last_step = std::move(step.delta);
-  state.last_step_halvable = update.steps_can_be_halved();
+  state.last_step_halvable = halvable;
   network.parameters() += state.last_step;
   return report;
 }

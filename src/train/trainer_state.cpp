@@ -49,6 +49,25 @@ SimulatorCounts counts_from_json(const nlohmann::json& document) {
   return counts;
 }
 
+nlohmann::json phases_to_json(const std::vector<TrainingSummary::Phase>& phases) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const TrainingSummary::Phase& phase : phases) {
+    out.push_back({{"first_iteration", phase.first_iteration}, {"batch_size", phase.batch_size}});
+  }
+  return out;
+}
+
+// Each part's first iteration and batch size (checked against the run by train() on resuming).
+std::vector<TrainingSummary::Phase> phases_from_json(const nlohmann::json& document) {
+  if (!document.is_array()) throw Error("checkpoint field 'phases': expected an array");
+  std::vector<TrainingSummary::Phase> phases;
+  for (const nlohmann::json& entry : document) {
+    phases.push_back({integer_from_json(entry, "first_iteration"),
+                      static_cast<Index>(integer_from_json(entry, "batch_size", 1))});
+  }
+  return phases;
+}
+
 }  // namespace
 
 nlohmann::json training_summary_to_json(const TrainingSummary& s) {
@@ -65,7 +84,8 @@ nlohmann::json training_summary_to_json(const TrainingSummary& s) {
           {"inversion_seconds", s.inversion_seconds},
           {"update_seconds", s.update_seconds},
           {"step_halvings", s.step_halvings},
-          {"counts", counts_to_json(s.counts)}};
+          {"counts", counts_to_json(s.counts)},
+          {"phases", phases_to_json(s.phases)}};
 }
 
 TrainingSummary training_summary_from_json(const nlohmann::json& document) {
@@ -100,6 +120,8 @@ TrainingSummary training_summary_from_json(const nlohmann::json& document) {
   summary.step_halvings = integer_from_json(document, "step_halvings");
   // Absent from files of earlier versions: the work of the steps before is then not known.
   if (document.contains("counts")) summary.counts = counts_from_json(document.at("counts"));
+  // Absent from files of earlier versions, whose runs had one part.
+  if (document.contains("phases")) summary.phases = phases_from_json(document.at("phases"));
   if (!document.contains("history") || !document.at("history").is_array() ||
       document.at("history").empty()) {
     throw Error("checkpoint field 'history': expected a non-empty array of records");

@@ -2,9 +2,11 @@
 // what it needs of a mini-batch (∇θ, the stacked Jacobian, or the network outputs) and returns Δθ.
 #pragma once
 
+#include <cmath>
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -40,6 +42,14 @@ struct BatchState {
   std::function<Vector(const Matrix&)> backprop;  // cotangent at x (n × B) ↦ ∇θ
 };
 
+// What the trainer tells a rule after each evaluation of the network (the untrained one
+// included): the losses over the training and test sets after `iteration` updates.
+struct Evaluation {
+  long long iteration = 0;
+  double train_loss = 0;
+  double test_loss = NAN;  // NaN without a test set
+};
+
 class LearningUpdate {
  public:
   virtual ~LearningUpdate() = default;
@@ -66,6 +76,15 @@ class LearningUpdate {
   // What the last step did beyond Δθ, as named numbers and words for the metrics of an
   // evaluation (hig: the inversion's path, kept directions, …); empty when there is nothing.
   virtual nlohmann::json step_info() const { return nlohmann::json::object(); }
+
+  // Called after every evaluation, in order (every rank of a data-parallel run sees the same
+  // numbers): a rule that schedules its step size or switches on the evaluated loss reads it.
+  virtual void observe(const Evaluation& /*evaluation*/) {}
+  // A rule made of parts in turn (SwitchingUpdate): the part that makes the next step, from 0.
+  // When it changes the trainer evaluates the network and starts a new epoch.
+  virtual int phase() const { return 0; }
+  // The mini-batch size the part making the next step was given; unset: the trainer's.
+  virtual std::optional<Index> batch_size() const { return std::nullopt; }
 };
 
 }  // namespace physgrad

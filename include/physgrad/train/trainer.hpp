@@ -21,11 +21,16 @@ enum class TrainingTermination {
   kTimeBudget,        // time_budget_seconds of training time were spent
   kNumericalFailure,  // a step or an evaluation was not finite (see train())
   kInterrupted,       // a stop was requested (TrainerOptions::stop); continue with `resume`
+  kDiverged,          // a limit ended the run with its training loss above its start
 };
-// "max_iterations", "max_epochs", "time_budget", "numerical_failure", "interrupted".
+// "max_iterations", "max_epochs", "time_budget", "numerical_failure", "interrupted",
+// "diverged".
 std::string to_string(TrainingTermination termination);
 // Inverse of to_string; throws Error naming the text otherwise.
 TrainingTermination parse_training_termination(const std::string& text);
+// Whether a run that ended so reached what its limits allowed: a limit, not a failure, a stop
+// request or a divergence.
+bool ended_by_limit(TrainingTermination termination);
 
 struct TrainingRecord {
   long long iteration = 0;   // updates made so far
@@ -55,23 +60,24 @@ struct TrainingSummary {
   long long step_halvings = 0;  // steps retried at half length after a non-finite batch
   SimulatorCounts counts;  // this process's simulator work in the steps (evaluations excluded)
 
-  // What ran, set by train(): the rule and its settings, the weights |θ|, the training samples,
-  // the batch size and the limits set (name, value); with a pretraining
-  // (TrainerOptions::pretraining) its rule, settings, batch size and the iteration after which
-  // `update` took over.
+  // The parts of the run: one for a plain rule; a rule made of parts in turn
+  // (LearningUpdate::phase(), e.g. SwitchingUpdate's Adam→HIG) adds one each time the next part
+  // takes over, with the updates made before it and its batch size. Kept in checkpoints.
+  struct Phase {
+    long long first_iteration = 0;
+    Index batch_size = 0;
+  };
+  std::vector<Phase> phases;
+
+  // What ran, set by train(): the rule and its settings, the weights |θ|, the training samples
+  // (of an epoch, with fresh samples: TrainerOptions::fresh_samples), whether each batch was drawn
+  // afresh, and the limits set (name, value).
   std::string update;
   nlohmann::json params;
   Index parameters = 0;
   Index samples = 0;
-  Index batch_size = 0;
+  bool fresh_samples = false;
   std::vector<std::pair<std::string, double>> limits;
-  struct Pretraining {
-    std::string update;
-    nlohmann::json params;
-    Index batch_size = 0;
-    long long iterations = 0;
-  };
-  std::optional<Pretraining> pretraining;
 };
 
 // Everything a run needs to continue exactly where it was, taken between two iterations. The
@@ -88,15 +94,16 @@ struct TrainerState {
   TrainingSummary summary;      // the history and timings so far
 };
 
-// The first part of a run made by another rule, as the HIG paper trains with Adam before HIG
-// (TrainerOptions::pretraining).
-struct Pretraining {
-  LearningUpdate* update = nullptr;  // not the run's rule
-  Index batch_size = 32;
-  long long iterations = 1;  // the updates it makes, ≥ 1 and below max_iterations
-};
+// Samples drawn afresh for one mini-batch: `count` samples from random stream `stream`
+// (fresh_stream()). Every call with the same stream must give the same samples, so that a
+// resumed or data-parallel run trains on what an uninterrupted one does.
+using SampleSource = std::function<Dataset(std::uint64_t stream, Index count)>;
+// The stream of the mini-batch after `iterations` updates of a run with seed `seed`: distinct for
+// every (seed, iteration) (a 64-bit mix of both), so no two batches of a run share a stream.
+std::uint64_t fresh_stream(std::uint64_t seed, long long iterations);
 
 struct TrainerOptions {
+  // The mini-batch size; a rule made of parts gives each part its own (batch_size()).
   Index batch_size = 32;
   // Stop after any of these; at least one must be set.
   std::optional<long long> max_iterations;
@@ -110,7 +117,11 @@ struct TrainerOptions {
   // data-parallel run reproduces them exactly.
   std::optional<double> eval_seconds;
   bool shuffle = true;
-  std::uint64_t seed = 0;  // shuffling order
+  std::uint64_t seed = 0;  // shuffling order, and the streams of fresh samples
+  // When set, every mini-batch is drawn afresh from it (the HIG paper's protocol) instead of
+  // taken from the training set, which then only sets the epoch's length (N samples) and gives
+  // the evaluated training loss.
+  SampleSource fresh_samples;
   // Data-parallel training: the ranks of this communicator share every mini-batch (Shard,
   // evaluate_batch()); none, or one rank: this process alone.
   std::shared_ptr<Communicator> communicator;
@@ -136,18 +147,14 @@ struct TrainerOptions {
   // For rules whose steps can be halved (gn, hig): how often a step that led to a non-finite
   // batch is retried at half its length before training stops.
   int max_step_halvings = 10;
-  // The first pretraining->iterations updates are made by pretraining->update on batches of its
-  // batch size; the network is evaluated there and the run's rule takes over from that θ, with
-  // a state of its own (reset) and its batch size, at the start of a new epoch. The iteration
-  // count, the training time, the history and the limits run on across the switch, which
-  // depends on the iteration count alone: a resumed or data-parallel run switches where an
-  // uninterrupted one does. A checkpoint holds the state of the rule making the updates then.
-  // max_epochs counts the pretraining's epochs too, its last (perhaps partial) one whole.
-  std::optional<Pretraining> pretraining;
 };
 
-// Trains `network` in place. Throws Error on mismatched dimensions, invalid options, a
-// resume state that does not fit, or an untrained network whose loss is not finite.
+// Trains `network` in place. The rule hears of every evaluation (LearningUpdate::observe()); when
+// its phase() changes, the network is evaluated and the next part starts a new epoch with its
+// batch size; the iteration count, training time, history and limits run on across parts.
+// A run that a limit ends with its training loss above the first evaluation's ends as kDiverged.
+// Throws Error on mismatched dimensions, invalid options, a resume state that does not fit, a
+// fresh batch of the wrong shape, or an untrained network whose loss is not finite.
 // Numerical guard (train_step()): a non-finite loss, derivative or step, or a NumericalError
 // below the rule, never reaches θ; a failed step ends training with kNumericalFailure and a
 // message naming the rule, the iteration and the place. An evaluation whose train or test loss
@@ -157,6 +164,10 @@ struct TrainerOptions {
 TrainingSummary train(Network& network, LearningUpdate& update, const LearningProblem& problem,
                       const Dataset& train_set, const Dataset* test_set,
                       const TrainerOptions& options);
+
+// The epochs the updates of `summary` amount to: the samples of their batches (each part's
+// iterations at its batch size, TrainingSummary::phases) over the training samples.
+double epochs_done(const TrainingSummary& summary);
 
 // One line: "hig: 120 iterations (3.75 epochs), 4800 simulator passes, train loss 1.2 → 0.045,
 // max_iterations".
