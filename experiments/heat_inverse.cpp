@@ -89,7 +89,8 @@ class HeatInverse final : public LearningExperiment {
   HeatInverse()
       : LearningExperiment(
             {.time = "20",
-             .eval_every_help = "evaluate every N iterations (default: 250 in 1-D, 40 in 2-D)"}) {}
+             .eval_every_help = "evaluate every N iterations (default: 250 in 1-D, 40 in 2-D)",
+             .data = "fixed"}) {}
   std::string name() const override { return "heat-inverse"; }
   std::string description() const override {
     return "fully connected net reconstructs hot boxes x* from their periodic heat diffusion "
@@ -159,6 +160,9 @@ class HeatInverse final : public LearningExperiment {
       record.extras["x_l1"] = error.cwiseAbs().sum() / samples;
     };
     LearningSweep sweep(settings, context, kDefaults);
+    sweep.draw_from([&physics](std::uint64_t stream, Index count) {
+      return make_data(physics, count, stream).set;
+    });
     std::vector<std::pair<const LearningResult*, Mlp>> trained;
     const Index size = physics.input_dim();
     for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
@@ -175,11 +179,10 @@ class HeatInverse final : public LearningExperiment {
     std::vector<const LearningResult*> runs;
     for (const auto& entry : trained) runs.push_back(entry.first);
     sweep.add_loss_figures(context, tag, std::to_string(dims) + "d");
-    const std::string x_loss_file = "x_loss_vs_time_" + std::to_string(dims) + "d.svg";
-    const auto x_loss = LearningSweep::extra("x_loss");
-    LearningSweep::add_metric_figure(context, sweep.rule_groups(tag), x_loss_file,
-                                     "Reconstruction error ½‖x − x*‖² vs time (" + tag + ")",
-                                     "mean x loss on the test set", x_loss);
+    const std::string x_loss_file = "x_loss_" + std::to_string(dims) + "d.svg";
+    context.add_figure(sweep.progress_figure(tag, x_loss_file, LearningSweep::extra("x_loss"),
+                                             "Reconstruction error ½‖x − x*‖²",
+                                             "mean x loss on the test set"));
     sweep.set_metric_message(tag, x_loss_file, "x_loss",
                              "final reconstruction error ½‖x − x*‖² on the test set",
                              "Lowest y loss (what the rules train on)", "final y loss");

@@ -12,6 +12,7 @@
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/svg_document.hpp"
+#include "physgrad/run/learning_verdict.hpp"
 #include "physgrad/run/sampling.hpp"
 
 namespace physgrad::experiments {
@@ -69,7 +70,7 @@ ActivationStats activation_stats(const Mlp& network, const Matrix& inputs) {
 
 class HigToy final : public LearningExperiment {
  public:
-  HigToy() : LearningExperiment({.eval_every = "200"}) {}
+  HigToy() : LearningExperiment({.eval_every = "200", .data = "fixed"}) {}
   std::string name() const override { return "hig-toy"; }
   std::string description() const override {
     return "1-7-2 tanh net learns (sin 6x, cos 9x) through P(y) = (y1, lambda*y2): "
@@ -103,6 +104,7 @@ class HigToy final : public LearningExperiment {
 
   void run(const Settings& settings, RunContext& context) const override {
     LearningSweep sweep(settings, context, rule_defaults());
+    sweep.draw_from([](std::uint64_t stream, Index count) { return make_data(count, stream); });
     for (const double lambda : settings.reals("lambda")) {
       const DiagonalScale physics(Vector{{1.0, lambda}});
       const L2Loss loss;
@@ -162,21 +164,27 @@ class HigToy final : public LearningExperiment {
     for (auto lambda = lambdas.rbegin(); lambda != lambdas.rend(); ++lambda) {
       const std::string tag = "λ=" + format_value(*lambda);
       const std::string ratio =
-          lowest_value_sentence(sweep.final_medians(tag, test_loss), "median final test loss");
+          verdict_sentence({sweep.rule_groups(tag), test_loss, "median final test loss"});
       sentence += sentence.empty() ? "At λ = " + format_value(*lambda) + ", " + ratio
                                    : " At λ = " + format_value(*lambda) + ": " + ratio;
     }
-    for (const double lambda : lambdas) {
-      const std::string tag = "λ=" + format_value(lambda);
-      panels.push_back(LearningSweep::metric_figure(sweep.rule_groups(tag), "", "Test loss (" + tag + ")",
-                                                    "mean test loss", test_loss,
-                                                    LearningSweep::Progress::kIteration, true, range)
-                           .svg);
+    for (auto lambda = lambdas.rbegin(); lambda != lambdas.rend(); ++lambda) {
+      const std::string tag = "λ=" + format_value(*lambda);
+      for (const auto progress :
+           {LearningSweep::Progress::kIteration, LearningSweep::Progress::kTime}) {
+        const bool by_time = progress == LearningSweep::Progress::kTime;
+        panels.push_back(LearningSweep::metric_figure(
+                             sweep.rule_groups(tag), "",
+                             "Test loss (" + tag + ") per " + (by_time ? "second" : "update"),
+                             "mean test loss", test_loss, progress, true, range)
+                             .svg);
+      }
     }
     const std::string file = "loss_by_lambda.svg";
     context.add_figure({file,
-                        "Test loss vs iteration for each λ, one y axis. Line: median over the "
-                        "seeds; band: their minimum to maximum. Dots: evaluations.",
+                        "Test loss per update and per second of training for each λ (the "
+                        "hardest first), one y axis. Line: median over the seeds; band: their "
+                        "minimum to maximum. Dots: evaluations.",
                         svg::side_by_side(panels)});
     // The index compares run folders at the hardest λ (the smallest: the most ill-conditioned).
     const double hardest = *std::min_element(lambdas.begin(), lambdas.end());

@@ -137,8 +137,7 @@ void add_trajectory_figures(RunContext& context, const OscillatorConfig& config,
 
 class Oscillators final : public LearningExperiment {
  public:
-  // --pretrain: see the note in run().
-  Oscillators() : LearningExperiment({.time = "20", .pretrain = "300"}) {}
+  Oscillators() : LearningExperiment({.time = "20", .pretrain = "auto", .data = "fixed"}) {}
   std::string name() const override { return "oscillators"; }
   std::string description() const override {
     return "controls that return coupled oscillators to their start: Adam vs GN vs HIG (paper) "
@@ -189,6 +188,8 @@ class Oscillators final : public LearningExperiment {
     const Dataset test_set = make_states(settings.integer("test-size"), dim, 2 * seed + 1);
 
     LearningSweep sweep(settings, context, config.defaults);
+    sweep.draw_from(
+        [dim](std::uint64_t stream, Index count) { return make_states(count, dim, stream); });
     const std::vector<std::string> rules =
         settings.has("optimizers") ? settings.texts("optimizers") : config.rules;
     sweep.plan_runs(rules);
@@ -210,18 +211,6 @@ class Oscillators final : public LearningExperiment {
         "SIP ~1e-4; the paper's runs used 3600 s per method and stored no numbers. Budgets here "
         "are training time per rule (--time), evaluations excluded; every rule starts from the "
         "same network.");
-    if (std::any_of(ids.begin(), ids.end(),
-                    [](const std::string& id) { return !pretrained_rule(id).empty(); })) {
-      context.add_note(
-          "Adam→GN and Adam→HIG are the HIG paper's switch from Adam: their first --pretrain " +
-          std::to_string(settings.integer("pretrain")) +
-          " iterations are the Adam run's, then the rule continues from that network within the "
-          "same budget. The default 300 comes from the Adam curve alone, measured before any "
-          "such run: the paper variant's default Adam run's test loss had fallen 10× below its "
-          "start (1.0 → 0.099) at iteration 264, its first evaluation below 0.1 (6–9 s of its "
-          "20 s in two runs here), rounded up; its descent slows there (0.061 at iteration 296, "
-          "0.030 at 360, 0.015 at 512).");
-    }
   }
 };
 

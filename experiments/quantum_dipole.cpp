@@ -128,7 +128,7 @@ void add_state_figures(RunContext& context, const QuantumDipoleConfig& config,
 
 class QuantumDipoleExperiment final : public LearningExperiment {
  public:
-  QuantumDipoleExperiment() : LearningExperiment({.time = "30"}) {}
+  QuantumDipoleExperiment() : LearningExperiment({.time = "30", .data = "fixed"}) {}
   std::string name() const override { return "quantum-dipole"; }
   std::string description() const override {
     return "dipole controls that steer a 1-D quantum state to a target superposition: "
@@ -184,6 +184,9 @@ class QuantumDipoleExperiment final : public LearningExperiment {
     const Dataset test_set = make_targets(settings.integer("test-size"), config.points, 2 * seed + 1);
 
     LearningSweep sweep(settings, context, rule_defaults());
+    sweep.draw_from([points = config.points](std::uint64_t stream, Index count) {
+      return make_targets(count, points, stream);
+    });
     const std::string tag = "Nt=" + std::to_string(config.steps);
     std::vector<std::pair<const LearningResult*, Mlp>> trained;
     for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {

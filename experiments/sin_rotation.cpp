@@ -57,7 +57,8 @@ double x_distance(const SinRotation& physics, const Matrix& x, const Matrix& tar
 
 class SinRotationExperiment final : public LearningExperiment {
  public:
-  SinRotationExperiment() : LearningExperiment({.time = "8", .eval_every = "1000"}) {}
+  SinRotationExperiment()
+      : LearningExperiment({.time = "8", .eval_every = "1000", .data = "fixed"}) {}
   std::string name() const override { return "sin-rotation"; }
   std::string description() const override {
     return "2-32-64-32-2 ReLU net inverts the rotated sine map P(x) = SinRotation(xi, phi): "
@@ -104,6 +105,9 @@ class SinRotationExperiment final : public LearningExperiment {
       const std::string tag = "ξ=" + format_value(xi);
       const std::map<std::string, RuleDefaults> defaults = rule_defaults(xi, form);
       LearningSweep sweep(settings, context, defaults);
+      sweep.draw_from([xi, form](std::uint64_t stream, Index count) {
+        return make_data(count, xi, form, stream);
+      });
       for (long long s = 0; s < settings.integer("seeds"); ++s) {
         const auto seed = static_cast<std::uint64_t>(settings.integer("seed") + s);
         const Dataset train_set = make_data(settings.integer("train-size"), xi, form, 2 * seed);
@@ -128,12 +132,10 @@ class SinRotationExperiment final : public LearningExperiment {
       }
       const std::vector<const LearningResult*> runs = sweep.first_seed_runs(tag);
       sweep.add_loss_figures(context, tag, "xi_" + format_value(xi));
-      const std::string distance_file = "x_distance_vs_time_xi_" + format_value(xi) + ".svg";
-      const auto distance = LearningSweep::extra("x_distance");
-      LearningSweep::add_metric_figure(
-          context, sweep.rule_groups(tag), distance_file,
-          "x-distance to the nearest exact solution vs time (" + tag + ")",
-          "mean |f(y*) − x_closest| on the test set", distance);
+      const std::string distance_file = "x_distance_xi_" + format_value(xi) + ".svg";
+      context.add_figure(sweep.progress_figure(tag, distance_file, LearningSweep::extra("x_distance"),
+                                               "x-distance to the nearest exact solution",
+                                               "mean |f(y*) − x_closest| on the test set"));
       // The message: at the stiffest ξ, how much closer to an exact solution the best rule lands.
       if (xi == *std::max_element(xis.begin(), xis.end())) {
         sweep.set_metric_message(tag, distance_file, "x_distance",

@@ -34,7 +34,8 @@ TEST_F(Cli, BadInputIsOneLineExitTwoAndWritesNothing) {
   expect_rejected("run scaled-toy --start 0,0", "(0, 0)");
   expect_rejected("run comparison --pg-inverse magic", "'magic'");
   expect_rejected("run sensitivity --no-such-option 1", "--no-such-option");
-  expect_rejected("run poisson --pretrain -1", "--pretrain: must be in [0, 1000000000], got '-1'");
+  expect_rejected("run poisson --pretrain -1",
+                  "--pretrain: '-1' is neither auto nor a whole number from 0 to 10⁹");
   expect_rejected("run poisson --pretrain soon", "--pretrain: 'soon'");
   expect_rejected("run oscillators --pretrain 2.5", "--pretrain: '2.5'");
 }

@@ -67,10 +67,10 @@ const std::vector<Case>& cases() {
        {"loss_vs_time_lambda_0.01.svg", "activations_lambda_0.01.svg"}},
       {"sin-rotation",
        "run sin-rotation --xi 1,32 --time 0.1 --train-size 100 --test-size 20 --eval-every 50",
-       {"x_distance_vs_time_xi_32.svg", "landscape_xi_1.svg"}},
+       {"x_distance_xi_32.svg", "landscape_xi_1.svg"}},
       {"heat-inverse",
        "run heat-inverse --n 16 --train-size 32 --test-size 8 --iters 20 --eval-every 5 --batch 8",
-       {"reconstruction_1.svg", "x_loss_vs_time_1d.svg"}},
+       {"reconstruction_1.svg", "x_loss_1d.svg"}},
       {"heat-inverse-2d",
        "run heat-inverse --dims 2 --n 8 --train-size 16 --test-size 4 --iters 10 --eval-every 5 "
        "--batch 4",

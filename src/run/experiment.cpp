@@ -169,9 +169,15 @@ std::string describe_range(const OptionSpec& spec) {
   return out;
 }
 
-OptionSpec rule_option_spec(const std::string& name, std::optional<RuleKind> kind,
+std::string flag_name(std::string rule_option) {
+  std::replace(rule_option.begin(), rule_option.end(), '_', '-');
+  return rule_option;
+}
+
+OptionSpec rule_option_spec(const std::string& rule_option, std::optional<RuleKind> kind,
                             const std::vector<std::string>& offered) {
-  const SharedRuleOption shared = shared_rule_option(name, kind);
+  const std::string name = flag_name(rule_option);
+  const SharedRuleOption shared = shared_rule_option(rule_option, kind);
   std::vector<std::string> rules;
   for (const std::string& id : shared.rules) {
     if (std::find(offered.begin(), offered.end(), id) != offered.end()) rules.push_back(id);
@@ -195,8 +201,9 @@ OptionSpec rule_option_spec(const std::string& name, std::optional<RuleKind> kin
 RuleSettings rule_settings(const Settings& settings, RuleKind kind) {
   RuleSettings rule;
   for (const std::string& name : rule_option_names(kind)) {
-    if (settings.json().contains(name) && !settings.json().at(name).is_null()) {
-      rule[name] = settings.json().at(name);
+    const std::string flag = flag_name(name);
+    if (settings.json().contains(flag) && !settings.json().at(flag).is_null()) {
+      rule[name] = settings.json().at(flag);
     }
   }
   return rule;

@@ -6,6 +6,7 @@
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad::experiments {
 
@@ -69,13 +70,15 @@ void require_learning_sizes(const Settings& settings, Index outputs,
         settings.has("iters")
             ? static_cast<double>(settings.integer("iters"))
             : static_cast<double>(settings.integer("epochs")) * std::ceil(train_size / batch);
-    // A pretrained run (--pretrain) next to each gn or hig run.
+    // A pretrained run (--pretrain) next to each rule that needs the stacked Jacobian.
     double runs = 1;
     if (settings.has("optimizers")) {
       const std::vector<std::string> ids = settings.texts("optimizers");
-      const bool pretrained = settings.has("pretrain") && settings.integer("pretrain") > 0;
+      const bool pretrained = settings.has("pretrain") && settings.text("pretrain") != "0";
       runs = static_cast<double>(ids.size());
-      for (const std::string& id : ids) runs += pretrained && (id == "gn" || id == "hig") ? 1 : 0;
+      for (const std::string& id : ids) {
+        runs += pretrained && make_learning_update(id)->need() == UpdateNeed::kStackedJacobian;
+      }
     }
     const long long every = settings.integer("eval-every");
     require_memory(1024 * runs * (iterations / static_cast<double>(every) + 2),
@@ -88,7 +91,7 @@ void require_learning_sizes(const Settings& settings, Index outputs,
 // keeps its own defaults unless one is given; an experiment may give time and eval-every
 // defaults.
 std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
-  return {
+  std::vector<OptionSpec> options = {
       integer_option("batch", "",
                      "mini-batch size for every rule (default: each rule's own); with gn or hig "
                      "one step may take at most 10¹² multiply-adds (docs/cli.md, forming J Jᵀ "
@@ -116,20 +119,57 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
       real_option("checkpoint-seconds", "60",
                   "save a checkpoint of the run in progress at least this often (wall seconds)")
           .above(0),
-      integer_option("pretrain", defaults.pretrain,
-                     "N > 0: each gn or hig run gets a twin that Adam trains for its first N "
-                     "iterations (Adam→GN, Adam→HIG; Adam with the settings and batch of the Adam "
-                     "run) before the rule continues from that network; --iters, --epochs and "
-                     "--time count the whole run, and with --iters ≤ N there is no such run; "
-                     "0: none" +
-                         std::string(defaults.pretrain.empty() ? " (default)" : ""))
-          .at_least(0)
-          .at_most(1e9)
+      text_option("pretrain", defaults.pretrain,
+                  "auto or N: each rule that needs the stacked Jacobian (gn, hig, …) gets a twin "
+                  "that Adam trains first (Adam→GN, Adam→HIG; Adam with the settings and batch "
+                  "of the Adam run) before the rule continues from that network — auto: once "
+                  "Adam's evaluated training loss has levelled off (--plateau-window, "
+                  "--plateau-fraction), N: after N updates (with --iters ≤ N there is no such "
+                  "run); a twin that never switched reads as Adam; --iters, --epochs and --time "
+                  "count the whole run; 0: none" +
+                      std::string(defaults.pretrain.empty() ? " (default)" : ""))
           .quick("1"),
+      integer_option("plateau-window", "10",
+                     "--pretrain auto: the evaluations over which Adam's loss is compared")
+          .at_least(1)
+          .at_most(1e6),
+      real_option("plateau-fraction", "0.02",
+                  "--pretrain auto: Adam has levelled off when the best loss of the last "
+                  "--plateau-window evaluations is less than this fraction below the best before "
+                  "them")
+          .above(0)
+          .below(1),
+      rule_option_spec("schedule", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("decay", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("decay_every", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("t_max", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("min_lr", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("patience", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("threshold", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
   };
+  if (!defaults.data.empty()) {
+    options.push_back(text_option("data", defaults.data,
+                                  "training samples: fixed (the --train-size samples, in shuffled "
+                                  "epochs) or fresh (every mini-batch drawn anew from the same "
+                                  "distribution; --train-size then sets the epoch's length and "
+                                  "the set the training loss is evaluated on)")
+                          .one_of({"fixed", "fresh"}));
+  }
+  return options;
 }
 
 }  // namespace
+
+long long pretrain_iterations(const std::string& text) {
+  if (text == "auto") return 0;
+  OptionSpec spec = integer_option("pretrain", "", "").at_least(0).at_most(1e9);
+  try {
+    return parse_option(spec, text).get<long long>();
+  } catch (const Error&) {
+    throw Error("--pretrain: " + in_quotes(text) + " is neither auto nor a whole number from 0 "
+                "to 10⁹");
+  }
+}
 
 std::unique_ptr<LearningUpdate> ReferenceCase::update(const std::string& id) const {
   const auto found = defaults.find(id);
@@ -153,6 +193,7 @@ std::vector<std::string> LearningExperiment::optimizer_choices() const {
 }
 
 void LearningExperiment::validate(const Settings& settings) const {
+  if (settings.has("pretrain")) pretrain_iterations(settings.text("pretrain"));
   check(settings);
   require_training_limit(settings, name());
   const Shape sizes = shape(settings);

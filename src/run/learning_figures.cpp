@@ -4,9 +4,11 @@
 #include <cmath>
 
 #include "physgrad/run/learning_runs.hpp"
+#include "physgrad/run/learning_verdict.hpp"
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
+#include "physgrad/report/svg_document.hpp"
 
 namespace physgrad::experiments {
 
@@ -160,25 +162,33 @@ void LearningSweep::add_loss_figures(RunContext& context, const std::string& tag
   }
 }
 
-std::vector<LearningSweep::RuleValue> LearningSweep::final_medians(
-    const std::string& tag, const std::function<double(const TrainingRecord&)>& value) const {
-  std::vector<RuleValue> out;
-  for (const auto& group : rule_groups(tag)) {
-    std::vector<double> finals;
-    for (const LearningResult* run : group) {
-      const double v = value(run->summary.history.back());
-      finals.push_back(std::isfinite(v) ? v : NAN);
-    }
-    out.push_back({learning_run_label(group.front()->id), median(finals)});
+RunContext::Figure LearningSweep::progress_figure(
+    const std::string& tag, const std::string& file,
+    const std::function<double(const TrainingRecord&)>& value, const std::string& what,
+    const std::string& y_label) const {
+  const auto groups = rule_groups(tag);
+  const std::string title = what + " (" + tag + ")";
+  std::vector<std::string> panels;
+  for (const Progress progress : {Progress::kIteration, Progress::kTime}) {
+    panels.push_back(metric_figure(groups, "", title + (progress == Progress::kTime
+                                                            ? " per second of training"
+                                                            : " per update"),
+                                   y_label, value, progress, true)
+                         .svg);
   }
-  return out;
+  return {file,
+          "The message metric per update (left) and per second of training (right), " + tag +
+              ": the same runs against the updates they made and the training time they took.",
+          svg::side_by_side(panels), tag};
 }
 
 void LearningSweep::set_time_message(const std::string& tag, const std::string& file_tag,
                                      const std::string& what) const {
-  const std::string sentence = lowest_value_sentence(
-      final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }), what);
-  context_.set_message("loss_vs_time_" + file_tag + ".svg", "After the same budget, " + sentence,
+  const auto test_loss = [](const TrainingRecord& r) { return r.test_loss; };
+  const std::string file = "progress_" + file_tag + ".svg";
+  context_.add_figure(progress_figure(tag, file, test_loss, "Test loss", "mean test loss"));
+  context_.set_message(file,
+                       "After the same budget, " + verdict_sentence({rule_groups(tag), test_loss, what}),
                        {"test_loss", what, labels(tag)});
 }
 
@@ -186,12 +196,11 @@ void LearningSweep::set_metric_message(const std::string& tag, const std::string
                                        const std::string& metric, const std::string& what_metric,
                                        const std::string& loss_lead, const std::string& what_loss,
                                        const std::string& prefix) const {
+  const auto test_loss = [](const TrainingRecord& r) { return r.test_loss; };
   context_.set_message(
       file,
-      prefix + lowest_value_sentence(final_medians(tag, extra(metric)), what_metric) + " " +
-          loss_lead + ": " +
-          lowest_value_sentence(
-              final_medians(tag, [](const TrainingRecord& r) { return r.test_loss; }), what_loss),
+      prefix + verdict_sentence({rule_groups(tag), extra(metric), what_metric}) + " " + loss_lead +
+          ": " + verdict_sentence({rule_groups(tag), test_loss, what_loss}),
       {metric, what_metric, labels(tag)});
 }
 
@@ -207,35 +216,6 @@ std::vector<std::string> LearningSweep::labels(const std::string& tag) const {
     }
   }
   return out;
-}
-
-std::string lowest_value_sentence(const std::vector<LearningSweep::RuleValue>& values,
-                                  const std::string& what) {
-  std::vector<LearningSweep::RuleValue> finite;
-  for (const auto& v : values) {
-    if (std::isfinite(v.value)) finite.push_back(v);
-  }
-  std::sort(finite.begin(), finite.end(),
-            [](const auto& a, const auto& b) { return a.value < b.value; });
-  if (finite.empty()) return "No rule ended with a finite " + what + ".";
-  const auto& best = finite.front();
-  std::string out = best.label + "'s " + what + " is ";
-  if (finite.size() == 1) {
-    out += format_value(best.value);
-  } else {
-    const auto& next = finite[1];
-    const std::string ratio = best.value > 0 ? format_value(next.value / best.value) : "∞";
-    out += ratio + "× below " + next.label + "'s (" + format_value(best.value) + " vs " +
-           format_value(next.value) + ")";
-  }
-  // Every other rule: the finite values upwards, then those that are not finite.
-  for (std::size_t k = 2; k < finite.size(); ++k) {
-    out += "; " + finite[k].label + "'s is " + format_value(finite[k].value);
-  }
-  for (const auto& v : values) {
-    if (!std::isfinite(v.value)) out += "; " + v.label + "'s is not finite";
-  }
-  return out + ".";
 }
 
 void LearningSweep::add_tables() const {
@@ -282,10 +262,14 @@ void LearningSweep::add_tables() const {
           saturated.push_back("–");
           continue;
         }
-        values.push_back(final_test_loss(*r));
-        row.push_back(format_value(values.back()) +
-                      (r->summary.termination == TrainingTermination::kNumericalFailure ? " (NaN stop)"
-                                                                                   : ""));
+        // A run that failed, diverged or never switched is shown, never counted in a median.
+        const bool counts = credited(*r);
+        if (counts) values.push_back(final_test_loss(*r));
+        row.push_back(format_value(final_test_loss(*r)) +
+                      (counts ? std::string()
+                       : r->params.value("switched", true) == false
+                           ? " (never switched)"
+                           : " (" + to_string(*r->summary.termination) + ")"));
         if (has_saturation) {
           saturated.push_back(format_value(r->summary.history.back().extras["saturated_fraction"]));
         }
@@ -308,7 +292,8 @@ void LearningSweep::add_tables() const {
                                                           : "×" + format_value(medians[k] / lowest));
     }
     losses.title += "; the last column marks the lowest median (best) and gives the others as "
-                    "multiples of it";
+                    "multiples of it. A run in brackets (failed, diverged, never switched) counts "
+                    "in no median";
     context_.add_table(std::move(losses));
     if (has_saturation) context_.add_table(std::move(saturation));
   }
@@ -342,6 +327,41 @@ void LearningSweep::add_tables() const {
     }
   }
   context_.add_table(std::move(timing));
+  add_switch_note();
+}
+
+void LearningSweep::add_switch_note() const {
+  std::string note;
+  for (const LearningResult& r : results_) {
+    const std::string rule = pretrained_rule(r.id);
+    if (rule.empty()) continue;
+    const std::string who = learning_run_label(r.id) + " (" + r.tag + ", seed " +
+                            std::to_string(r.seed) + ")";
+    if (r.params.value("switched", false)) {
+      const long long at = r.params.at("pretrain_iterations").get<long long>();
+      double seconds = 0;
+      for (const TrainingRecord& record : r.summary.history) {
+        if (record.iteration <= at) seconds = record.train_seconds;
+      }
+      note += (note.empty() ? "" : " ") + who + ": Adam made " + std::to_string(at) +
+              " updates (" + format_value(seconds) + " s) before " + learning_run_label(rule) +
+              " took over.";
+    } else {
+      note += (note.empty() ? "" : " ") + who + " never switched within its budget: it is Adam's "
+              "run, shown as such and not ranked.";
+    }
+  }
+  if (note.empty()) return;
+  const std::string pretrain = settings_.text("pretrain");
+  context_.add_note(
+      "The Adam→ runs are the HIG paper's switch from Adam to the rule, " +
+      (pretrain == "auto"
+           ? "made once Adam's evaluated training loss had levelled off (--pretrain auto: the best "
+             "of the last " + std::to_string(settings_.integer("plateau-window")) +
+                 " evaluations less than " + format_value(100 * settings_.real("plateau-fraction")) +
+                 " % below the best before them)"
+           : "after --pretrain " + pretrain + " Adam updates") +
+      "; the switch is marked on the curves. " + note);
 }
 
 }  // namespace physgrad::experiments

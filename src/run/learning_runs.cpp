@@ -6,6 +6,7 @@
 #include <new>
 
 #include "physgrad/run/checkpoint.hpp"
+#include "physgrad/run/learning_experiment.hpp"
 #include "physgrad/run/direct_runs.hpp"
 #include "physgrad/run/interrupt.hpp"
 #include "physgrad/error.hpp"
@@ -112,26 +113,34 @@ LearningSweep::LearningSweep(const Settings& settings, RunContext& context,
   if (plan.started >= 0) return;
   plan.started = steady_seconds();
   if (settings_.has("optimizers")) plan_runs(settings_.texts("optimizers"));
-  if (settings_.has("pretrain") && settings_.integer("pretrain") > 0 &&
-      pretraining_iterations() == 0) {
-    context_.add_note("No run is pretrained with Adam: --pretrain " +
-                      std::to_string(settings_.integer("pretrain")) +
+  if (settings_.has("pretrain") && settings_.text("pretrain") != "0" && !switch_condition()) {
+    context_.add_note("No run is pretrained with Adam: --pretrain " + settings_.text("pretrain") +
                       " would leave none of the --iters " +
                       std::to_string(settings_.integer("iters")) + " to the rule taking over.");
   }
 }
 
-long long LearningSweep::pretraining_iterations() const {
-  const long long n = settings_.has("pretrain") ? settings_.integer("pretrain") : 0;
-  return n > 0 && !(settings_.has("iters") && n >= settings_.integer("iters")) ? n : 0;
+std::optional<SwitchCondition> LearningSweep::switch_condition() const {
+  if (!settings_.has("pretrain")) return std::nullopt;
+  const std::string text = settings_.text("pretrain");
+  SwitchCondition condition;
+  if (text == "auto") {
+    condition.window = static_cast<int>(settings_.integer("plateau-window"));
+    condition.fraction = settings_.real("plateau-fraction");
+    return condition;
+  }
+  condition.after = pretrain_iterations(text);
+  if (condition.after == 0 || (settings_.has("iters") && condition.after >= settings_.integer("iters"))) {
+    return std::nullopt;
+  }
+  return condition;
 }
 
 std::vector<std::string> LearningSweep::run_ids(const std::vector<std::string>& rules) const {
   std::vector<std::string> ids;
   for (const std::string& id : rules) {
     ids.push_back(id);
-    if (pretraining_iterations() > 0 &&
-        make_learning_update(id)->need() == UpdateNeed::kStackedJacobian) {
+    if (switch_condition() && make_learning_update(id)->need() == UpdateNeed::kStackedJacobian) {
       ids.push_back(pretrained_run_id(id));
     }
   }
@@ -166,9 +175,22 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                                          std::function<void(const Mlp&, TrainingRecord&)> observe) {
   // A pretrained run: its Adam part as the Adam run of this sweep, then its rule.
   const std::string pretrained = pretrained_rule(id);
-  const std::string rule = pretrained.empty() ? id : pretrained;
-  const std::unique_ptr<LearningUpdate> update = make_update(rule);
-  std::unique_ptr<LearningUpdate> pretraining;
+  std::unique_ptr<LearningUpdate> update;
+  const SwitchingUpdate* switching = nullptr;
+  if (pretrained.empty()) {
+    update = make_update(id);
+  } else {
+    const std::optional<SwitchCondition> condition = switch_condition();
+    if (!condition) {
+      throw Error(context_.experiment_name() + ": run '" + id +
+                  "' needs --pretrain auto or N, N below the --iters limit if one is given");
+    }
+    auto composed = std::make_unique<SwitchingUpdate>(
+        make_update(kPretrainingRule), batch_size(kPretrainingRule), make_update(pretrained),
+        batch_size(pretrained), *condition);
+    switching = composed.get();
+    update = std::move(composed);
+  }
 
   LearningResult result;
   result.id = id;
@@ -177,16 +199,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   result.seed = params.value("seed", 0LL);
 
   TrainerOptions options;
-  options.batch_size = batch_size(rule);
-  if (!pretrained.empty()) {
-    if (pretraining_iterations() == 0) {
-      throw Error(context_.experiment_name() + ": run '" + id +
-                  "' needs --pretrain N, below the --iters limit if one is given");
-    }
-    pretraining = make_update(kPretrainingRule);
-    options.pretraining =
-        Pretraining{pretraining.get(), batch_size(kPretrainingRule), pretraining_iterations()};
-  }
+  options.batch_size = batch_size(pretrained.empty() ? id : pretrained);
   if (settings_.has("iters")) options.max_iterations = settings_.integer("iters");
   if (settings_.has("epochs")) options.max_epochs = settings_.integer("epochs");
   if (settings_.has("time")) options.time_budget_seconds = settings_.real("time");
@@ -198,6 +211,13 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   }
   if (settings_.has("eval-every")) options.eval_every = settings_.integer("eval-every");
   options.seed = static_cast<std::uint64_t>(result.seed);
+  if (settings_.has("data") && settings_.text("data") == "fresh") {
+    if (!fresh_samples_) {
+      throw Error(context_.experiment_name() + ": --data fresh: this experiment draws no fresh "
+                  "samples");
+    }
+    options.fresh_samples = fresh_samples_;
+  }
   options.communicator = context_.communicator();
   if (observe) {
     options.on_evaluate = [&network, observe](const Network&, TrainingRecord& record) {
@@ -223,6 +243,20 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   result.summary = train_or_resume(RunKey{context_.next_learning_run(), id, tag, result.seed},
                                    network, *update, problem, train_set, test_set, options);
   ++plan.finished;
+  nlohmann::json run_params = update->params();
+  run_params["batch"] = options.batch_size;
+  if (switching != nullptr) {
+    // Where the rule took over (the second part's first iteration), or that it never did: then
+    // the run is Adam's alone and reads so.
+    const auto& phases = result.summary.phases;
+    run_params["switched"] = phases.size() > 1;
+    if (phases.size() > 1) {
+      run_params["pretrain_iterations"] = phases[1].first_iteration;
+    } else {
+      result.label = learning_run_label(kPretrainingRule) + " (" + tag + "; never switched to " +
+                     learning_run_label(pretrained) + ")";
+    }
+  }
   const TrainingRecord& last = result.summary.history.back();
   if (trained_now) {
     context_.progress_event(name + result.label + " seed " + std::to_string(result.seed) +
@@ -236,14 +270,6 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                         {"widths", network.widths()},
                         {"parameters", vector_to_json(network.parameters())}});
 
-  nlohmann::json run_params = update->params();
-  run_params["batch"] = options.batch_size;
-  if (options.pretraining) {  // the iteration after which the rule took over, and Adam's settings
-    run_params["pretrain_iterations"] = options.pretraining->iterations;
-    run_params["pretrain_batch"] = options.pretraining->batch_size;
-    const nlohmann::json adam = pretraining->params();
-    for (const auto& [key, value] : adam.items()) run_params["pretrain_" + key] = value;
-  }
   result.params = run_params;
   for (const auto& [key, value] : params.items()) run_params[key] = value;
   for (const TrainingRecord& r : result.summary.history) {

@@ -78,12 +78,16 @@ nlohmann::json parse_option(const OptionSpec& spec, const std::string& text);
 // "a range like ≥ 1" for help texts; empty when unbounded.
 std::string describe_range(const OptionSpec& spec);
 
-// The command line's option `name` for every rule that has it (--lr, --rcond): unset by default,
+// The command line's option for every rule that has rule option `name` (--lr, --rcond,
+// --decay-every for decay_every): unset by default,
 // so each rule keeps its own; its range (the one all those rules take) and its help come from
 // the rules' option descriptions (shared_rule_option in catalogue.hpp). `offered`: the rule ids
 // the experiment runs, named in the help; `kind`: which rules' range counts (none: every rule).
 OptionSpec rule_option_spec(const std::string& name, std::optional<RuleKind> kind,
                             const std::vector<std::string>& offered);
+
+// The command line's name of rule option `rule_option`: "decay_every" is --decay-every.
+std::string flag_name(std::string rule_option);
 
 // The settings of a run that name a rule option (those rule_option_spec declared), as the
 // rules take them; each rule ignores those it has not.

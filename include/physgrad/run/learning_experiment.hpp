@@ -1,6 +1,7 @@
 // Learning experiment — the base of the experiments that train a network through a simulator. It
 // declares the learning options once (--batch, --rcond, --precision, --eigensolver, --epochs,
-// --time, --eval-every, the checkpoint options and --pretrain), offers every learning rule,
+// --time, --eval-every, the checkpoint options, --pretrain, the step-size schedule and --data),
+// offers every learning rule,
 // checks before a run that it is limited and that its Jacobian steps and evaluations fit, and
 // gives the experiment's problem at one batch (its reference case) to `physgrad bench` and the
 // micro-benchmarks.
@@ -43,8 +44,15 @@ struct LearningDefaults {
   std::string eval_every{};  // --eval-every
   // The help of --eval-every, for an experiment whose default depends on other options.
   std::string eval_every_help{};
-  std::string pretrain{};  // --pretrain, Adam iterations
+  std::string pretrain{};  // --pretrain: auto, or Adam's updates
+  // --data's default, fixed or fresh, for an experiment that draws fresh samples
+  // (LearningSweep::draw_from); empty: the experiment has no --data.
+  std::string data{};
 };
+
+// The N of --pretrain N (0 for auto, which switches on a plateau); throws Error naming the text
+// when it is neither auto nor a whole number from 0 to 10⁹.
+long long pretrain_iterations(const std::string& text);
 
 class LearningExperiment : public Experiment {
  public:

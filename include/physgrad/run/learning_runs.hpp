@@ -12,6 +12,7 @@
 
 #include "physgrad/run/experiment.hpp"
 #include "physgrad/catalogue.hpp"
+#include "physgrad/learn/switching.hpp"
 #include "physgrad/nn/mlp.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/train/trainer.hpp"
@@ -25,8 +26,9 @@ struct LearningResult {
   std::string tag;    // the setting, e.g. "λ=0.01"
   std::string label;  // "HIG (λ=0.01)", "Adam→HIG (λ=0.01)"
   long long seed = 0;
-  // The rule's params() and the batch size; for a pretrained run also pretrain_iterations (after
-  // which its rule took over), pretrain_batch and Adam's params() as pretrain_<name>.
+  // The rule's params() and the batch size; for a pretrained run also its switch condition
+  // (SwitchingUpdate::params()), "switched" and, when it did, pretrain_iterations (the updates
+  // Adam made before its rule took over). A run that never switched is labelled as Adam's.
   nlohmann::json params;
   TrainingSummary summary;
 };
@@ -57,21 +59,27 @@ class LearningSweep {
   // (run_ids) are the run count the progress lines plan with. The first call counts.
   void plan_runs(const std::vector<std::string>& rules);
 
-  // The runs of `rules`, in order: each rule, and after each rule that inverts the stacked
-  // Jacobian (gn, hig), when --pretrain N is given (N > 0 and below the --iters limit), its run
-  // pretrained with Adam ("adam-hig"). An experiment trains each of these ids.
+  // The runs of `rules`, in order: each rule, and after each rule that needs the stacked
+  // Jacobian (gn, hig, …), when --pretrain is auto or N (N > 0 and below the --iters limit), its
+  // run pretrained with Adam ("adam-hig"). An experiment trains each of these ids.
   std::vector<std::string> run_ids(const std::vector<std::string>& rules) const;
 
   // Trains `network` with rule `id` and records it; `params` (e.g. {"lambda", "seed"}) are
-  // added to the summary entry and to every metrics row. For a pretrained run ("adam-hig") the
-  // first --pretrain iterations are Adam's, with the settings and batch size of this sweep's
-  // Adam run, and the rule continues from that network to the end of the run's limits (which
-  // count the whole run); its history is one curve.
+  // added to the summary entry and to every metrics row. A pretrained run ("adam-hig") is a
+  // SwitchingUpdate: Adam, with the settings and batch size of this sweep's Adam run, until
+  // --pretrain's condition holds (N updates, or a plateau of its evaluated training loss:
+  // --plateau-window, --plateau-fraction), then the rule continues from that network to the end
+  // of the run's limits (which count the whole run); its history is one curve. With --data
+  // fresh (and draw_from() called), every batch is drawn afresh.
   const LearningResult& run(const std::string& id, const std::string& tag,
                             const nlohmann::json& params, Mlp& network,
                             const LearningProblem& problem, const Dataset& train_set,
                             const Dataset* test_set,
                             std::function<void(const Mlp&, TrainingRecord&)> observe = {});
+
+  // Where --data fresh is set, the runs draw every mini-batch from `source` (TrainerOptions::
+  // fresh_samples) instead of the training set.
+  void draw_from(SampleSource source) { fresh_samples_ = std::move(source); }
 
   // The first-seed run of every rule for `tag`, in the order they ran.
   std::vector<const LearningResult*> first_seed_runs(const std::string& tag) const;
@@ -100,22 +108,19 @@ class LearningSweep {
   void add_loss_figures(RunContext& context, const std::string& tag, const std::string& file_tag,
                         bool by_epoch = false,
                         const std::string& loss_label = "mean test loss") const;
-  // Per rule for `tag`, in the order they ran: its label and the median over its seeds of
-  // `value` at the last evaluation.
-  struct RuleValue {
-    std::string label;
-    double value;
-  };
-  std::vector<RuleValue> final_medians(
-      const std::string& tag, const std::function<double(const TrainingRecord&)>& value) const;
-  // Makes the test loss vs training time figure of `tag` (add_loss_figures) the message: which
-  // rule's median final `what` is lowest within the same budget, by how much, and the others'
-  // (lowest_value_sentence).
+  // `value` of every rule's runs for `tag` against the updates made (left) and the training time
+  // (right), side by side: the figure of a message that judges per update and per second.
+  RunContext::Figure progress_figure(const std::string& tag, const std::string& file,
+                                     const std::function<double(const TrainingRecord&)>& value,
+                                     const std::string& what, const std::string& y_label) const;
+  // Makes that figure of the test loss the message (progress_<file_tag>.svg), with the verdict
+  // (learning_verdict.hpp): which rule's median final `what` is lowest within the same budget,
+  // and per rule against Adam the update advantage and the step-cost ratio.
   void set_time_message(const std::string& tag, const std::string& file_tag,
                         const std::string& what = "final test loss") const;
   // Makes figure `file` the message for a metric other than the loss, the record's extra
-  // `metric`: `prefix`, then which rule's median final `metric` (`what_metric`) is lowest and by
-  // how much, then the same for the test loss (`what_loss`).
+  // `metric`: `prefix`, then the verdict on `metric` (`what_metric`), then on the test loss
+  // (`what_loss`) after `loss_lead`.
   void set_metric_message(const std::string& tag, const std::string& file,
                           const std::string& metric, const std::string& what_metric,
                           const std::string& loss_lead, const std::string& what_loss,
@@ -125,7 +130,8 @@ class LearningSweep {
   // The labels of the runs of `tag`, in the order they ran (each once).
   std::vector<std::string> labels(const std::string& tag) const;
   // Per setting: final test loss per seed with median and worst; the saturated-neuron
-  // fraction when recorded; the time split per step of every rule.
+  // fraction when recorded; the time split per step of every rule; and a note on where each
+  // pretrained run switched (add_switch_note).
   void add_tables() const;
 
  private:
@@ -135,24 +141,21 @@ class LearningSweep {
   TrainingSummary train_or_resume(const RunKey& key, Mlp& network, LearningUpdate& update,
                                   const LearningProblem& problem, const Dataset& train_set,
                                   const Dataset* test_set, TrainerOptions options);
+  // A note saying, for every pretrained run, after how many Adam updates its rule took over.
+  void add_switch_note() const;
   // Learning rule `rule` as this sweep runs it: the experiment's choices with the settings given
   // for every rule (--lr, --rcond, …), and its batch size.
   std::unique_ptr<LearningUpdate> make_update(const std::string& rule) const;
   Index batch_size(const std::string& rule) const;
-  // --pretrain when it makes pretrained runs (> 0 and below the --iters limit), else 0.
-  long long pretraining_iterations() const;
+  // When pretrained runs are made (--pretrain auto, or N > 0 and below the --iters limit), the
+  // condition of their switch from Adam to the rule.
+  std::optional<SwitchCondition> switch_condition() const;
 
   const Settings& settings_;
   RunContext& context_;
   std::map<std::string, RuleDefaults> defaults_;
   std::deque<LearningResult> results_;  // stable addresses
+  SampleSource fresh_samples_;
 };
-
-// One sentence naming the rule with the lowest finite value and the ratio to the next, then the
-// value of every other rule: "HIG's <what> is 191× below Adam's (0.000596 vs 0.114); Adam→HIG's
-// is 0.2; Gauss-Newton's is not finite." (no second finite value: "HIG's <what> is 0.000596;
-// Adam's is not finite.").
-std::string lowest_value_sentence(const std::vector<LearningSweep::RuleValue>& values,
-                                  const std::string& what);
 
 }  // namespace physgrad::experiments

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <random>
 
+#include "physgrad/types.hpp"
+
 namespace physgrad::experiments {
 
 class Sampler {
@@ -23,5 +25,14 @@ class Sampler {
  private:
   std::mt19937_64 engine_;
 };
+
+// `count` smooth periodic random fields on an n × n grid of unit cells (one per column, cell
+// (i, j) at row i + n·j), as phiflow's Noise(scale, smoothness) samples them on a grid: complex
+// Fourier coefficients with real and imaginary parts N(0, 1), weighted by (1/|k|²)^smoothness
+// with k = scale·fftfreq(n) per axis (physical wavenumbers of unit cells) and set to 0 where
+// |k|² ≤ 0.1 (the mean); the real part of their inverse DFT; then each field divided by its
+// standard deviation and its mean subtracted. O(n³) per field (two passes of 1-D sums).
+Matrix periodic_noise(Index count, Index n, Sampler& sampler, double scale = 10,
+                      double smoothness = 1);
 
 }  // namespace physgrad::experiments

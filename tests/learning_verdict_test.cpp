@@ -1,0 +1,104 @@
+// The verdict of a learning comparison (run/learning_verdict.hpp): updates and seconds to reach a
+// level, the update advantage N and step-cost ratio M against Adam, and failed, diverged or
+// never-switched runs never ranked.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "physgrad/run/learning_runs.hpp"
+#include "physgrad/run/learning_verdict.hpp"
+
+namespace physgrad::experiments {
+namespace {
+
+const auto kTestLoss = [](const TrainingRecord& r) { return r.test_loss; };
+
+// A run of rule `id` whose test loss at iteration k·every is `losses[k]`, each update taking
+// `seconds_per_update`.
+LearningResult run(const std::string& id, const std::vector<double>& losses, long long every,
+                   double seconds_per_update,
+                   TrainingTermination end = TrainingTermination::kTimeBudget) {
+  LearningResult r;
+  r.id = id;
+  r.label = learning_run_label(id);
+  for (std::size_t k = 0; k < losses.size(); ++k) {
+    TrainingRecord record;
+    record.iteration = static_cast<long long>(k) * every;
+    record.train_seconds = static_cast<double>(record.iteration) * seconds_per_update;
+    record.train_loss = record.test_loss = losses[k];
+    r.summary.history.push_back(record);
+  }
+  r.summary.iterations = r.summary.history.back().iteration;
+  r.summary.train_seconds = r.summary.history.back().train_seconds;
+  r.summary.termination = end;
+  return r;
+}
+
+TEST(LearningVerdict, UpdatesToReachALevelInterpolateLogLinearly) {
+  const LearningResult r = run("adam", {1.0, 0.1, 0.01}, 10, 0.5);
+  EXPECT_DOUBLE_EQ(updates_to_reach(r.summary, 1.0, kTestLoss), 0);
+  EXPECT_NEAR(updates_to_reach(r.summary, std::sqrt(0.1), kTestLoss), 5, 1e-12);
+  EXPECT_NEAR(updates_to_reach(r.summary, 0.01, kTestLoss), 20, 1e-12);
+  EXPECT_NEAR(seconds_to_reach(r.summary, 0.01, kTestLoss), 10, 1e-12);
+  EXPECT_TRUE(std::isnan(updates_to_reach(r.summary, 0.001, kTestLoss)));
+}
+
+// HIG reaches Adam's final 0.1 in 10 updates where Adam took 1000 (N = 100), at 500× the cost a
+// step (M = 500 > N): HIG ends lower, and Adam gets there sooner in wall time.
+TEST(LearningVerdict, StatesTheUpdateAdvantageAndTheStepCostAgainstAdam) {
+  const LearningResult adam = run("adam", {1.0, 0.5, 0.2, 0.1}, 333, 1e-3);
+  const LearningResult hig = run("hig", {1.0, 0.1, 0.05, 0.02}, 10, 0.5);
+  const std::string sentence =
+      verdict_sentence({{{&adam}, {&hig}}, kTestLoss, "final test loss"});
+  EXPECT_NE(sentence.find("HIG's final test loss is 5× below Adam's (0.02 vs 0.1)"),
+            std::string::npos)
+      << sentence;
+  EXPECT_NE(sentence.find("to reach 0.1 HIG needs 100× fewer updates (10 vs 999)"),
+            std::string::npos)
+      << sentence;
+  EXPECT_NE(sentence.find("its update costs 500× Adam's"), std::string::npos) << sentence;
+  EXPECT_NE(sentence.find("so in wall time Adam gets there 5× sooner (5 vs 0.999 s)"),
+            std::string::npos)
+      << sentence;
+}
+
+// A failed or diverged run counts in no median and is never ranked; a twin that never switched is
+// Adam's run, named as such; values within 10 % are about equal.
+TEST(LearningVerdict, FailedDivergedAndUnswitchedRunsAreNeverRanked) {
+  const LearningResult adam = run("adam", {1.0, 0.5}, 10, 1e-3);
+  const LearningResult gn =
+      run("gn", {1.0, 1e-9}, 10, 0.1, TrainingTermination::kNumericalFailure);
+  const LearningResult hig = run("hig", {1.0, 2.0}, 10, 0.1, TrainingTermination::kDiverged);
+  LearningResult twin = run("adam-hig", {1.0, 0.48}, 10, 1e-3);
+  twin.params = {{"switched", false}};
+  const std::string sentence =
+      verdict_sentence({{{&adam}, {&gn}, {&hig}, {&twin}}, kTestLoss, "final test loss"});
+  EXPECT_EQ(sentence.find("Gauss-Newton's final test loss"), std::string::npos) << sentence;
+  EXPECT_NE(sentence.find("Adam's final test loss is 0.5"), std::string::npos) << sentence;
+  EXPECT_NE(sentence.find("Gauss-Newton: 1 of 1 runs failed or diverged and are not ranked"),
+            std::string::npos)
+      << sentence;
+  EXPECT_NE(sentence.find("HIG: 1 of 1 runs failed or diverged"), std::string::npos) << sentence;
+  EXPECT_NE(sentence.find("Adam→HIG never switched from Adam"), std::string::npos) << sentence;
+  EXPECT_FALSE(credited(gn));
+  EXPECT_FALSE(credited(twin));
+  EXPECT_TRUE(credited(adam));
+
+  const LearningResult close = run("sgd", {1.0, 0.52}, 10, 1e-3);
+  const std::string equal = verdict_sentence({{{&adam}, {&close}}, kTestLoss, "final test loss"});
+  EXPECT_NE(equal.find("Adam's final test loss is about equal to SGD's (0.5 vs 0.52)"),
+            std::string::npos)
+      << equal;
+}
+
+TEST(LearningVerdict, RatiosCarryTwoSignificantDigits) {
+  EXPECT_EQ(ratio_text(1.5), "1.5×");
+  EXPECT_EQ(ratio_text(12.34), "12×");
+  EXPECT_EQ(ratio_text(482.0), "480×");
+  EXPECT_EQ(ratio_text(7712.0), "7700×");
+  EXPECT_EQ(ratio_text(0.456), "0.46×");
+  EXPECT_EQ(value_text(0.031234), "0.0312");
+}
+
+}  // namespace
+}  // namespace physgrad::experiments
