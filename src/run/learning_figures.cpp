@@ -252,7 +252,16 @@ void LearningSweep::add_tables() const {
     losses.header.insert(losses.header.end(), {"median", "worst", "median / lowest"});
     std::vector<double> medians;
     for (const std::string& id : ids) {
-      const std::string label = learning_run_label(id);
+      // A pretrained run none of whose seeds switched is Adam's, and reads so.
+      bool switched = pretrained_rule(id).empty();
+      for (const long long seed : seeds) {
+        const LearningResult* r = find(tag, id, seed);
+        switched = switched || (r != nullptr && r->params.value("switched", false));
+      }
+      const std::string label =
+          switched ? learning_run_label(id)
+                   : learning_run_label(kPretrainingRule) + " (never switched to " +
+                         learning_run_label(pretrained_rule(id)) + ")";
       std::vector<std::string> row = {label}, saturated = {label};
       std::vector<double> values;
       for (const long long seed : seeds) {
