@@ -1,7 +1,6 @@
 #include "physgrad/inversion/power_pinv.hpp"
 
 #include <cblas.h>
-#include <lapacke.h>
 
 #include <algorithm>
 #include <chrono>
@@ -15,12 +14,18 @@
 #include <vector>
 
 #include "physgrad/error.hpp"
-#include "physgrad/inversion/tridiagonal_eigen.hpp"
 #include "physgrad/text.hpp"
+#include "symmetric_spectrum.hpp"
 
 namespace physgrad {
 
 namespace {
+
+using inversion_detail::check_lapack;
+using inversion_detail::lambda_max_lower_bound;
+using inversion_detail::lapack_dim;
+using inversion_detail::solve_spectrum;
+using inversion_detail::Spectrum;
 
 constexpr NameTable<PinvBackend, 4> kBackendNames{{
     {PinvBackend::kAuto, "auto"},
@@ -59,20 +64,6 @@ void check_operands(const Matrix& a, const Vector& g, const char* what) {
   if (!all_finite(g)) throw NumericalError(std::string(what) + ": non-finite entry in the vector");
 }
 
-lapack_int lapack_dim(Index n) {
-  if (n > std::numeric_limits<lapack_int>::max()) {
-    throw Error("power_pinv_apply: dimension " + std::to_string(n) + " too large for LAPACK");
-  }
-  return static_cast<lapack_int>(n);
-}
-
-void check_lapack(lapack_int status, const char* routine) {
-  if (status != 0) {
-    throw NumericalError(std::string("power_pinv_apply: LAPACK ") + routine + " failed (info = " +
-                std::to_string(status) + ")");
-  }
-}
-
 // Thin SVD J = U Σ Vᵀ by divide and conquer (dgesdd, which overwrites `a` = J), then V Σ^{−κ} Uᵀ g
 // over the kept σ, which are the leading ones (dgesdd sorts σ descending).
 Vector svd_apply(Matrix& a, const Vector& g, double kappa, PowerPinvInfo& info) {
@@ -94,181 +85,6 @@ Vector svd_apply(Matrix& a, const Vector& g, double kappa, PowerPinvInfo& info) 
   Vector c = u.leftCols(info.rank).transpose() * g;
   c.array() *= sigma.head(info.rank).array().pow(-kappa);
   return vt.topRows(info.rank).transpose() * c;
-}
-
-// The float check's bounds for an n × n spectrum with largest eigenvalue λ_max: the float
-// eigenvalue error δ, the smallest clearly kept value and the largest clearly dropped one.
-struct FloatBounds {
-  double kept_from, dropped_below;
-  FloatBounds(Index n, double lambda_max, double rcond) {
-    const double delta = std::sqrt(static_cast<double>(n)) *
-                         std::numeric_limits<float>::epsilon() * lambda_max;
-    const double cut2 = rcond * rcond * lambda_max;
-    kept_from = std::max(kFloatAccuracy * delta, cut2 + delta);
-    dropped_below = cut2 - delta;
-  }
-  bool resolves(const Vector& lambda) const {
-    return (lambda.array() >= kept_from || lambda.array() <= dropped_below).all();
-  }
-};
-
-// What an eigensolve of the symmetric n × n matrix W gives the step: every eigenvalue the cut may
-// keep (in double, in the solver's order) and the product Σᵢ weightsᵢ·vᵢvᵢᵀx over their
-// eigenvectors vᵢ, whichever way the solver holds them.
-struct Spectrum {
-  Vector lambda;
-  std::function<Vector(const Vector& weights, const Vector& x)> apply;
-  PinvPrecision precision = PinvPrecision::kDouble;
-  PinvEigensolver eigensolver = PinvEigensolver::kFull;
-  bool float_resolves = false;
-};
-
-// The product for eigenvectors held as the columns of `vectors`.
-auto with_vectors(Matrix vectors) {
-  return [v = std::move(vectors)](const Vector& weights, const Vector& x) -> Vector {
-    return v * weights.cwiseProduct(v.transpose() * x);
-  };
-}
-
-// h ← Q h (trans 'N') or Qᵀ h ('T') for W = Q T Qᵀ from sytrd (lower): Q's reflectors below the
-// subdiagonal of `reduced`, their factors in `tau`.
-void apply_reflectors(const Matrix& reduced, const Vector& tau, Vector& h, char trans) {
-  const lapack_int n = lapack_dim(reduced.rows());
-  check_lapack(LAPACKE_dormtr(LAPACK_COL_MAJOR, 'L', 'L', trans, n, 1, reduced.data(), n,
-                              tau.data(), h.data(), n),
-               "dormtr");
-}
-
-// The product for W = Q T Qᵀ and T = S Λ Sᵀ (S as rotations): Q S diag(weights) Sᵀ Qᵀ x,
-// O(n²) — no eigenvector is formed.
-auto with_tridiagonal(Matrix reduced, Vector tau, TridiagonalEigen t) {
-  return [q = std::move(reduced), tau = std::move(tau), t = std::move(t)](
-             const Vector& weights, const Vector& x) -> Vector {
-    Vector h = x;
-    apply_reflectors(q, tau, h, 'T');
-    h = t.apply(t.apply_transpose(std::move(h)).cwiseProduct(weights));
-    apply_reflectors(q, tau, h, 'N');
-    return h;
-  };
-}
-
-// LAPACK's symmetric eigensolvers for one scalar type: all pairs (syevd), or those with
-// λ in (vl, ∞) (syevr by value range), lower triangle of the n × n `a` (overwritten).
-lapack_int syevd(lapack_int n, double* a, double* w) {
-  return LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', n, a, n, w);
-}
-// With the workspace sizes LAPACK documents for ssyevd (1 + 6n + 2n² and 3 + 5n): LAPACKE's
-// size query returns them as a float, which rounds 2n² down for n ≳ 2900 (ssyevd then fails).
-lapack_int syevd(lapack_int n, float* a, float* w) {
-  const auto count = static_cast<std::size_t>(n);
-  std::vector<float> work(1 + 6 * count + 2 * count * count);
-  std::vector<lapack_int> iwork(3 + 5 * count);
-  return LAPACKE_ssyevd_work(LAPACK_COL_MAJOR, 'V', 'L', n, a, n, w, work.data(),
-                             static_cast<lapack_int>(work.size()), iwork.data(),
-                             static_cast<lapack_int>(iwork.size()));
-}
-lapack_int syevr(lapack_int n, double* a, double vl, lapack_int* found, double* w, double* z,
-                 lapack_int* support) {
-  return LAPACKE_dsyevr(LAPACK_COL_MAJOR, 'V', 'V', 'L', n, a, n, vl,
-                        std::numeric_limits<double>::max(), 0, 0, 0.0, found, w, z, n, support);
-}
-lapack_int syevr(lapack_int n, float* a, float vl, lapack_int* found, float* w, float* z,
-                 lapack_int* support) {
-  return LAPACKE_ssyevr(LAPACK_COL_MAJOR, 'V', 'V', 'L', n, a, n, vl,
-                        std::numeric_limits<float>::max(), 0, 0, 0.0f, found, w, z, n, support);
-}
-// The reduction W = Q T Qᵀ (lower triangle of `a`, overwritten by Q's reflectors): T's diagonal
-// d (n), subdiagonal e (n − 1) and the reflectors' factors tau (n − 1).
-lapack_int sytrd(lapack_int n, double* a, double* d, double* e, double* tau) {
-  return LAPACKE_dsytrd(LAPACK_COL_MAJOR, 'L', n, a, n, d, e, tau);
-}
-lapack_int sytrd(lapack_int n, float* a, float* d, float* e, float* tau) {
-  return LAPACKE_ssytrd(LAPACK_COL_MAJOR, 'L', n, a, n, d, e, tau);
-}
-
-// The spectrum of the symmetric `w` (lower triangle, consumed) in Scalar arithmetic by
-// `eigensolver` (kSubset: the pairs with λ > vl). Double full and tridiagonal solves work in
-// place on `w`; the others on copies. The tridiagonal form of a float solve is kept in double
-// (its reflectors and T rounded to float), so only the reduction runs in float.
-template <typename Scalar>
-Spectrum solve_spectrum(Matrix& w, PinvEigensolver eigensolver, double vl, double rcond) {
-  using ScalarMatrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
-  using ScalarVector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
-  constexpr bool kIsFloat = std::is_same_v<Scalar, float>;
-  const lapack_int n = lapack_dim(w.rows());
-  const bool subset = eigensolver == PinvEigensolver::kSubset;
-  Spectrum out;
-  out.precision = kIsFloat ? PinvPrecision::kFloat : PinvPrecision::kDouble;
-  out.eigensolver = eigensolver;
-  ScalarMatrix copy;
-  Scalar* a = nullptr;
-  if constexpr (kIsFloat) {
-    copy = w.cast<float>();
-    a = copy.data();
-  } else {
-    if (subset) copy = w;
-    a = subset ? copy.data() : w.data();
-  }
-  // The matrix a's solve left behind, in double (w itself when it was solved in place).
-  const auto solved = [&]() -> Matrix {
-    if constexpr (kIsFloat) {
-      return copy.template cast<double>();
-    } else {
-      return std::move(w);
-    }
-  };
-  ScalarVector lambda(n);
-  switch (eigensolver) {
-    case PinvEigensolver::kSubset: {
-      ScalarMatrix z(n, n);
-      std::vector<lapack_int> support(2 * static_cast<std::size_t>(n));
-      lapack_int found = 0;
-      check_lapack(syevr(n, a, static_cast<Scalar>(vl), &found, lambda.data(), z.data(),
-                         support.data()),
-                   kIsFloat ? "ssyevr" : "dsyevr");
-      out.lambda = lambda.head(found).template cast<double>();
-      out.apply = with_vectors(z.leftCols(found).template cast<double>());
-      break;
-    }
-    case PinvEigensolver::kTridiagonal: {
-      const Index off = std::max<Index>(n - 1, 1);
-      ScalarVector e(off), tau(off);
-      check_lapack(sytrd(n, a, lambda.data(), e.data(), tau.data()),
-                   kIsFloat ? "ssytrd" : "dsytrd");
-      TridiagonalEigen t(lambda.template cast<double>(), e.head(n - 1).template cast<double>());
-      out.lambda = t.eigenvalues();
-      out.apply = with_tridiagonal(solved(), tau.template cast<double>(), std::move(t));
-      break;
-    }
-    default:
-      check_lapack(syevd(n, a, lambda.data()), kIsFloat ? "ssyevd" : "dsyevd");
-      out.lambda = lambda.template cast<double>();
-      out.apply = with_vectors(solved());
-  }
-  // Eigenvalues ≤ vl that a subset left out must lie clearly below the cut for the check.
-  if (out.lambda.size() > 0) {
-    const FloatBounds bounds(n, out.lambda.maxCoeff(), rcond);
-    const bool complete = out.lambda.size() == n || vl <= bounds.dropped_below;
-    out.float_resolves = complete && bounds.resolves(out.lambda);
-  }
-  return out;
-}
-
-// A lower bound of λ_max of the symmetric positive semi-definite w (lower triangle): the
-// largest of its diagonal entries and of the Rayleigh quotients of a few power iterations.
-double lambda_max_lower_bound(const Matrix& w) {
-  const lapack_int n = lapack_dim(w.rows());
-  double bound = w.diagonal().maxCoeff();
-  Vector v = Vector::Ones(n) / std::sqrt(static_cast<double>(n));
-  Vector u(n);
-  for (int iteration = 0; iteration < 8; ++iteration) {
-    cblas_dsymv(CblasColMajor, CblasLower, n, 1.0, w.data(), n, v.data(), 1, 0.0, u.data(), 1);
-    bound = std::max(bound, v.dot(u));  // v has unit length
-    const double norm = u.norm();
-    if (!(norm > 0)) break;
-    v = u / norm;
-  }
-  return bound;
 }
 
 // The precision and eigensolver `options` ask for on an n × n matrix.
@@ -394,7 +210,7 @@ double kept_condition(const PowerPinvInfo& info) {
 
 bool float_resolves_spectrum(const Vector& lambda, Index n, double rcond) {
   if (lambda.size() == 0) return true;
-  return FloatBounds(n, lambda.maxCoeff(), rcond).resolves(lambda);
+  return inversion_detail::FloatBounds(n, lambda.maxCoeff(), rcond).resolves(lambda);
 }
 
 PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions& options) {
