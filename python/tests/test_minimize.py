@@ -140,7 +140,7 @@ def test_a_wrong_sized_return_is_the_librarys_size_error():
 
 
 def test_bad_input_is_a_one_line_error(scaled_toy):
-    with pytest.raises(physgrad.Error, match="unknown rule option 'lrate'"):
+    with pytest.raises(physgrad.Error, match="gd: unknown option 'lrate'"):
         physgrad.minimize(scaled_toy(1.0), [0.5, 0.5], "gd", lrate=0.1)
     with pytest.raises(physgrad.Error, match="nope"):
         physgrad.minimize(scaled_toy(1.0), [0.5, 0.5], "nope")
