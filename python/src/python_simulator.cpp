@@ -48,15 +48,19 @@ using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecas
 // of numbers". Only integers and floats convert: None, text, booleans, complex numbers, dates
 // and objects, which a forced cast would turn into numbers, are refused.
 DoubleArray as_array(const py::handle& value, const std::string& lead) {
-  DoubleArray array;
+  DoubleArray array;  // (an empty array, not a null handle)
   std::string kind;
+  bool converted = false;
   try {
     const py::array raw = py::array::ensure(value);
     if (raw) kind = std::string(1, raw.dtype().kind());
-    if (kind == "i" || kind == "u" || kind == "f") array = DoubleArray::ensure(raw);
+    if (kind == "i" || kind == "u" || kind == "f") {
+      array = DoubleArray::ensure(raw);
+      converted = static_cast<bool>(array);
+    }
   } catch (py::error_already_set&) {
   }
-  if (!array) {
+  if (!converted) {
     std::string type = py::str(py::type::handle_of(value).attr("__name__"));
     if (!kind.empty() && (type == "list" || type == "tuple" || type == "ndarray")) {
       static const std::map<std::string, std::string> kinds = {

@@ -61,10 +61,7 @@ class TorchSimulator:
         if self._output_dim is None:  # m, asked once: the choice of mode needs it
             with torch.no_grad():
                 self._output_dim = self.simulate(x.reshape(1, -1)).numel()
-        mode = self.mode
-        if mode == "auto":
-            mode = "fwd" if x.numel() <= self._output_dim else "rev"
-        return self._numpy(sample_jacobian(self.simulate, x, mode, outputs=self._output_dim))
+        return self._numpy(sample_jacobian(self.simulate, x, self.mode, outputs=self._output_dim))
 
     def _inverse_one(self, y, x0):
         return self._inverse_rows(y.reshape(1, -1), x0.reshape(1, -1))
