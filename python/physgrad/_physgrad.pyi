@@ -31,6 +31,10 @@ class MinimizeResult:
     at_bounds: int
     history_dropped: int
     @property
+    def best_x(self) -> npt.NDArray[np.float64]: ...
+    best_loss: float
+    best_iteration: int
+    @property
     def history_iterations(self) -> npt.NDArray[np.int64]: ...
     @property
     def loss_history(self) -> npt.NDArray[np.float64]: ...

@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "bindings.hpp"
@@ -135,7 +136,16 @@ bool callback_stops(const py::object& returned) {
               "), expected True (stop), False or None (go on)");
 }
 
-MinimizeSummary run_minimize(const py::object& sim, const py::object& x0_value,
+// What minimize() returns to Python: the library's summary and the best iterate of the run (the
+// lowest finite loss of any record, the start included), which a rule without a line search,
+// Newton's, may have left behind.
+struct PythonMinimizeResult : MinimizeSummary {
+  Vector best_x;
+  double best_loss = INFINITY;
+  int best_iteration = 0;
+};
+
+PythonMinimizeResult run_minimize(const py::object& sim, const py::object& x0_value,
                              const std::string& rule, const py::object& target,
                              const py::object& loss_weight, const py::object& lower,
                              const py::object& upper, const py::object& x_scale,
@@ -154,7 +164,13 @@ MinimizeSummary run_minimize(const py::object& sim, const py::object& x0_value,
 
   std::optional<Problem> problem;
   CallbackErrors errors;  // the iteration is that of the last record, + 1 once it is handled
+  PythonMinimizeResult result;
   settings.callback = [&](const IterationRecord& record) {
+    if (record.loss < result.best_loss) {  // NaN never
+      result.best_loss = record.loss;
+      result.best_x = record.x;
+      result.best_iteration = record.iteration;
+    }
     errors.iteration = record.iteration;
     const bool stop = !callback.is_none() && call_python(errors, "callback", [&] {
       return callback_stops(callback(record.iteration, record.loss, to_numpy(record.x)));
@@ -162,18 +178,21 @@ MinimizeSummary run_minimize(const py::object& sim, const py::object& x0_value,
     errors.iteration = record.iteration + 1;
     return stop;
   };
-  MinimizeSummary summary;
   try {
     problem.emplace(sim, x0, target, weight, errors);
     problem->simulator->set_differences(kind);
     const Objective objective(*problem->simulator, problem->loss, problem->target);
     py::gil_scoped_release released;
-    summary = minimize(*optimizer, objective, x0, settings);
+    static_cast<MinimizeSummary&>(result) = minimize(*optimizer, objective, x0, settings);
   } catch (const CallbackFailed&) {
     raise_kept(errors, "rule " + rule + ", iteration " + std::to_string(errors.iteration));
   }
-  summary.counts = problem->simulator->actual(summary.counts);
-  return summary;
+  result.counts = problem->simulator->actual(result.counts);
+  if (result.best_x.size() == 0) {  // no finite loss recorded
+    result.best_x = result.x;
+    result.best_loss = result.loss;
+  }
+  return result;
 }
 
 py::dict run_local_inverse(const py::object& sim, const py::object& y_value,
@@ -230,51 +249,54 @@ py::list rules(RuleKind kind) {
 }  // namespace
 
 void bind_direct(py::module_& m) {
-  py::class_<MinimizeSummary>(m, "MinimizeResult",
+  py::class_<PythonMinimizeResult>(m, "MinimizeResult",
                               "What minimize() returned: the final x, the history and the counts.")
-      .def_property_readonly("x", [](const MinimizeSummary& s) { return to_numpy(s.x); })
+      .def_property_readonly("x", [](const PythonMinimizeResult& s) { return to_numpy(s.x); })
       .def_readonly("loss", &MinimizeSummary::loss)
       .def_readonly("initial_loss", &MinimizeSummary::initial_loss)
       .def_property_readonly("termination",
-                             [](const MinimizeSummary& s) { return to_string(s.termination); })
+                             [](const PythonMinimizeResult& s) { return to_string(s.termination); })
       .def_property_readonly("converged",
-                             [](const MinimizeSummary& s) { return converged(s.termination); })
+                             [](const PythonMinimizeResult& s) { return converged(s.termination); })
       .def_readonly("message", &MinimizeSummary::message)
       .def_readonly("iterations", &MinimizeSummary::iterations)
       .def_readonly("rejected_steps", &MinimizeSummary::rejected_steps)
       .def_readonly("evaluations", &MinimizeSummary::evaluations)
       .def_property_readonly("counts",
-                             [](const MinimizeSummary& s) { return counts_dict(s.counts); })
+                             [](const PythonMinimizeResult& s) { return counts_dict(s.counts); })
       .def_readonly("wall_seconds", &MinimizeSummary::wall_seconds)
       .def_readonly("rule", &MinimizeSummary::optimizer)
       .def_property_readonly("params",
-                             [](const MinimizeSummary& s) { return to_python(s.params); })
+                             [](const PythonMinimizeResult& s) { return to_python(s.params); })
       .def_readonly("at_bounds", &MinimizeSummary::at_bounds)
       .def_readonly("history_dropped", &MinimizeSummary::history_dropped)
+      .def_property_readonly("best_x", [](const PythonMinimizeResult& s) { return to_numpy(s.best_x); })
+      .def_readonly("best_loss", &PythonMinimizeResult::best_loss)
+      .def_readonly("best_iteration", &PythonMinimizeResult::best_iteration)
       .def_property_readonly("history_iterations",
-                             [](const MinimizeSummary& s) {
+                             [](const PythonMinimizeResult& s) {
                                py::array_t<long long> out(static_cast<py::ssize_t>(s.history.size()));
                                for (std::size_t i = 0; i < s.history.size(); ++i)
                                  out.mutable_at(static_cast<py::ssize_t>(i)) = s.history[i].iteration;
                                return out;
                              })
       .def_property_readonly("loss_history",
-                             [](const MinimizeSummary& s) {
+                             [](const PythonMinimizeResult& s) {
                                Vector losses(static_cast<Index>(s.history.size()));
                                for (Index i = 0; i < losses.size(); ++i)
                                  losses(i) = s.history[static_cast<std::size_t>(i)].loss;
                                return to_numpy(losses);
                              })
       .def_property_readonly("x_history",
-                             [](const MinimizeSummary& s) {
+                             [](const PythonMinimizeResult& s) {
                                Matrix xs(static_cast<Index>(s.history.size()), s.x.size());
                                for (Index i = 0; i < xs.rows(); ++i)
                                  xs.row(i) = s.history[static_cast<std::size_t>(i)].x.transpose();
                                return to_numpy(xs);
                              })
-      .def("brief_report", [](const MinimizeSummary& s) { return brief_report(s); })
-      .def("full_report", [](const MinimizeSummary& s) { return full_report(s); })
-      .def("__repr__", [](const MinimizeSummary& s) { return "<" + brief_report(s) + ">"; });
+      .def("brief_report", [](const PythonMinimizeResult& s) { return brief_report(s); })
+      .def("full_report", [](const PythonMinimizeResult& s) { return full_report(s); })
+      .def("__repr__", [](const PythonMinimizeResult& s) { return "<" + brief_report(s) + ">"; });
 
   m.def("_minimize", &run_minimize, py::arg("sim"), py::arg("x0"), py::arg("rule"),
         py::arg("target"), py::arg("loss_weight"), py::arg("lower"), py::arg("upper"),
