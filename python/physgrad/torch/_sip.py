@@ -36,13 +36,21 @@ class TorchSimulator:
             self.inverse_batch = self._inverse_rows
 
     def _tensor(self, array):
-        return torch.as_tensor(array).to(self.device, self.dtype)
+        tensor = torch.as_tensor(array)  # the array's memory, for a float64 NumPy array
+        if tensor.dtype == self.dtype and tensor.device == self.device:
+            return tensor
+        return tensor.to(self.device, self.dtype)
 
-    def _numpy(self, tensor):
-        return tensor.detach().to("cpu", torch.float64).numpy()
+    @staticmethod
+    def _numpy(tensor):
+        tensor = tensor.detach()
+        if tensor.dtype != torch.float64 or tensor.device.type != "cpu":
+            tensor = tensor.to("cpu", torch.float64)
+        return tensor.numpy()
 
     def forward(self, x):
-        return self.forward_batch(x.reshape(1, -1)).reshape(-1)
+        with torch.no_grad():
+            return self._numpy(self.simulate(self._tensor(x).unsqueeze(0))).reshape(-1)
 
     def forward_batch(self, x):
         with torch.no_grad():
@@ -53,8 +61,8 @@ class TorchSimulator:
         with torch.enable_grad():
             x = self._tensor(x).unsqueeze(0).requires_grad_(True)
             y = self.simulate(x)
-            (gx,) = torch.autograd.grad(y, x, self._tensor(gy).reshape(y.shape).to(y.dtype))
-        return self._numpy(gx.squeeze(0))
+            (gx,) = torch.autograd.grad(y, x, self._tensor(gy).view(y.shape))
+        return self._numpy(gx).reshape(-1)
 
     def jacobian(self, x):
         x = self._tensor(x)
