@@ -28,7 +28,8 @@ RuleSettings rule_settings(const py::dict& given) {
     if (py::isinstance<py::str>(value)) {
       settings[name] = value.cast<std::string>();
     } else if (py::isinstance<py::int_>(value)) {
-      settings[name] = to_integer(value, "rule option " + name, std::numeric_limits<long long>::min(),
+      settings[name] = to_integer(value, "rule option " + name,
+                                  std::numeric_limits<long long>::min(),
                                   std::numeric_limits<long long>::max());
     } else {
       try {
@@ -111,7 +112,8 @@ MinimizeOptions minimize_options(const py::dict& given) {
     return to_real(given[name], std::string("minimize: ") + name);
   };
   constexpr long long kLongMax = std::numeric_limits<long long>::max();
-  options.max_iterations = static_cast<int>(integer("max_iterations", 1, std::numeric_limits<int>::max()));
+  options.max_iterations =
+      static_cast<int>(integer("max_iterations", 1, std::numeric_limits<int>::max()));
   options.max_evaluations = integer("max_evaluations", 0, kLongMax);
   options.max_history = integer("max_history", 2, kLongMax);
   options.max_history_values = integer("max_history_values", 2, kLongMax);
@@ -270,14 +272,16 @@ void bind_direct(py::module_& m) {
                              [](const PythonMinimizeResult& s) { return to_python(s.params); })
       .def_readonly("at_bounds", &MinimizeSummary::at_bounds)
       .def_readonly("history_dropped", &MinimizeSummary::history_dropped)
-      .def_property_readonly("best_x", [](const PythonMinimizeResult& s) { return to_numpy(s.best_x); })
+      .def_property_readonly("best_x",
+                             [](const PythonMinimizeResult& s) { return to_numpy(s.best_x); })
       .def_readonly("best_loss", &PythonMinimizeResult::best_loss)
       .def_readonly("best_iteration", &PythonMinimizeResult::best_iteration)
       .def_property_readonly("history_iterations",
                              [](const PythonMinimizeResult& s) {
-                               py::array_t<long long> out(static_cast<py::ssize_t>(s.history.size()));
-                               for (std::size_t i = 0; i < s.history.size(); ++i)
-                                 out.mutable_at(static_cast<py::ssize_t>(i)) = s.history[i].iteration;
+                               const auto size = static_cast<py::ssize_t>(s.history.size());
+                               py::array_t<long long> out(size);
+                               for (py::ssize_t i = 0; i < size; ++i)
+                                 out.mutable_at(i) = s.history[static_cast<std::size_t>(i)].iteration;
                                return out;
                              })
       .def_property_readonly("loss_history",

@@ -94,7 +94,8 @@ std::string option_text(const std::string& name, const py::handle& value) {
   std::string text;
   bool first = true;
   // The lists being read, outermost first, each with the place of its next item.
-  std::vector<std::pair<py::sequence, std::size_t>> open{{py::reinterpret_borrow<py::sequence>(value), 0}};
+  std::vector<std::pair<py::sequence, std::size_t>> open{
+      {py::reinterpret_borrow<py::sequence>(value), 0}};
   while (!open.empty()) {
     auto& [list, next] = open.back();
     if (next == list.size()) {

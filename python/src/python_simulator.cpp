@@ -177,7 +177,9 @@ void PythonSimulator::answer_inverses(const Matrix& y, const Matrix& x0) {
   }
   if (!has_forward_batch_ || !all_finite(x)) return;
   const Matrix y_at = call_rows("forward", x, nullptr, m_);
-  for (Index i = 0; i < x.cols(); ++i) answers_[answer_key("forward", x.col(i), nullptr)] = y_at.col(i);
+  for (Index i = 0; i < x.cols(); ++i) {
+    answers_[answer_key("forward", x.col(i), nullptr)] = y_at.col(i);
+  }
 }
 
 Vector PythonSimulator::call_vector(const char* method, const Vector& a, const Vector* b,

@@ -101,7 +101,8 @@ class _JacobianRule(torch.optim.Optimizer):
             j.numpy(), g.numpy(), lr=group["lr"] if lr is None else lr,
             kappa=0.5 if self.rule == "hig" else 1.0, rcond=group["rcond"],
             backend=group["backend"], precision=group["precision"],
-            eigensolver=group["eigensolver"], previous=self._previous)
+            eigensolver=group["eigensolver"],
+            previous=self.last_info["state"] if self.last_info else self._previous)
 
     @torch.no_grad()
     def find_lr(self, closure, evaluate, candidates=(0.25, 0.5, 1.0, 2.0, 4.0, 8.0)):
