@@ -9,8 +9,10 @@ DEB_PACKAGES = cmake g++ make pkg-config libeigen3-dev libopenblas-dev liblapack
 # The Python package (built by `make build` and `make test`, not needed by `make demo`).
 PYTHON_PACKAGES = pybind11-dev python3-dev python3-numpy
 # Only the tests need these: Chromium loads the HTML reports (layout, no script, no request);
-# pytest, torch and SciPy run the Python package's tests and examples (docs/python.md).
-TEST_PACKAGES = chromium python3-pytest python3-torch python3-scipy
+# pytest, torch and SciPy run the Python package's tests and examples; venv, pip, setuptools and
+# wheel make the offline `pip install .` into a fresh venv (docs/python.md).
+TEST_PACKAGES = chromium python3-pytest python3-torch python3-scipy python3-venv python3-pip \
+                python3-setuptools python3-wheel
 
 SANITIZE_DIR ?= build-sanitize
 

@@ -226,5 +226,30 @@ TEST(Reports, FullReportListsTheRunAndWhyItEnded) {
       << brief_report(s);
 }
 
+TEST(History, KeepsTheStartAndTheLatestRecordsWithinBothLimits) {
+  // GD with η = ½ halves x: record k holds x_k = 2⁻ᵏ x₀ and L_k = 4⁻ᵏ L₀.
+  const HalfSquares p;
+  MinimizeOptions options;
+  options.max_history = 4;
+  const auto gd = make_optimizer("gd", {{"lr", 0.5}});
+  options.max_iterations = 20;
+  const MinimizeSummary s = minimize(*gd, p.objective, p.x0, options);
+  ASSERT_EQ(s.history.size(), 4u);
+  EXPECT_EQ(s.history_dropped, 21 - 4);
+  EXPECT_EQ(s.history[0].iteration, 0);
+  EXPECT_EQ(s.history[0].loss, s.initial_loss);
+  for (int i = 1; i < 4; ++i) {
+    EXPECT_EQ(s.history[static_cast<std::size_t>(i)].iteration, 17 + i);
+    EXPECT_DOUBLE_EQ(s.history[static_cast<std::size_t>(i)].x(0), std::ldexp(0.48, -(17 + i)));
+  }
+  EXPECT_NE(full_report(s).find("4 records kept, 17 dropped (max_history)"), std::string::npos);
+  // max_history_values = 6 entries of x, n = 2: 3 records.
+  options.max_history = 100000;
+  options.max_history_values = 6;
+  EXPECT_EQ(minimize(*gd, p.objective, p.x0, options).history.size(), 3u);
+  options.max_history = 1;
+  EXPECT_THROW(minimize(*gd, p.objective, p.x0, options), Error);
+}
+
 }  // namespace
 }  // namespace physgrad

@@ -1,5 +1,5 @@
 """A torch network learns controls through a badly scaled differentiable simulator: Adam first,
-then physgrad's HIG on the per-sample Jacobian (built with functorch in chunks).
+then physgrad's HIG on the per-sample Jacobian (batched autodiff, the chunk chosen from memory).
 
     PYTHONPATH=build/python /usr/bin/python3 examples/python/torch_adam_then_hig.py [--quick]
 """
@@ -46,7 +46,7 @@ def main():
     print(f"after {adam_steps} Adam steps: loss {after_adam:.3e}")
 
     hig = pt.HIG(model.parameters(), lr=0.5, rcond=1e-6)
-    closure = pt.jacobian_closure(model, simulate, loss_fn, inputs, targets, chunk=16)
+    closure = pt.jacobian_closure(model, simulate, loss_fn, inputs, targets)
     for _ in range(hig_steps):
         hig.step(closure)
     after_hig = loss().item()

@@ -12,7 +12,8 @@
 namespace physgrad::python {
 
 void bind_direct(pybind11::module_& m);       // minimize, local_inverse, rules (direct.cpp)
-void bind_learning(pybind11::module_& m);     // HIG/GN steps, SIP's targets (learning.cpp)
+void bind_learning(pybind11::module_& m);     // HIG/GN steps, reference steps (learning.cpp)
+void bind_sip(pybind11::module_& m);          // SIP's options and targets (sip.cpp)
 void bind_experiments(pybind11::module_& m);  // experiments and run folders (experiments.cpp)
 
 // A JSON value as the Python value json.loads would give.
@@ -22,6 +23,14 @@ pybind11::object to_python(const nlohmann::json& value);
 // reports them; Error for any other value. The catalogue then refuses an unknown name and a value
 // outside the option's range. (direct.cpp)
 RuleSettings rule_settings(const pybind11::dict& given);
+
+// Refuses (Error "lm: unknown option 'lr' …") a setting that rule `id` of `kind` does not take:
+// where one rule is named, an option of another rule is a mistake, not a setting to pass over.
+void check_rule_option_names(RuleKind kind, const std::string& id, const RuleSettings& settings);
+
+// A real number (int, float or a NumPy number; not a bool, text or complex); Error "WHAT is
+// 'abc', expected a number" otherwise.
+double to_real(const pybind11::handle& value, const std::string& what);
 
 // The simulator's work by kind, {"passes": …, "forward": …, …}. (direct.cpp)
 pybind11::dict counts_dict(const SimulatorCounts& counts);

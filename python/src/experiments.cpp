@@ -4,12 +4,13 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
+#include <utility>
+#include <vector>
 
 #include "bindings.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/io/csv.hpp"
+#include "physgrad/io/json_file.hpp"
 #include "physgrad/run/registry.hpp"
 #include "physgrad/run/run.hpp"
 #include "physgrad/stop.hpp"
@@ -19,12 +20,24 @@ namespace physgrad::python {
 
 namespace {
 
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("cannot read " + path.string());
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+// What open_metrics and open_summary read at most: the limits `physgrad report` reads a run
+// folder's files with (src/run/run_index.cpp), so that a file of any size, a FIFO or a device
+// neither fills the memory nor blocks.
+constexpr std::size_t kMaxSummaryBytes = std::size_t{8} << 20;
+constexpr std::size_t kMaxSummaryDepth = 64;
+constexpr std::size_t kMaxMetricsBytes = std::size_t{32} << 20;
+
+// The bytes of FOLDER/NAME, a regular file of at most `max_bytes`; Error "open_metrics:
+// FOLDER/metrics.csv is a directory" (a FIFO, a device, too large, missing) otherwise.
+std::string read_run_file(const char* who, const std::string& folder, const char* name,
+                          std::size_t max_bytes) {
+  const std::filesystem::path path = std::filesystem::path(folder) / name;
+  try {
+    py::gil_scoped_release released;
+    return read_regular_file(path, max_bytes);
+  } catch (const Error& e) {
+    throw Error(std::string(who) + ": " + path.string() + " " + e.what());
+  }
 }
 
 // A column as float64 when every cell is a number (nan, inf and empty cells read as NaN), else
@@ -46,7 +59,8 @@ py::object column_values(const CsvData& data, std::size_t column) {
 }
 
 py::dict open_metrics(const std::string& folder) {
-  const CsvData data = parse_csv(read_text(std::filesystem::path(folder) / "metrics.csv"));
+  const CsvData data =
+      parse_csv(read_run_file("open_metrics", folder, "metrics.csv", kMaxMetricsBytes));
   py::dict out;
   for (std::size_t c = 0; c < data.columns.size(); ++c) {
     out[py::str(data.columns[c])] = column_values(data, c);
@@ -55,18 +69,61 @@ py::dict open_metrics(const std::string& folder) {
 }
 
 py::object open_summary(const std::string& folder) {
-  const std::string text = read_text(std::filesystem::path(folder) / "summary.json");
-  return py::module_::import("json").attr("loads")(text);
+  const std::string text =
+      read_run_file("open_summary", folder, "summary.json", kMaxSummaryBytes);
+  try {
+    return to_python(parse_json_text(text, kMaxSummaryDepth));
+  } catch (const Error& e) {
+    throw Error("open_summary: " + (std::filesystem::path(folder) / "summary.json").string() +
+                ": " + e.what());
+  }
 }
 
-// An option's value as the command line would give it: a list joins its items with commas.
-std::string option_text(const py::handle& value) {
-  if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
-    std::string text;
-    for (const py::handle item : value) text += (text.empty() ? "" : ",") + option_text(item);
-    return text;
+// An option's value as the command line would give it: a list (or tuple) joins its items with
+// commas, nested lists flattened. Read without recursion, with limits: nesting at most
+// kMaxOptionDepth deep, a list that contains itself, or more than kMaxOptionText characters are
+// an Error naming the option.
+constexpr std::size_t kMaxOptionDepth = 32;
+constexpr std::size_t kMaxOptionText = std::size_t{1} << 20;
+
+std::string option_text(const std::string& name, const py::handle& value) {
+  const auto is_list = [](const py::handle& v) {
+    return py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v);
+  };
+  if (!is_list(value)) return py::str(value).cast<std::string>();
+  std::string text;
+  bool first = true;
+  // The lists being read, outermost first, each with the place of its next item.
+  std::vector<std::pair<py::sequence, std::size_t>> open{
+      {py::reinterpret_borrow<py::sequence>(value), 0}};
+  while (!open.empty()) {
+    auto& [list, next] = open.back();
+    if (next == list.size()) {
+      open.pop_back();
+      continue;
+    }
+    const py::object item = list[next++];
+    if (is_list(item)) {
+      for (const auto& [outer, unused] : open) {
+        if (outer.ptr() == item.ptr()) {
+          throw Error("option " + name + ": the list contains itself");
+        }
+      }
+      if (open.size() == kMaxOptionDepth) {
+        throw Error("option " + name + ": lists nested deeper than " +
+                    std::to_string(kMaxOptionDepth) + " levels");
+      }
+      open.emplace_back(py::reinterpret_borrow<py::sequence>(item), 0);
+      continue;
+    }
+    text += (first ? "" : ",") + py::str(item).cast<std::string>();
+    first = false;
+    if (text.size() > kMaxOptionText) {
+      throw Error("option " + name + ": more than " + std::to_string(kMaxOptionText) +
+                  " characters");
+    }
   }
-  return py::str(value).cast<std::string>();
+  return text;
 }
 
 // What a run returns to Python: where it is, whether it finished, and its summary.json as a dict.
@@ -137,7 +194,8 @@ py::dict run_experiment(const std::string& name, const py::dict& options, const 
   const experiments::Experiment& experiment = experiments::registry().find(name);
   std::vector<std::pair<std::string, std::string>> given;
   for (const auto& [key, value] : options) {
-    given.emplace_back(py::str(key).cast<std::string>(), option_text(value));
+    const std::string key_text = py::str(key).cast<std::string>();
+    given.emplace_back(key_text, option_text(key_text, value));
   }
   const experiments::Settings settings = experiments::resolve_settings(experiment, given);
   PythonHooks hooks{progress};

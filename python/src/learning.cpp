@@ -1,7 +1,6 @@
 // Learning from PyTorch: the Jacobian step of HIG and Gauss-Newton (HigUpdate) on a per-sample
-// Jacobian given as an array that is read in place, SIP's proxy targets by the library's local
-// inverse on a Python simulator, and a reference case's first step computed by the library
-// alone, for comparison.
+// Jacobian given as an array that is read in place, and a reference case's first step computed
+// by the library alone, for comparison. (SIP's targets: sip.cpp.)
 #include <pybind11/numpy.h>
 
 #include <algorithm>
@@ -11,10 +10,8 @@
 
 #include "bindings.hpp"
 #include "physgrad/error.hpp"
-#include "physgrad/inversion/y_step.hpp"
 #include "physgrad/learn/hig.hpp"
 #include "physgrad/learn/mapped_jacobian.hpp"
-#include "physgrad/learn/sip.hpp"
 #include "physgrad/run/registry.hpp"
 #include "physgrad/text.hpp"
 #include "physgrad/threads.hpp"
@@ -56,7 +53,24 @@ py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradie
     throw Error("jacobian_step: the Jacobian's dtype is " +
                 std::string(py::str(jacobian.dtype())) + ", expected float64 or float32");
   }
+  // A NaN or Inf in J would only show as an overflow deep in the eigensolve: name it here.
+  const Eigen::Map<const Vector> entries(data, batch * outputs * cols);
+  if (!all_finite(entries)) {
+    Index first = 0;
+    while (std::isfinite(entries(first))) ++first;
+    // `data` is row-major (B·m × P) as given, or the converted copy, column-major (P × B·m).
+    const Index row = first / cols;  // row-major (B·m × P), also the converted copy
+    const Index column = first % cols;
+    throw NumericalError("jacobian_step: the Jacobian has " +
+                         std::to_string((!entries.array().isFinite()).count()) +
+                         " non-finite entries, the first " + report_number(entries(first)) +
+                         " at sample " + std::to_string(row / outputs) + ", output " +
+                         std::to_string(row % outputs) + ", parameter " + std::to_string(column));
+  }
   const Vector g = to_vector(loss_gradient_y, "jacobian_step", "loss_gradient_y");
+  if (!all_finite(g)) {
+    throw NumericalError("jacobian_step: dL/dy has a non-finite entry");
+  }
   if (g.size() != batch * outputs) {
     throw Error("jacobian_step: dL/dy has " + std::to_string(g.size()) + " entries, the Jacobian " +
                 std::to_string(batch * outputs) + " rows");
@@ -81,6 +95,14 @@ py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradie
   {
     py::gil_scoped_release released;
     step = update.step(state);
+  }
+  // A step that is not finite would write ±inf or NaN into the parameters: refused.
+  if (!all_finite(step.delta)) {
+    throw NumericalError("jacobian_step: the step Δθ = −lr·J^−κ·dL/dy (lr " + report_number(lr) +
+                         ", κ " + report_number(kappa) + ") is not finite in " +
+                         std::to_string((!step.delta.array().isFinite()).count()) + " of " +
+                         std::to_string(step.delta.size()) +
+                         " entries (lr too large for this J?); nothing was changed");
   }
   py::dict info;
   const PowerPinvInfo& last = update.last_info();
@@ -124,102 +146,15 @@ double time_jacobian_step(const py::array_t<double, py::array::c_style>& jacobia
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / repeats;
 }
 
-// sip's options: the catalogue's defaults with the keyword settings, checked as SipUpdate checks
-// them. A name sip does not take is an Error (with_settings alone passes over an option of
-// another learning rule, such as hig's rcond).
-SipOptions sip_options(const py::dict& given) {
-  const RuleInfo& rule = find_rule(RuleKind::kLearning, "sip");
+// hig's or gn's options (`rule`), checked as HigUpdate checks them: what HIG(...) and GN(...)
+// check when they are made and when a param group is added; their params() by name.
+py::object hig_params(const std::string& rule, const py::dict& given) {
   const RuleSettings settings = rule_settings(given);
-  std::vector<std::string> known;
-  for (const OptionDescription& option : rule_options(rule)) {
-    known.push_back(option.name);
-    if (!option.alias.empty()) known.push_back(option.alias);
-  }
-  std::sort(known.begin(), known.end());
-  for (const auto& [name, value] : settings) {
-    if (!std::binary_search(known.begin(), known.end(), name)) {
-      throw Error("sip: " + unknown_name_text("option", name, known));
-    }
-  }
-  return checked("sip", std::get<SipOptions>(with_settings(rule, settings)));
-}
-
-// sip's params() for those options: every option that applies, by name.
-py::object sip_params(const py::dict& settings) {
-  return to_python(SipUpdate(sip_options(settings)).params());
-}
-
-// SIP's proxy targets for one batch, made as SipUpdate::step makes them (learn/sip.cpp): for each
-// sample x̃ᵢ = P⁻¹(yᵢ + Δyᵢ; xᵢ) by local_inverse with sip's inverse options, where
-// Δyᵢ = y_step(L2, yᵢ, y*ᵢ, η) = η(y*ᵢ − yᵢ). x (B, n), y and y* (B, m) hold one sample a row.
-// Where SipUpdate hands a failed sample on as a NaN step, this raises, naming the sample: a
-// non-finite x, y, y* or x̃ (NumericalError), a result of the wrong size (Error), an exception
-// of the simulator's (its own type).
-py::dict sip_targets(const py::object& sim, const py::object& x_value, const py::object& y_value,
-                     const py::object& target_value, const py::dict& settings) {
-  const SipOptions options = sip_options(settings);
-  const Matrix x = to_columns(x_value, "sip", "x");
-  const Matrix y = to_columns(y_value, "sip", "y");
-  const Matrix target = to_columns(target_value, "sip", "the target y*");
-  const Index count = x.cols();
-  if (y.cols() != count || target.rows() != y.rows() || target.cols() != count || count == 0) {
-    const auto shape = [](const Matrix& m) {  // as given: one sample a row
-      return "(" + std::to_string(m.cols()) + ", " + std::to_string(m.rows()) + ")";
-    };
-    throw Error("sip: x has shape " + shape(x) + ", y " + shape(y) + " and the target y* " +
-                shape(target) + ", expected (B, n), (B, m) and (B, m) with B ≥ 1");
-  }
-  CallbackErrors errors;
-  const PythonSimulator simulator(sim, x.rows(), y.rows(), x.col(0), errors);
-  const std::string method = to_string(options.inverse.method);
-  const L2Loss loss;
-  Matrix x_tilde(x.rows(), count);
-  Vector residual(count);
-  py::array_t<bool> converged(count);
-  SimulatorCounts counts;
-  long long iterations = 0, evaluations = 0;
-  Index i = 0;
-  const auto sample = [&] {
-    return "sip: sample " + std::to_string(i) + " of " + std::to_string(count) + ": ";
-  };
-  const auto start = std::chrono::steady_clock::now();
-  try {
-    py::gil_scoped_release released;
-    for (; i < count; ++i) {
-      if (!all_finite(x.col(i))) throw NumericalError("the network output x is not finite");
-      if (!all_finite(y.col(i))) throw NumericalError("the simulator output y is not finite");
-      if (!all_finite(target.col(i))) throw NumericalError("the target y* is not finite");
-      const Vector yi = y.col(i);
-      const Vector y_target = yi + y_step(loss, yi, target.col(i), options.y_step);
-      const LocalInverseResult result =
-          local_inverse(simulator, y_target, x.col(i), Vector(), options.inverse);
-      if (!all_finite(result.x)) {
-        throw NumericalError("the local inverse (" + method + ") gave no finite preimage");
-      }
-      x_tilde.col(i) = result.x;
-      residual(i) = result.residual;
-      converged.mutable_at(i) = result.converged;
-      iterations += result.iterations;
-      evaluations += result.evaluations;
-      counts += result.counts;
-    }
-  } catch (const CallbackFailed&) {
-    raise_kept(errors, "sip, sample " + std::to_string(i) + ", local inverse " + method);
-  } catch (const NumericalError& e) {
-    throw NumericalError(sample() + e.what());
-  } catch (const Error& e) {
-    throw Error(sample() + e.what());
-  }
-  py::dict out;
-  out["x"] = to_numpy(Matrix(x_tilde.transpose()));
-  out["residual"] = to_numpy(residual);
-  out["converged"] = converged;
-  out["iterations"] = iterations;
-  out["evaluations"] = evaluations;
-  out["counts"] = counts_dict(counts);
-  out["inversion_seconds"] =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return out;
+  check_rule_option_names(RuleKind::kLearning, rule, settings);
+  const auto options =
+      checked(rule, std::get<HigOptions>(with_settings(find_rule(RuleKind::kLearning, rule),
+                                                       settings)));
+  return to_python(HigUpdate(options).params());
 }
 
 // A reference case's first batch (run/registry.hpp): the stacked Jacobian as
@@ -279,13 +214,11 @@ void bind_learning(py::module_& m) {
   m.def("_time_jacobian_step", &time_jacobian_step, py::arg("jacobian"),
         py::arg("loss_gradient_y"), py::arg("lr"), py::arg("kappa"), py::arg("rcond"),
         py::arg("repeats"), py::arg("precision") = "double", py::arg("eigensolver") = "auto");
-  m.def("_sip_params", &sip_params, py::arg("settings"));
+  m.def("_hig_params", &hig_params, py::arg("rule"), py::arg("settings"));
   m.def("blas_core", &blas_core,
         "The kernel set OpenBLAS chose for this CPU ('' for another BLAS).");
   m.def("blas_core_note", &blas_core_note,
         "A one-line note when OpenBLAS runs generic kernels on a CPU with AVX2, else ''.");
-  m.def("_sip_targets", &sip_targets, py::arg("simulator"), py::arg("x"), py::arg("y"),
-        py::arg("target"), py::arg("settings"));
   m.def("reference_step", &reference_step, py::arg("name") = "oscillators",
         py::arg("batch") = 128, py::arg("rule") = "hig",
         "A reference case's first batch and the library's first step of `rule` on it.");

@@ -14,6 +14,7 @@ pybind11::object to_python(const nlohmann::json& value) {
 
 PYBIND11_MODULE(_physgrad, m) {
   m.doc() = "physgrad: inversion-based optimization (the compiled part; see physgrad)";
+  m.attr("__version__") = PHYSGRAD_VERSION;  // the project's version (CMakeLists.txt)
   // Bad input (a size, a range, an unknown name) is a ValueError; numbers that cannot be worked
   // with (NaN, no convergence) an ArithmeticError. The most derived is registered last.
   static pybind11::exception<physgrad::Error> error(m, "Error", PyExc_ValueError);
@@ -30,5 +31,6 @@ PYBIND11_MODULE(_physgrad, m) {
   });
   physgrad::python::bind_direct(m);
   physgrad::python::bind_learning(m);
+  physgrad::python::bind_sip(m);
   physgrad::python::bind_experiments(m);
 }

@@ -140,7 +140,7 @@ def test_a_wrong_sized_return_is_the_librarys_size_error():
 
 
 def test_bad_input_is_a_one_line_error(scaled_toy):
-    with pytest.raises(physgrad.Error, match="unknown rule option 'lrate'"):
+    with pytest.raises(physgrad.Error, match="gd: unknown option 'lrate'"):
         physgrad.minimize(scaled_toy(1.0), [0.5, 0.5], "gd", lrate=0.1)
     with pytest.raises(physgrad.Error, match="nope"):
         physgrad.minimize(scaled_toy(1.0), [0.5, 0.5], "nope")
@@ -169,3 +169,38 @@ def test_pg_through_the_python_inverse(scaled_toy):
     run = physgrad.minimize(scaled_toy(1000.0), [0.48, 0.84], "pg", inverse="analytic",
                             loss_tolerance=1e-20)
     assert run.converged and run.counts["inverses"] > 0
+
+
+def test_the_best_iterate_is_kept_when_newton_walks_away_from_it():
+    class Atan:  # Newton's step on ½ atan(x)² overshoots from |x| > 1.39: the iterates grow
+        def forward(self, x):
+            return np.arctan(x)
+
+        def jacobian(self, x):
+            return np.array([[1.0 / (1.0 + x[0] ** 2)]])
+
+    run = physgrad.minimize(Atan(), [1.5], "gn", max_iterations=6)
+    assert run.loss > run.initial_loss  # the last iterate is worse than the start
+    assert run.best_iteration == 0 and run.best_loss == run.initial_loss
+    np.testing.assert_array_equal(run.best_x, [1.5])
+    good = physgrad.minimize(Atan(), [0.5], "gn", max_iterations=6)
+    assert good.best_iteration == good.iterations and good.best_loss == good.loss
+
+
+def test_scipy_style_bounds_and_forward_differences(scaled_toy):
+    pairs = physgrad.minimize(scaled_toy(10.0), [0.48, 0.84], "lm", bounds=[(0, 1), (0.5, None)])
+    tupled = physgrad.minimize(scaled_toy(10.0), [0.48, 0.84], "lm",
+                               bounds=([0, 0.5], [1, np.inf]))
+    np.testing.assert_array_equal(pairs.x, tupled.x)
+    np.testing.assert_allclose(pairs.x, [0.0, 0.5], atol=1e-8)
+    central = physgrad.minimize(scaled_toy(10.0, analytic=False), [0.48, 0.84], "gn",
+                                max_iterations=1)
+    forward = physgrad.minimize(scaled_toy(10.0, analytic=False), [0.48, 0.84], "gn",
+                                max_iterations=1, differences="forward")
+    # One Jacobian: 2n = 4 difference passes, or n + 1 = 3; the forward passes of the loss
+    # (start, new point) come on top, and passes count each call of the object.
+    assert central.counts["passes"] - forward.counts["passes"] == 1
+    assert central.counts["forward"] == central.counts["passes"] == 4 + central.evaluations
+    np.testing.assert_allclose(forward.x, central.x, atol=1e-6)
+    with pytest.raises(physgrad.Error, match="differences 'backward'"):
+        physgrad.minimize(scaled_toy(1.0), [0.5, 0.5], "gn", differences="backward")

@@ -1,6 +1,9 @@
 #include "physgrad/optim/minimize.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <deque>
+#include <iterator>
 #include <cmath>
 #include <sstream>
 
@@ -50,6 +53,11 @@ void check_minimize_options(const MinimizeOptions& options) {
   if (options.max_evaluations < 0) {
     throw Error("minimize: max_evaluations must be ≥ 0 (0: no budget), got " +
                 std::to_string(options.max_evaluations));
+  }
+  if (options.max_history < 2 || options.max_history_values < 2) {
+    throw Error("minimize: max_history and max_history_values must be ≥ 2, got " +
+                std::to_string(options.max_history) + " and " +
+                std::to_string(options.max_history_values));
   }
   const double inf = INFINITY;
   require_in_range("minimize: max_seconds", options.max_seconds, 0.0, inf);
@@ -193,11 +201,19 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
   const StoppingRules rules(options, domain, summary.initial_loss);
   summary.stopping_rules = rules.listed();
   const Vector* tested_gradient = with_gradient ? &gradient : nullptr;
+  // The records kept: the start and the latest, within both limits.
+  const std::size_t kept = static_cast<std::size_t>(std::max<long long>(
+      2, std::min(options.max_history,
+                  options.max_history_values / std::max<long long>(1, x0.size()))));
+  std::deque<IterationRecord> history;  // a deque: dropping the record after the start is O(1)
   const auto record = [&](double step_norm) {
-    summary.history.push_back({summary.iterations, summary.loss, step_norm, seconds_since(start),
-                               summary.evaluations, simulator.counts() - counts_at_start,
-                               summary.x});
-    return options.callback && options.callback(summary.history.back());
+    if (history.size() >= kept) {
+      history.erase(history.begin() + 1);
+      ++summary.history_dropped;
+    }
+    history.push_back({summary.iterations, summary.loss, step_norm, seconds_since(start),
+                       summary.evaluations, simulator.counts() - counts_at_start, summary.x});
+    return options.callback && options.callback(history.back());
   };
   const auto end_on = [&summary](Termination termination, std::string message) {
     summary.termination = termination;
@@ -296,6 +312,8 @@ MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const
                                        "), but L = " + report_number(summary.loss) +
                                        " is above L(x₀) = " + report_number(summary.initial_loss));
   }
+  summary.history.assign(std::make_move_iterator(history.begin()),
+                         std::make_move_iterator(history.end()));
   summary.counts = simulator.counts() - counts_at_start;
   summary.at_bounds = domain.count_at_bounds(summary.x);
   summary.wall_seconds = seconds_since(start);
@@ -336,6 +354,10 @@ std::string full_report(const MinimizeSummary& s) {
   row("iterations", std::to_string(s.iterations) + " (" + std::to_string(s.rejected_steps) +
                         " rejected trials)");
   row("evaluations", std::to_string(s.evaluations) + " (of the loss)");
+  if (s.history_dropped > 0) {
+    row("history", std::to_string(s.history.size()) + " records kept, " +
+                       std::to_string(s.history_dropped) + " dropped (max_history)");
+  }
   row("simulator passes", std::to_string(s.counts.passes));
   row("  forward samples", std::to_string(s.counts.forward));
   row("  VJP samples", std::to_string(s.counts.vjp));

@@ -88,12 +88,20 @@ struct MinimizeOptions {
   // ended by a budget keeps its last accepted x. ≥ 0.
   long long max_evaluations = 0;
   double max_seconds = 0.0;
+  // The history kept (MinimizeSummary::history): the start and the latest records, at most
+  // max_history of them and at most max_history_values entries of x in all (for n parameters,
+  // max(2, max_history_values / n) records), so that its memory is bounded whatever the run's
+  // length and dimension; the records in between are dropped (history_dropped counts them).
+  // Each ≥ 2; the defaults keep 10⁵ records, fewer for n > 100 (80 MB of x at most).
+  long long max_history = 100000;
+  long long max_history_values = 10000000;
 };
 
 struct MinimizeSummary {
   Termination termination = Termination::kMaxIterations;
   std::string message;                   // why it ended, with the numbers of the test that held
-  std::vector<IterationRecord> history;  // history[0] is the start
+  std::vector<IterationRecord> history;  // history[0] is the start, then the latest records
+  long long history_dropped = 0;         // records dropped between them (max_history)
   Vector x;                              // last finite iterate
   double loss = 0;                       // L(x)
   double initial_loss = 0;               // L(x₀)
