@@ -15,8 +15,7 @@ Matrix ComparisonToy::forward_batch(const Matrix& x, const Matrix& context) cons
 }
 
 Matrix ComparisonToy::vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const {
-  check_batch(x, context, "vjp");
-  if (gy.rows() != 2 || gy.cols() != x.cols()) throw Error("comparison_toy.vjp: gy has the wrong shape");
+  check_vjp_batch(x, context, gy);
   Matrix gx(2, x.cols());
   gx.row(0) = gy.row(0);
   gx.row(1) = 2.0 * x.row(1).cwiseProduct(gy.row(1));

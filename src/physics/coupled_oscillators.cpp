@@ -141,14 +141,8 @@ Vector CoupledOscillators::time_reversal(const Vector& y, const Vector& context)
 
 Matrix CoupledOscillators::vjp_batch(const Matrix& x, const Matrix& context,
                                      const Matrix& gy) const {
-  check_batch(x, context, "vjp", controls_in());
+  check_vjp_batch(x, context, gy, controls_in());
   const Index N = config_.oscillators, B = x.cols(), last = 2 * N - 1;
-  if (gy.rows() != output_dim() || gy.cols() != B) {
-    std::ostringstream msg;
-    msg << name() << ".vjp: gy is " << gy.rows() << "×" << gy.cols() << ", expected "
-        << output_dim() << "×" << B;
-    throw Error(msg.str());
-  }
   require_memory(8.0 * static_cast<double>(N) * 4 * static_cast<double>(config_.steps) *
                      static_cast<double>(B),
                  name() + ".vjp: the stage positions of " + std::to_string(N) +

@@ -84,14 +84,8 @@ Matrix FpuChain::forward_batch(const Matrix& x, const Matrix& context) const {
 }
 
 Matrix FpuChain::vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const {
-  check_batch(x, context, "vjp");
+  check_vjp_batch(x, context, gy);
   const Index N = config_.masses, B = x.cols();
-  if (gy.rows() != output_dim() || gy.cols() != B) {
-    std::ostringstream msg;
-    msg << name() << ".vjp: gy is " << gy.rows() << "×" << gy.cols() << ", expected "
-        << output_dim() << "×" << B;
-    throw Error(msg.str());
-  }
   require_memory(8.0 * static_cast<double>(N) * (static_cast<double>(config_.steps) + 1) *
                      static_cast<double>(B),
                  name() + ".vjp: the positions of " + std::to_string(N) + " masses over " +

@@ -106,13 +106,7 @@ Matrix HeatDiffusion::forward_batch(const Matrix& x, const Matrix& context) cons
 }
 
 Matrix HeatDiffusion::vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const {
-  check_batch(x, context, "vjp");
-  if (gy.rows() != size_ || gy.cols() != x.cols()) {
-    std::ostringstream msg;
-    msg << "heat_diffusion.vjp: gy is " << gy.rows() << "×" << gy.cols() << ", expected " << size_
-        << "×" << x.cols();
-    throw Error(msg.str());
-  }
+  check_vjp_batch(x, context, gy);
   return diffuse(gy);
 }
 

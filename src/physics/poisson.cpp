@@ -67,13 +67,7 @@ Matrix Poisson::forward_batch(const Matrix& x, const Matrix& context) const {
 }
 
 Matrix Poisson::vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const {
-  check_batch(x, context, "vjp");
-  if (gy.rows() != output_dim() || gy.cols() != x.cols()) {
-    std::ostringstream msg;
-    msg << name() << ".vjp: gy is " << gy.rows() << "×" << gy.cols() << ", expected "
-        << output_dim() << "×" << x.cols();
-    throw Error(msg.str());
-  }
+  check_vjp_batch(x, context, gy);
   return laplace(gy);
 }
 

@@ -106,14 +106,8 @@ Matrix QuantumDipole::forward_batch(const Matrix& x, const Matrix& context) cons
 }
 
 Matrix QuantumDipole::vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const {
-  check_batch(x, context, "vjp", true);
+  check_vjp_batch(x, context, gy, true);
   const Index M = interior(), B = x.cols();
-  if (gy.rows() != output_dim() || gy.cols() != B) {
-    std::ostringstream msg;
-    msg << name() << ".vjp: gy is " << gy.rows() << "×" << gy.cols() << ", expected "
-        << output_dim() << "×" << B;
-    throw Error(msg.str());
-  }
   require_memory(16.0 * static_cast<double>(M) * (static_cast<double>(config_.steps) + 1) *
                      static_cast<double>(B),
                  name() + ".vjp: the states of " + std::to_string(M) + " points over " +

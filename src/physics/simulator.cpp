@@ -32,6 +32,17 @@ void Simulator::check_batch(const Matrix& x, const Matrix& context, const char* 
   }
 }
 
+void Simulator::check_vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy,
+                                bool context_required) const {
+  check_batch(x, context, "vjp", context_required);
+  if (gy.rows() != output_dim() || gy.cols() != x.cols()) {
+    std::ostringstream msg;
+    msg << name() << ".vjp: gy is " << gy.rows() << "×" << gy.cols() << ", expected "
+        << output_dim() << "×" << x.cols();
+    throw Error(msg.str());
+  }
+}
+
 Vector Simulator::forward(const Vector& x, const Vector& context) const {
   return forward_batch(x, context);
 }

@@ -41,13 +41,7 @@ Matrix SinRotation::forward_batch(const Matrix& x, const Matrix& context) const 
 }
 
 Matrix SinRotation::vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const {
-  check_batch(x, context, "vjp");
-  if (gy.rows() != 2 || gy.cols() != x.cols()) {
-    std::ostringstream msg;
-    msg << "sin_rotation.vjp: gy is " << gy.rows() << "×" << gy.cols() << ", expected 2×"
-        << x.cols();
-    throw Error(msg.str());
-  }
+  check_vjp_batch(x, context, gy);
   Matrix g_hat(2, x.cols());
   g_hat.row(0) = out1_ * ((to_hat_.row(0) * x).array().cos() * gy.row(0).array()).matrix();
   g_hat.row(1) = out2_ * gy.row(1);

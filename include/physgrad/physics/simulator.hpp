@@ -55,6 +55,10 @@ class Simulator {
   // column per sample, or empty unless `context_required`.
   void check_batch(const Matrix& x, const Matrix& context, const char* where,
                    bool context_required = false) const;
+  // check_batch(x, context, "vjp", context_required), and that gy is output_dim() × B: the one
+  // check of a vjp_batch()'s arguments ("NAME.vjp: gy is 3×4, expected 2×4").
+  void check_vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy,
+                       bool context_required = false) const;
 };
 
 }  // namespace physgrad
