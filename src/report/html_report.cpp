@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "physgrad/error.hpp"
+#include "physgrad/report/svg_document.hpp"
 #include "physgrad/text.hpp"
 
 namespace physgrad {
@@ -21,16 +22,21 @@ p{max-width:60em;overflow-wrap:anywhere}
 table{border-collapse:collapse;font-size:.9em}
 p.caption{font-weight:600;margin:1.2em 0 .3em}
 .table{overflow-x:auto;max-width:100%;margin:0 0 1em}
+p.links a{margin-right:1em}
 th,td{border:1px solid #ccc;padding:.3em .7em;text-align:right;white-space:nowrap}
 th{background:#f3f3f3}
 th:first-child,td:first-child{text-align:left}
 .figures{display:flex;flex-wrap:wrap;gap:1.5em;align-items:flex-start}
 figure{margin:0;min-width:0;max-width:100%}
-figure svg{display:block;max-width:100%;height:auto}
+.figure-scroll>div>svg{display:block;max-width:100%;height:auto}
 .figure-scroll{overflow-x:auto;max-width:100%}
 figcaption{font-size:.9em;color:#555;margin-top:.3em;max-width:640px}
 p.message{font-size:1.15em;font-weight:600;color:#222;margin:.2em 0 .4em}
 .swatch{display:inline-block;width:.8em;height:.8em;margin-right:.4em;vertical-align:-.05em}
+@media (max-width:700px){.table table,.table tbody,.table tr,.table td{display:block}
+  .table thead{display:none}.table tr{border-top:2px solid #bbb;padding:.2em 0}
+  .table td{border:0;text-align:left;white-space:normal;overflow-wrap:anywhere;padding:.1em .3em}
+  .table td::before{content:attr(data-h) ": ";color:#555}}
 )";
 
 // The width (px) at which an SVG document of svg::open() shows its smallest text at 11 px: its
@@ -49,6 +55,15 @@ int readable_width(const std::string& svg) {
     if (size > 0) smallest = std::min(smallest, size);
   }
   return static_cast<int>(std::ceil(width * kSmallestReadable / smallest));
+}
+
+// The narrow layout of a responsive figure (svg::responsive), else the figure itself.
+std::string narrow_layout(const std::string& svg) {
+  try {
+    return svg::layouts(svg).narrow;
+  } catch (const Error&) {
+    return svg;  // not a document of svg::open(): shown as it is
+  }
 }
 
 bool blank(std::string_view line) {
@@ -117,7 +132,7 @@ std::string table_html(const HtmlTable& table, const std::string& where) {
     for (std::size_t c = 0; c < row.size(); ++c) {
       const std::string link = table.links.empty() ? std::string() : table.links[r][c];
       const std::string colour = table.colours.empty() ? std::string() : table.colours[r][c];
-      out += "<td>";
+      out += "<td data-h=\"" + xml_escape(table.header[c]) + "\">";
       if (!colour.empty()) {
         if (!is_hex_colour(colour)) {
           throw Error("html_report: '" + shown_text(colour) + "' in a table in " + where +
@@ -167,14 +182,20 @@ std::string local_href(std::string_view relative_path) {
 
 std::string html_report(const std::string& title, const std::string& intro,
                         const std::vector<HtmlSection>& sections) {
-  std::string out =
-      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
-  out += "<title>" + xml_escape(title) + "</title>\n<style>\n" + kStyle + "</style>\n";
-  out += "</head>\n<body>\n<h1>" + xml_escape(title) + "</h1>\n" + paragraphs(intro);
+  std::string out, rules;
+  out += "<h1>" + xml_escape(title) + "</h1>\n" + paragraphs(intro);
   for (const HtmlSection& section : sections) {
     out += "<section>\n";
     if (!section.heading.empty()) out += "<h2>" + xml_escape(section.heading) + "</h2>\n";
+    if (!section.links.empty()) {
+      out += "<p class=\"links\">";
+      for (const HtmlLink& link : section.links) {
+        const std::string href = local_href(link.path);
+        out += "<a href=\"" + (link.up ? "." + href : href) + "\">" + xml_escape(link.text) +
+               "</a>";
+      }
+      out += "</p>\n";
+    }
     out += paragraphs(section.text);
     for (const HtmlTable& table : section.tables) {
       out += table_html(table, "section '" + section.heading + "'");
@@ -187,8 +208,12 @@ std::string html_report(const std::string& title, const std::string& intro,
       out += (figure.id.empty() ? std::string("<figure>\n")
                                 : "<figure id=\"" + xml_escape(figure.id) + "\">\n") +
              "<div class=\"figure-scroll\"><div style=\"min-width:" +
-             std::to_string(readable_width(figure.svg)) + "px\">\n" + figure.svg +
+             std::to_string(readable_width(narrow_layout(figure.svg))) + "px\">\n" + figure.svg +
              "</div></div>\n";
+      // The narrow layout where the page (its margins aside) is narrower than the wide one.
+      if (figure.svg != narrow_layout(figure.svg)) {
+        rules += svg::narrow_rules(figure.svg, svg::size_of(figure.svg).first + 40);
+      }
       if (!figure.message.empty() || !figure.caption.empty()) {
         out += "<figcaption>" +
                (figure.message.empty()
@@ -201,7 +226,11 @@ std::string html_report(const std::string& title, const std::string& intro,
     if (!section.figures.empty()) out += "</div>\n";
     out += "</section>\n";
   }
-  return out + "</body>\n</html>\n";
+  return "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+         "<title>" +
+         xml_escape(title) + "</title>\n<style>\n" + kStyle + rules + "</style>\n</head>\n<body>\n" +
+         out + "</body>\n</html>\n";
 }
 
 }  // namespace physgrad

@@ -48,16 +48,17 @@ void check_options(const Grid2D& grid, const std::vector<Trajectory>& trajectori
 
 }  // namespace
 
-std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& trajectories,
-                          const LandscapeOptions& options) {
-  check_options(grid, trajectories, options);
+namespace {
+
+std::string draw_landscape(const Grid2D& grid, const std::vector<Trajectory>& trajectories,
+                           const LandscapeOptions& options) {
   const ColorScale scale =
       ColorScale::of({&grid}, options.log_levels, false, options.value_range);
   plot::Axis ax = plot::fixed_axis(grid.x_min, grid.x_max, false, 0, 1);
   plot::Axis ay = plot::fixed_axis(grid.y_min, grid.y_max, false, 1, 0);
   const double right = plot::color_bar_width(scale, options.value_label) + 14;
   const Box available{plot::left_margin(ay, !options.y_label.empty()),
-                      plot::top_margin(!options.title.empty()), options.width - right,
+                      plot::top_margin(options.title, options.width), options.width - right,
                       options.height - plot::kBottomMargin};
   const Box box = options.equal_aspect
                       ? plot::equal_aspect_box(available, grid.x_max - grid.x_min,
@@ -153,9 +154,11 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
                                "paint-order=\"stroke\"");
     }
   }
-  const double title_width = svg::text_width(options.title, 14) + 20;
+  const double title_width =
+      std::min(svg::text_width(options.title, 14) + 20, static_cast<double>(options.width));
   const int width = static_cast<int>(std::ceil(std::max(
-      {box.right + right, title_width, plot::legend_entry_width(entries)})));
+      {box.right + right, title_width,
+       std::min(plot::legend_entry_width(entries), static_cast<double>(options.width))})));
   const double below = box.bottom + 48;
   const plot::LegendLayout legend =
       plot::legend(entries, box, plot::Occupancy(box), below, width, false);
@@ -164,6 +167,18 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
   return svg::open(width, height) + svg::clipped(box, content) + notes +
          plot::axes(width, box, ax, ay, {options.title, options.x_label, options.y_label}) +
          plot::color_bar(bar, scale, options.value_label) + legend.svg + "</svg>\n";
+}
+
+}  // namespace
+
+std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& trajectories,
+                          const LandscapeOptions& options) {
+  check_options(grid, trajectories, options);
+  const std::string wide = draw_landscape(grid, trajectories, options);
+  if (svg::size_of(wide).first <= svg::kNarrowWidth) return wide;
+  LandscapeOptions narrow = options;
+  narrow.width = svg::kNarrowWidth;
+  return svg::responsive(wide, draw_landscape(grid, trajectories, narrow));
 }
 
 }  // namespace physgrad

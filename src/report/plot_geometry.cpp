@@ -180,11 +180,18 @@ bool coincide(const std::vector<Polyline>& a, const std::vector<Polyline>& b) {
 
 }  // namespace
 
+std::vector<std::size_t> retraced(const std::vector<Polyline>& pieces,
+                                  const std::vector<std::vector<Polyline>>& earlier) {
+  std::vector<std::size_t> out;
+  for (std::size_t k = 0; k < earlier.size(); ++k) {
+    if (coincide(pieces, earlier[k])) out.push_back(k);
+  }
+  return out;
+}
+
 int retraces(const std::vector<Polyline>& pieces,
              const std::vector<std::vector<Polyline>>& earlier) {
-  int count = 0;
-  for (const auto& other : earlier) count += coincide(pieces, other) ? 1 : 0;
-  return count;
+  return static_cast<int>(retraced(pieces, earlier).size());
 }
 
 std::string dash_pattern(int k) {

@@ -1,8 +1,9 @@
-// html_report — one self-contained HTML5 page of sections with text, captioned tables and inline
-// SVG figures; no external resources and no script. Readable down to phone widths: wide tables
-// scroll in their own box, and figures scale to the page down to the width at which their
-// smallest text is 11 px, below which they scroll in their own box too. Every text goes through xml_escape and
-// every link through local_href.
+// html_report — one self-contained HTML5 page of sections with text, links, captioned tables and
+// inline SVG figures; no external resources and no script. Readable down to phone widths: a
+// figure with a narrow layout (svg::responsive) switches to it where the page is narrower than
+// the figure, tables become one block per row ("header: value" lines) below 700 px, and what is
+// still wider scrolls in its own box. Every text goes through xml_escape and every link through
+// local_href.
 #pragma once
 
 #include <string>
@@ -33,11 +34,20 @@ struct HtmlFigure {
   std::string row{};
 };
 
+// A link in a section's line of links: to a file inside the page's folder (a path as for
+// HtmlTable::links), or with `up`, to one in the folder above it (e.g. the index of the run
+// folders, "../index.html").
+struct HtmlLink {
+  std::string text, path;
+  bool up = false;
+};
+
 struct HtmlSection {
   std::string heading;
   std::string text;  // plain text; blank lines separate paragraphs
   std::vector<HtmlTable> tables;
   std::vector<HtmlFigure> figures;
+  std::vector<HtmlLink> links{};  // one line of links under the heading
 };
 
 // The address of a file inside the page's folder, for href and src: "./" and the path's

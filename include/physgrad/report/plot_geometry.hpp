@@ -38,8 +38,11 @@ std::string band_path(const std::vector<double>& x, const std::vector<double>& l
                       const std::vector<double>& high, const Scale& sx, const Scale& sy,
                       const Box& bounds);
 
-// How many of the earlier series `pieces` retraces (0: none). Two series coincide when they
-// have as many points and each lies within half a pixel of the other's.
+// The positions in `earlier` of the series `pieces` retraces (empty: none). Two series
+// coincide when they have as many points and each lies within half a pixel of the other's.
+std::vector<std::size_t> retraced(const std::vector<Polyline>& pieces,
+                                  const std::vector<std::vector<Polyline>>& earlier);
+// How many of the earlier series `pieces` retraces (0: none).
 int retraces(const std::vector<Polyline>& pieces,
              const std::vector<std::vector<Polyline>>& earlier);
 // The stroke-dasharray of the k-th dash pattern: k = 0 the usual dashes of a dashed series,
