@@ -131,7 +131,7 @@ std::string responsive(const std::string& wide, const std::string& narrow) {
   std::snprintf(id.data(), id.size(), "pg-f%016llx",
                 static_cast<unsigned long long>(fnv1a64(wide_body + narrow_body)));
   const std::string name = id.data();
-  const std::string box = "\" x=\"0\" y=\"0\" width=\"" + std::to_string(w) + "\" height=\"" +
+  const std::string box = " x=\"0\" y=\"0\" width=\"" + std::to_string(w) + "\" height=\"" +
                           std::to_string(h) + "\" preserveAspectRatio=\"none\" viewBox=\"0 0 ";
   return open_tag(w, h,
                   " preserveAspectRatio=\"none\" class=\"pg-fig " + name + "\" data-narrow=\"" +
@@ -139,7 +139,7 @@ std::string responsive(const std::string& wide, const std::string& narrow) {
          "<style>svg." + name + " svg.pg-narrow{display:none}@media (max-width:" +
          std::to_string(w - 1) + "px){" + switch_rules(name, nw, nh) + "}</style>\n" +
          std::string(kWide) + box + std::to_string(w) + " " + std::to_string(h) + "\">\n" +
-         wide_body + "</svg>\n" + std::string(kNarrow) + " display=\"none" + box +
+         wide_body + "</svg>\n" + std::string(kNarrow) + " display=\"none\"" + box +
          std::to_string(nw) + " " + std::to_string(nh) + "\">\n" + narrow_body + "</svg>\n</svg>\n";
 }
 
