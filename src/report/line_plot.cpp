@@ -216,7 +216,9 @@ std::string draw_line_plot(const std::vector<Series>& series, const LinePlotOpti
     const std::size_t count = points.empty() ? 0 : points.front().size();
     if (shape >= 0) {
       // Markers of series drawn on one another are spread over the points in turns.
-      const std::size_t every = retraced > 0 ? std::max<std::size_t>(2, count / 12) : 1;
+      const std::size_t every = retraced > 0 ? std::max<std::size_t>(2, count / 12)
+                                : shape > 0 && count > 24 ? count / 12
+                                                          : 1;
       const double size = shape == 0 ? (count <= 40 ? 5 : count <= 120 ? 3 : 2) : 7;
       group += plot::markers_svg(points, bounds, shape, size, color, every,
                                  retraced * std::max<std::size_t>(1, every / 3));

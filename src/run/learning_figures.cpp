@@ -104,6 +104,21 @@ RunContext::Figure LearningSweep::metric_figure(
     // median and band change in steps.
     s.steps = n > 1 && progress == Progress::kTime;
     if (log_y) mark_if_diverging(s);
+    // Where a pretrained run switched from Adam to its rule (it did when it ran past it).
+    const nlohmann::json switch_at = first.params.value("pretrain_iterations", nlohmann::json());
+    if (switch_at.is_number_integer() && first.summary.iterations > switch_at.get<long long>()) {
+      for (const TrainingRecord& r : first.summary.history) {
+        if (r.iteration < switch_at.get<long long>()) continue;
+        const double x = progress == Progress::kTime    ? r.train_seconds
+                         : progress == Progress::kEpoch ? r.epoch
+                                                        : static_cast<double>(r.iteration);
+        double y = NAN;  // the drawn curve where the rule took over
+        for (std::size_t i = 0; i < s.x.size() && s.x[i] <= x; ++i) y = s.y[i];
+        s.marks.push_back({x, y, "switched from Adam after iteration " +
+                                     std::to_string(switch_at.get<long long>())});
+        break;
+      }
+    }
     if (stopped > 0) {
       s.end_label = n > 1 ? std::to_string(stopped) + " of " + std::to_string(n) +
                                 " runs stopped: not finite"
