@@ -56,7 +56,7 @@ bool index_same_value(const std::string& cell, const json& value) {
 
 // The compared runs' curves of metrics.csv on each of the folder's axes: per label the median
 // and band over its seeds; for direct runs only the rows of the first run's setting.
-void add_index_curves(IndexedFolder& folder, const fs::path& file, const RunRecord& first,
+void add_index_curves(IndexedFolder& folder, const fs::path& file, const RunRecord* first,
                 const std::vector<std::string>& setting_keys, std::vector<std::string>& notes) {
   const std::vector<IndexAxes> all_axes = index_axes_of(folder);
   std::vector<std::string> wanted = {"label", "optimizer", "seed"};
@@ -74,7 +74,7 @@ void add_index_curves(IndexedFolder& folder, const fs::path& file, const RunReco
   if (label == n) return;
   std::vector<std::pair<std::size_t, json>> setting;  // column, the first run's value
   for (const std::string& key : setting_keys) {
-    if (metrics.column(key) != n) setting.emplace_back(metrics.column(key), first.params.at(key));
+    if (metrics.column(key) != n) setting.emplace_back(metrics.column(key), first->params.at(key));
   }
   std::map<std::pair<std::string, std::string>, std::size_t> places;  // (label, seed) → curve
   std::vector<std::pair<std::string, std::vector<std::vector<Curve>>>> curves;  // per curve: axes
@@ -173,9 +173,10 @@ IndexedFolder read_index_folder(const fs::path& path, std::vector<std::string>& 
     }
   }
   if (!runs.empty()) folder.first_setting = index_setting(runs.front(), setting_keys);
-  if (!runs.empty() && draw(folder.experiment) && fs::exists(metrics, error)) {
+  if (draw(folder.experiment) && fs::exists(metrics, error)) {
     try {
-      add_index_curves(folder, metrics, runs.front(), setting_keys, cut);
+      add_index_curves(folder, metrics, runs.empty() ? nullptr : &runs.front(), setting_keys,
+                       cut);
     } catch (const Error& e) {
       cut.push_back(in_quotes(metrics.string()) + ": " + e.what() +
                     "; its loss curves are not drawn");
