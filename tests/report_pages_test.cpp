@@ -89,13 +89,28 @@ const std::vector<Case>& cases() {
   return all;
 }
 
-// The <svg>…</svg> documents embedded in an HTML page.
+// The <svg>…</svg> documents embedded in an HTML page (the outermost ones: a figure's layouts
+// are nested <svg>s inside it).
 std::vector<std::string> inline_svgs(const std::string& html) {
   std::vector<std::string> svgs;
-  for (std::size_t at = html.find("<svg"); at != std::string::npos; at = html.find("<svg", at + 1)) {
-    const std::size_t end = html.find("</svg>", at);
-    if (end == std::string::npos) break;
+  std::size_t at = html.find("<svg");
+  while (at != std::string::npos) {
+    std::size_t depth = 1, next = at + 4, end = std::string::npos;
+    while (depth > 0) {
+      const std::size_t open = html.find("<svg", next), close = html.find("</svg>", next);
+      if (close == std::string::npos) break;
+      if (open != std::string::npos && open < close) {
+        ++depth;
+        next = open + 4;
+      } else {
+        --depth;
+        next = close + 6;
+        end = close;
+      }
+    }
+    if (depth > 0) break;
     svgs.push_back(html.substr(at, end + 6 - at));
+    at = html.find("<svg", end + 6);
   }
   return svgs;
 }
@@ -515,6 +530,7 @@ TEST_F(ReportPages, ChromiumShowsThemWithoutErrorsAt420PixelsWide) {
         "for (const t of document.querySelectorAll('svg text')) {"
         "const svg = t.ownerSVGElement; const box = svg.viewBox.baseVal;"
         "if (!box || box.width === 0) continue;"
+        "if (svg.getBoundingClientRect().width === 0) continue;"
         "const px = parseFloat(getComputedStyle(t).fontSize) *"
         " svg.getBoundingClientRect().width / box.width;"
         "if (px < smallest) { smallest = px; text = t.textContent.slice(0, 20); }}"
@@ -725,9 +741,11 @@ TEST_F(ReportPages, TheIndexComparesFoldersByTheMessageMetric) {
   EXPECT_NE(index.find("<th>final x-distance to the nearest exact solution</th>", section),
             std::string::npos);
   // Options: what differs from the defaults (iters, sizes, eval-every; b also lr), per folder.
-  EXPECT_NE(index.find("<td>eval-every = 20, iters = 60, test-size = 20, train-size = 100</td>"),
+  EXPECT_NE(index.find("<td data-h=\"options\">eval-every = 20, iters = 60, test-size = 20, "
+                       "train-size = 100</td>"),
             std::string::npos);
-  EXPECT_NE(index.find("<td>eval-every = 20, iters = 60, lr = 0.01, test-size = 20, "
+  EXPECT_NE(index.find("<td data-h=\"options\">eval-every = 20, iters = 60, lr = 0.01, "
+                       "test-size = 20, "
                        "train-size = 100</td>"),
             std::string::npos);
   // Only the ξ = 32 runs are compared, each rule in its colour, one best per folder.
@@ -737,18 +755,23 @@ TEST_F(ReportPages, TheIndexComparesFoldersByTheMessageMetric) {
   EXPECT_NE(table.find("<span class=\"swatch\" style=\"background:#000000\"></span>SIP (ξ=32)"),
             std::string::npos);  // SIP's colour in the catalogue
   std::size_t best = 0;
-  for (std::size_t at = table.find("<td>best</td>"); at != std::string::npos;
-       at = table.find("<td>best</td>", at + 1)) {
+  const std::string best_cell = "<td data-h=\"× best\">best</td>";
+  for (std::size_t at = table.find(best_cell); at != std::string::npos;
+       at = table.find(best_cell, at + 1)) {
     ++best;
   }
   EXPECT_EQ(best, 2u);
-  // The overlay draws the x-distance of the six compared runs.
+  // The overlays draw the x-distance of the six compared runs against updates and against
+  // training time, each axis labelled with what it plots.
   const std::vector<std::string> svgs = inline_svgs(table);
-  ASSERT_EQ(svgs.size(), 1u);
-  EXPECT_NE(svgs[0].find("final x-distance to the nearest exact solution vs training time"),
-            std::string::npos);
-  EXPECT_NE(svgs[0].find("b: Adam (ξ=32)"), std::string::npos);
-  EXPECT_EQ(svgs[0].find("ξ=1)"), std::string::npos);
+  ASSERT_EQ(svgs.size(), 2u);
+  for (const std::string& svg : svgs) {
+    EXPECT_NE(svg.find(">x-distance to the nearest exact solution</text>"), std::string::npos);
+    EXPECT_NE(svg.find("b: Adam (ξ=32)"), std::string::npos);
+    EXPECT_EQ(svg.find("ξ=1)"), std::string::npos);
+  }
+  EXPECT_NE(svgs[0].find(">updates (iterations)</text>"), std::string::npos);
+  EXPECT_NE(svgs[1].find(">training time (s, evaluations excluded)</text>"), std::string::npos);
 }
 
 TEST_F(ReportPages, AFolderWithAFieldOfTheWrongTypeIsLeftOutWithAOneLineWarning) {
@@ -861,8 +884,12 @@ TEST_F(ReportPages, LargeFilesAreReadInBoundedTimeAndMemoryAndWhatIsLeftOutIsSai
                        "listed</p>"),
             std::string::npos);
   // 10,000 runs of "many" in 40 rows of 250 seeds, the setting named by alpha alone.
-  EXPECT_NE(index.find("<td>L</td><td>alpha = 0</td><td>250</td>"), std::string::npos);
-  EXPECT_NE(index.find("<td>L</td><td>alpha = 39</td><td>250</td>"), std::string::npos);
+  EXPECT_NE(index.find("<td data-h=\"run\">L</td><td data-h=\"setting\">alpha = 0</td>"
+                       "<td data-h=\"runs\">250</td>"),
+            std::string::npos);
+  EXPECT_NE(index.find("<td data-h=\"run\">L</td><td data-h=\"setting\">alpha = 39</td>"
+                       "<td data-h=\"runs\">250</td>"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -111,15 +111,17 @@ void add_index_curves(IndexedFolder& folder, const fs::path& file, const RunReco
   }
   for (std::size_t a = 0; a < all_axes.size(); ++a) {
     std::vector<Series> drawn;
-    for (const ComparedGroup& group : folder.compared) {
+    std::vector<std::string> labels;  // in the file's order
+    for (const auto& [name, per_axes] : curves) {
+      if (std::find(labels.begin(), labels.end(), name) == labels.end()) labels.push_back(name);
+    }
+    for (const std::string& label : labels) {
       std::vector<Curve> seeds;
       for (const auto& [name, per_axes] : curves) {
-        if (name == group.label && !per_axes[a].front().x.empty()) {
-          seeds.push_back(per_axes[a].front());
-        }
+        if (name == label && !per_axes[a].front().x.empty()) seeds.push_back(per_axes[a].front());
       }
       if (seeds.empty()) continue;
-      Series s = median_band(group.label, seeds, "", true, kCurvePoints);
+      Series s = median_band(label, seeds, "", true, kCurvePoints);
       if (seeds.size() > 1) s.label += ", median of " + std::to_string(seeds.size());
       drawn.push_back(std::move(s));
     }
