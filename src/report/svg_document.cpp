@@ -89,16 +89,12 @@ std::string nested_body(const std::string& document, std::string_view marker,
   return document.substr(tag_end + 2, close - tag_end - 2);
 }
 
+constexpr std::string_view kFigureClass = " class=\"pg-fig ";
+
 bool is_responsive(const std::string& document) {
   const std::size_t tag_end = document.find(">\n");
   return document.rfind(kRoot, 0) == 0 &&
-         document.substr(0, tag_end).find(" class=\"pg-fig ") != std::string::npos;
-}
-
-std::string figure_class(const std::string& document) {
-  const std::size_t at = document.find(" class=\"pg-fig ");
-  const std::size_t from = at + 16, end = document.find('"', from);
-  return document.substr(from, end - from);
+         document.substr(0, tag_end).find(kFigureClass) != std::string::npos;
 }
 
 std::string switch_rules(const std::string& name, int width, int height) {
@@ -158,13 +154,19 @@ Layouts layouts(const std::string& document) {
           open_tag(nw, nh) + nested_body(document, kNarrow, "</svg>\n</svg>") + "</svg>\n"};
 }
 
-std::string narrow_rules(const std::string& document, int below) {
-  if (!is_responsive(document)) return "";
-  const std::size_t at = document.find("data-narrow=\"");
-  int nw = 0, nh = 0;
-  if (std::sscanf(document.c_str() + at + 13, "%d %d", &nw, &nh) != 2) return "";
-  return "@media (max-width:" + std::to_string(below - 1) + "px){" +
-         switch_rules(figure_class(document), nw, nh) + "}\n";
+std::string switched_below(const std::string& document, int below) {
+  if (!is_responsive(document)) return document;
+  // responsive() writes one "@media (max-width:Npx)" in its <style>: N becomes below − 1.
+  constexpr std::string_view kQuery = "@media (max-width:";
+  const std::size_t style_end = document.find("</style>");
+  const std::size_t at = document.find(kQuery);
+  const std::size_t end = at == std::string::npos ? at : document.find("px)", at);
+  if (end == std::string::npos || end > style_end) {
+    throw Error("svg: a figure is not a responsive SVG document");
+  }
+  std::string out = document;
+  out.replace(at + kQuery.size(), end - at - kQuery.size(), std::to_string(std::max(0, below - 1)));
+  return out;
 }
 
 namespace {

@@ -62,4 +62,23 @@ std::string local_href(std::string_view relative_path);
 std::string html_report(const std::string& title, const std::string& intro,
                         const std::vector<HtmlSection>& sections);
 
+// The page in parts, in the order they are written, for a page too large to hold at once
+// (html_report() is their concatenation): the page's start (head, title, intro); per section its
+// opening (heading, links, text), its tables — each whole (html_table), or as its opening
+// (caption and header), its rows written in turns and kHtmlTableClose — its figures and
+// kHtmlSectionClose; then kHtmlPageClose. `where` names the table in errors ("section 'Runs'").
+std::string html_page_open(const std::string& title, const std::string& intro);
+// Plain text as paragraphs (<p>), blank lines separating them.
+std::string html_paragraphs(std::string_view text);
+std::string html_section_open(const HtmlSection& section);
+std::string html_table(const HtmlTable& table, const std::string& where);
+std::string html_table_open(const HtmlTable& table);
+std::string html_table_rows(const HtmlTable& table, const std::string& where);
+inline constexpr std::string_view kHtmlTableClose = "</tbody>\n</table></div>\n";
+// The figures in rows (HtmlFigure::row); a responsive figure carries the rule that switches it to
+// its narrow layout where the page is narrower than the wide one (its margins included).
+std::string html_figures(const std::vector<HtmlFigure>& figures);
+inline constexpr std::string_view kHtmlSectionClose = "</section>\n";
+inline constexpr std::string_view kHtmlPageClose = "</body>\n</html>\n";
+
 }  // namespace physgrad

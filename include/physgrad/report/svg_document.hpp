@@ -52,9 +52,9 @@ std::string side_by_side(const std::vector<std::string>& documents, int gap = 12
 // A figure in two layouts, documents of open(): `wide` as it is, and `narrow` (at most
 // kNarrowWidth pixels wide: panels stacked, legend below) where the screen is narrower than the
 // wide one. One root <svg> of the wide size holds both as nested <svg>s; a <style> inside it
-// shows the narrow one and resizes the root below a width of wide − 1 pixels (a page that
-// embeds it may switch earlier: narrow_rules). Without CSS the wide one shows. Throws Error for a
-// text that is not a document of open().
+// shows the narrow one and resizes the root where the viewport is narrower than the wide one (a
+// page that embeds it may move that width: switched_below). Without CSS the wide one shows.
+// Throws Error for a text that is not a document of open().
 inline constexpr int kNarrowWidth = 380;
 std::string responsive(const std::string& wide, const std::string& narrow);
 // The two layouts of a document (for a document of open(), itself twice), as documents of
@@ -63,9 +63,9 @@ struct Layouts {
   std::string wide, narrow;
 };
 Layouts layouts(const std::string& document);
-// CSS that switches a responsive() document to its narrow layout in a page narrower than
-// `below` pixels; empty for a document with one layout.
-std::string narrow_rules(const std::string& document, int below);
+// A responsive() document that switches to its narrow layout where the viewport is narrower than
+// `below` pixels (e.g. embedded in a page with margins); any other document as it is.
+std::string switched_below(const std::string& document, int below);
 // The width and height of a document of open() or responsive() (its root's).
 std::pair<int, int> size_of(const std::string& document);
 
