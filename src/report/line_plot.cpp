@@ -151,11 +151,12 @@ std::string draw_line_plot(const std::vector<Series>& series, const LinePlotOpti
   std::vector<Box> note_boxes;
   std::vector<std::vector<Polyline>> drawn;  // the pieces of the series before
   std::vector<int> shapes;                    // the marker shape each series was drawn with
+  std::vector<int> dashes_of;                 // and its dash pattern (-1: solid)
   std::string hover;
   for (std::size_t n = 0; n < series.size(); ++n) {
     const Series& s = series[n];
     const std::string color = xml_escape(s.color.empty() ? palette_color(n) : s.color);
-    std::string group = "<g class=\"series\" data-label=\"" + xml_escape(s.label) + "\">\n";
+    std::string group;  // the series' band, line and markers
     std::vector<double> x, y;
     staircase(s, s.y, x, y);
     std::vector<Polyline> pieces(1);
@@ -188,11 +189,17 @@ std::string draw_line_plot(const std::vector<Series>& series, const LinePlotOpti
     }
     // A series that retraces earlier ones gets its own dashes and marker shape, its markers set
     // off from theirs, and says so in the legend: both stay visible.
-    const std::vector<std::size_t> under = plot::retraced(pieces, drawn);
+    const std::vector<std::size_t> under = plot::retraced(pieces, drawn, box);
     drawn.push_back(pieces);
     const int retraced = static_cast<int>(under.size());
-    const std::string dashes =
-        retraced > 0 ? plot::dash_pattern(retraced) : s.dashed ? plot::dash_pattern(0) : "";
+    int dash = s.dashed ? s.dash_pattern : -1;  // -1: solid
+    if (retraced > 0) {  // a pattern none of those it retraces has
+      std::vector<int> taken;
+      for (const std::size_t k : under) taken.push_back(dashes_of[k]);
+      dash = plot::free_dash_pattern(taken);
+    }
+    dashes_of.push_back(dash);
+    const std::string dashes = dash < 0 ? "" : plot::dash_pattern(dash);
     group += svg::path(plot::line_path(pieces, bounds),
                        "fill=\"none\" stroke=\"" + color +
                            "\" stroke-width=\"1.8\" stroke-linejoin=\"round\" "
@@ -215,10 +222,12 @@ std::string draw_line_plot(const std::vector<Series>& series, const LinePlotOpti
     const std::vector<Polyline> points = plot::to_pixels(s.x, s.y, ax.scale, sy, false);
     const std::size_t count = points.empty() ? 0 : points.front().size();
     if (shape >= 0) {
-      // Markers of series drawn on one another are spread over the points in turns.
-      const std::size_t every = retraced > 0 ? std::max<std::size_t>(2, count / 12)
-                                : shape > 0 && count > 24 ? count / 12
-                                                          : 1;
+      // Markers of series drawn on one another are spread over the points in turns (a series
+      // of one point keeps it).
+      std::size_t every = retraced > 0                ? std::max<std::size_t>(2, count / 12)
+                          : shape > 0 && count > 24 ? count / 12
+                                                    : 1;
+      every = std::min(every, std::max<std::size_t>(count, 1));
       const double size = shape == 0 ? (count <= 40 ? 5 : count <= 120 ? 3 : 2) : 7;
       group += plot::markers_svg(points, bounds, shape, size, color, every,
                                  retraced * std::max<std::size_t>(1, every / 3));
@@ -238,7 +247,12 @@ std::string draw_line_plot(const std::vector<Series>& series, const LinePlotOpti
                "</title>\n" + diamond(p, color) + "</g>\n";
       occupied.mark_box({p.x - 6, p.y - 6, p.x + 6, p.y + 6});
     }
-    content += group + "</g>\n";
+    // A series with no point to draw says why, here and in its legend entry.
+    const std::string not_drawn =
+        !pieces.empty() ? "" : s.end_label.empty() ? "no finite value" : s.end_label;
+    content += "<g class=\"series\" data-label=\"" + xml_escape(s.label) + "\"" +
+               (not_drawn.empty() ? "" : " data-empty=\"" + xml_escape(not_drawn) + "\"") +
+               ">\n" + group + "</g>\n";
     for (const Polyline& piece : pieces) occupied.mark_polyline(piece);
 
     // The end of a diverged (or otherwise labelled) run: a × and its label inside the frame.
@@ -278,6 +292,7 @@ std::string draw_line_plot(const std::vector<Series>& series, const LinePlotOpti
     std::string label = s.label.empty() ? "" : s.label + zero_note;
     if (!label.empty() && !coincides.empty()) label += " (coincides with " + coincides + ")";
     if (!label.empty() && !s.marks.empty()) label += " (◆ " + s.marks.front().label + ")";
+    if (!label.empty() && !not_drawn.empty()) label += " (not drawn: " + not_drawn + ")";
     entries.push_back({label, color, true, dashes, shape == 0, has_band(s), shape});
   }
   const plot::LegendLayout legend =

@@ -39,6 +39,9 @@ struct Series {
     std::string label;
   };
   std::vector<Mark> marks{};
+  // With `dashed`: which dash pattern (plot_geometry.hpp's dash_pattern; 0 the usual dashes), e.g.
+  // to tell apart variants of one rule that share its colour.
+  int dash_pattern = 0;
 };
 
 struct LinePlotOptions {
@@ -58,11 +61,14 @@ struct LinePlotOptions {
 // Non-finite points are skipped and break the line. On a log y axis a value ≤ 0 is drawn on the
 // axis' lower edge with a ▼ and the legend says where the series reaches it; on a log x axis
 // such points are skipped. The legend goes where no data is (else below the plot, which makes
-// the figure taller). A series that retraces earlier ones (every point within half a pixel) gets
-// a dash pattern and a marker shape of its own, its markers set off from theirs, and its legend
-// entry says "coincides with" them. Each point has a hover title with its x and y (at most 60 a
-// series). Throws Error when a series has x and y (or a band) of different lengths
-// or the size is below 200x150.
+// the figure taller). A series drawn over earlier ones that it would hide (every point of theirs
+// within 1.5 pixels of its line) gets a dash pattern and a marker shape of its own, its markers
+// set off from theirs, and its legend entry says "coincides with" them; a series with no point to
+// draw says so in its legend entry ("not drawn: …"). Each point has a hover title with its x and
+// y (at most 60 a series). Each series is a <g class="series" data-label="…"> holding its line
+// (class "line") and markers (class "marker", data-shape), with data-empty="…" when it has no
+// point to draw. Throws Error when a series has x and y (or a band) of different lengths or the
+// size is below 200x150.
 std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptions& options);
 
 }  // namespace physgrad
