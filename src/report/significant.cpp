@@ -51,18 +51,16 @@ std::string median_and_range(const Spread& s) {
   return m + " (" + with_digits(s.low, digits) + "–" + with_digits(s.high, digits) + ")";
 }
 
+int ratio_digits(const Spread& a, const Spread& b) {
+  if (a.count < 2 || b.count < 2 || a.median == 0 || b.median == 0) return 2;
+  const double relative = std::max((a.high - a.low) / std::abs(a.median),
+                                   (b.high - b.low) / std::abs(b.median));
+  if (!(relative > 0)) return 2;
+  return static_cast<int>(std::clamp(std::floor(-std::log10(relative)) + 2, 1.0, 4.0));
+}
+
 std::string ratio_text(const Spread& a, const Spread& b) {
-  int digits = 2;
-  if (a.count >= 2 && b.count >= 2 && a.median != 0 && b.median != 0) {
-    const double relative = std::max((a.high - a.low) / std::abs(a.median),
-                                     (b.high - b.low) / std::abs(b.median));
-    if (relative > 0) {
-      digits = static_cast<int>(std::clamp(std::floor(-std::log10(relative)) + 2, 1.0, 4.0));
-    }
-  }
-  const double ratio = a.median / b.median;
-  if (ratio == std::round(ratio)) return std::to_string(std::llround(ratio));
-  return with_digits(ratio, digits);
+  return with_digits(a.median / b.median, ratio_digits(a, b));
 }
 
 }  // namespace physgrad

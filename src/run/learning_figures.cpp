@@ -7,6 +7,7 @@
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
+#include "physgrad/report/significant.hpp"
 
 namespace physgrad::experiments {
 
@@ -286,10 +287,16 @@ void LearningSweep::add_tables() const {
     }
     losses.header.insert(losses.header.end(), {"median", "worst", "median / lowest"});
     std::vector<double> medians;
+    std::vector<Spread> spreads;  // the digits of a row and of its ratio follow its spread
     for (const std::string& id : ids) {
       const std::string label = learning_run_label(id);
       std::vector<std::string> row = {label}, saturated = {label};
       std::vector<double> values;
+      for (const long long seed : seeds) {
+        if (const LearningResult* r = find(tag, id, seed)) values.push_back(final_test_loss(*r));
+      }
+      spreads.push_back(spread_of(values));
+      const auto shown = [&](double v) { return with_digits(v, digits_for(spreads.back())); };
       for (const long long seed : seeds) {
         const LearningResult* r = find(tag, id, seed);
         if (r == nullptr) {
@@ -297,8 +304,7 @@ void LearningSweep::add_tables() const {
           saturated.push_back("–");
           continue;
         }
-        values.push_back(final_test_loss(*r));
-        row.push_back(format_value(values.back()) +
+        row.push_back(shown(final_test_loss(*r)) +
                       (r->summary.termination == TrainingTermination::kNumericalFailure ? " (NaN stop)"
                                                                                    : ""));
         if (has_saturation) {
@@ -306,9 +312,8 @@ void LearningSweep::add_tables() const {
         }
       }
       medians.push_back(median(values));
-      row.push_back(format_value(medians.back()));
-      row.push_back(values.empty() ? "–"
-                                   : format_value(*std::max_element(values.begin(), values.end())));
+      row.push_back(shown(medians.back()));
+      row.push_back(values.empty() ? "–" : shown(*std::max_element(values.begin(), values.end())));
       losses.rows.push_back(std::move(row));
       saturation.rows.push_back(std::move(saturated));
     }
@@ -317,10 +322,15 @@ void LearningSweep::add_tables() const {
     for (const double m : medians) {
       if (std::isfinite(m)) lowest = std::min(lowest, m);
     }
+    // A finite median as a multiple of the lowest, with the digits their spreads support.
+    const auto multiple = [&](std::size_t k) {
+      const auto best = std::find(medians.begin(), medians.end(), lowest) - medians.begin();
+      return with_digits(medians[k] / lowest, ratio_digits(spreads[k], spreads[best]));
+    };
     for (std::size_t k = 0; k < losses.rows.size(); ++k) {
       losses.rows[k].push_back(!std::isfinite(medians[k]) ? "–"
                                : medians[k] == lowest     ? "best"
-                                                          : "×" + format_value(medians[k] / lowest));
+                                                          : "×" + multiple(k));
     }
     losses.title += "; the last column marks the lowest median (best) and gives the others as "
                     "multiples of it";

@@ -23,8 +23,10 @@ std::string with_digits(double value, int digits);
 // "0.0123 (0.0118–0.0131)": the median with the digits its spread supports and the range; a
 // single value (or all equal) without the range; "–" for none.
 std::string median_and_range(const Spread& spread);
-// The ratio a / b of two medians with the digits the wider relative spread of the two supports
-// (two when either is a single value).
+// The digits a ratio a / b of two medians supports: d = ⌊−log₁₀ r⌋ + 2 (1 ≤ d ≤ 4) for the wider
+// relative spread r = (max − min) / |median| of the two; two when either is a single value.
+int ratio_digits(const Spread& a, const Spread& b);
+// The ratio a / b of two medians with ratio_digits(a, b) significant digits.
 std::string ratio_text(const Spread& a, const Spread& b);
 
 }  // namespace physgrad
