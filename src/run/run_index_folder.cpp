@@ -62,7 +62,7 @@ void add_index_curves(IndexedFolder& folder, const fs::path& file, const RunReco
   std::vector<std::string> wanted = {"label", "optimizer", "seed"};
   for (const IndexAxes& a : all_axes) wanted.insert(wanted.end(), {a.x, a.y});
   wanted.insert(wanted.end(), setting_keys.begin(), setting_keys.end());
-  const CsvData metrics =
+  CsvData metrics =
       parse_csv(read_regular_file(file, kMaxMetricsBytes), {wanted, kMaxMetricsRows});
   if (metrics.rows_left_out > 0) {
     notes.push_back(in_quotes(file.string()) + ": " +
@@ -79,7 +79,8 @@ void add_index_curves(IndexedFolder& folder, const fs::path& file, const RunReco
   std::map<std::pair<std::string, std::string>, std::size_t> places;  // (label, seed) → curve
   std::vector<std::pair<std::string, std::vector<std::vector<Curve>>>> curves;  // per curve: axes
   std::size_t rows_left_out = 0;
-  for (const std::vector<std::string>& row : metrics.rows) {
+  for (std::vector<std::string>& row : metrics.rows) {
+    row[label] = index_clipped(std::move(row[label]), kIndexMaxName);  // as the summary's labels
     if (!folder.message.compares(row[label])) continue;
     if (!std::all_of(setting.begin(), setting.end(),
                      [&](const auto& s) { return index_same_value(row[s.first], s.second); })) {
@@ -115,13 +116,13 @@ void add_index_curves(IndexedFolder& folder, const fs::path& file, const RunReco
     for (const auto& [name, per_axes] : curves) {
       if (std::find(labels.begin(), labels.end(), name) == labels.end()) labels.push_back(name);
     }
-    for (const std::string& label : labels) {
+    for (const std::string& name_of : labels) {
       std::vector<Curve> seeds;
       for (const auto& [name, per_axes] : curves) {
-        if (name == label && !per_axes[a].front().x.empty()) seeds.push_back(per_axes[a].front());
+        if (name == name_of && !per_axes[a].front().x.empty()) seeds.push_back(per_axes[a].front());
       }
       if (seeds.empty()) continue;
-      Series s = median_band(label, seeds, "", true, kCurvePoints);
+      Series s = median_band(name_of, seeds, "", true, kCurvePoints);
       if (seeds.size() > 1) s.label += ", median of " + std::to_string(seeds.size());
       drawn.push_back(std::move(s));
     }
@@ -136,7 +137,7 @@ json read_index_json(const fs::path& path) {
 }  // namespace
 
 IndexedFolder read_index_folder(const fs::path& path, std::vector<std::string>& notes,
-                                const std::function<bool(const std::string&)>& draw) {
+                                const std::function<bool(const IndexedFolder&)>& draw) {
   IndexedFolder folder;
   folder.name = path.filename().string();
   std::vector<std::string> cut;  // noted only when the folder is shown
@@ -154,7 +155,7 @@ IndexedFolder read_index_folder(const fs::path& path, std::vector<std::string>& 
   std::error_code error;  // a link inside the folder that leads nowhere counts as absent
   if (fs::exists(config, error)) {
     reading(config, [&] {
-      read_index_config(read_index_json(config), folder);
+      read_index_config(read_index_json(config), folder, cut, config);
     });
   }
   add_index_rows(folder, runs, cut, summary);
@@ -175,7 +176,7 @@ IndexedFolder read_index_folder(const fs::path& path, std::vector<std::string>& 
     }
   }
   if (!runs.empty()) folder.first_setting = index_setting(runs.front(), setting_keys);
-  if (draw(folder.experiment) && fs::exists(metrics, error)) {
+  if (draw(folder) && fs::exists(metrics, error)) {
     try {
       add_index_curves(folder, metrics, runs.empty() ? nullptr : &runs.front(), setting_keys,
                        cut);

@@ -31,6 +31,18 @@ std::string index_text(const json& value) {
   return value.is_string() ? value.get<std::string>() : format_value(value.get<double>());
 }
 
+std::string index_clipped(std::string text, std::size_t bytes) {
+  if (text.size() <= bytes) return text;
+  std::size_t end = 0;
+  while (end < text.size()) {
+    const std::size_t next = end + utf8_char_at(text, end).length;
+    if (next > bytes) break;
+    end = next;
+  }
+  text.resize(end);
+  return text + "…";
+}
+
 namespace {
 
 // "a number", "an array", … for messages.
@@ -81,17 +93,20 @@ IndexedMessage read_index_message(const json& summary) {
   IndexedMessage message;
   const json* given = index_field(summary, "message", "", &json::is_object, "an object");
   if (!given) return message;
-  message.figure = index_text_field(*given, "figure", "message.", "");
-  message.sentence = index_text_field(*given, "sentence", "message.", "");
-  const std::string metric = index_text_field(*given, "metric", "message.", "");
+  message.figure = index_clipped(index_text_field(*given, "figure", "message.", ""), kIndexMaxName);
+  message.sentence =
+      index_clipped(index_text_field(*given, "sentence", "message.", ""), kIndexMaxSentence);
+  const std::string metric =
+      index_clipped(index_text_field(*given, "metric", "message.", ""), kIndexMaxName);
   if (!metric.empty()) {
     message.metric = metric;
-    message.metric_text = index_text_field(*given, "metric_text", "message.", metric);
+    message.metric_text =
+        index_clipped(index_text_field(*given, "metric_text", "message.", metric), kIndexMaxName);
   }
   if (const json* labels = index_field(*given, "labels", "message.", &json::is_array, "an array")) {
     for (const json& label : *labels) {
       if (!label.is_string()) throw Error("message.labels holds " + index_type_name(label) + ", not text");
-      message.labels.push_back(label.get<std::string>());
+      message.labels.push_back(index_clipped(label.get<std::string>(), kIndexMaxName));
     }
   }
   return message;
@@ -112,7 +127,7 @@ std::vector<RunRecord> read_index_summary(const json& summary, IndexedFolder& fo
   if (!summary.is_object() || !summary.contains("runs") || !summary.at("runs").is_array()) {
     throw Error("has no list of runs");
   }
-  folder.experiment = index_text_field(summary, "experiment", "", "?");
+  folder.experiment = index_clipped(index_text_field(summary, "experiment", "", "?"), kIndexMaxName);
   folder.message = read_index_message(summary);
   const json& runs = summary.at("runs");
   if (folder.message.metric.empty()) {
@@ -132,9 +147,11 @@ std::vector<RunRecord> read_index_summary(const json& summary, IndexedFolder& fo
     const json& run = runs[k];
     if (!run.is_object()) throw Error(where + " is " + index_type_name(run) + ", not an object");
     const json& final = index_object_field(run, "final", where + ".");
+    // Only training evaluates on a test set; direct optimization writes "epochs": null.
     const bool learning = run.contains("seconds_per_part") ||
-                          (run.contains("epochs") && run.at("epochs").is_number());
-    records.push_back({index_text_field(run, "label", where + ".", "?"),
+                          (run.contains("epochs") && run.at("epochs").is_number()) ||
+                          !std::isnan(index_summary_number(run, "test_loss"));
+    records.push_back({index_clipped(index_text_field(run, "label", where + ".", "?"), kIndexMaxName),
                        index_text_field(run, "optimizer", where + ".", ""),
                        index_object_field(run, "params", where + "."),
                        index_number_field(final, "loss", where + ".final."),
@@ -212,7 +229,8 @@ void add_index_rows(IndexedFolder& folder, const std::vector<RunRecord>& runs,
   std::vector<std::pair<std::string, std::string>> order;
   std::map<std::pair<std::string, std::string>, std::vector<const RunRecord*>> groups;
   for (const RunRecord& run : runs) {
-    auto key = std::make_pair(run.label, index_setting(run, keys[run.label]));
+    auto key = std::make_pair(run.label,
+                              index_clipped(index_setting(run, keys[run.label]), kIndexMaxName));
     std::vector<const RunRecord*>& group = groups[key];
     if (group.empty()) order.push_back(std::move(key));
     group.push_back(&run);
@@ -282,10 +300,19 @@ void add_index_compared(IndexedFolder& folder, const std::vector<RunRecord>& run
   }
 }
 
-void read_index_config(const json& config, IndexedFolder& folder) {
+void read_index_config(const json& config, IndexedFolder& folder, std::vector<std::string>& notes,
+                       const fs::path& file) {
   if (!config.is_object()) throw Error("holds " + index_type_name(config) + ", not an object");
-  folder.command = index_text_field(config, "command", "", "");
-  folder.settings = index_object_field(config, "settings", "");
+  folder.command = index_clipped(index_text_field(config, "command", "", ""), kIndexMaxSentence);
+  const json& settings = index_object_field(config, "settings", "");
+  const std::size_t bytes = settings.dump().size();
+  if (bytes > kIndexMaxSettingsBytes) {
+    notes.push_back(in_quotes(file.string()) + ": settings of " + std::to_string(bytes) +
+                    " bytes, more than the " + std::to_string(kIndexMaxSettingsBytes) +
+                    " shown; its options are not listed");
+  } else {
+    folder.settings = settings;
+  }
 }
 
 bool is_cost_metric(const std::string& metric) {

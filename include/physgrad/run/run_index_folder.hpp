@@ -54,10 +54,13 @@ struct IndexAxes {
 struct IndexedFolder {
   std::string name;  // as listed: any bytes but '/' and NUL
   std::string experiment;
-  bool learning = false;  // training runs (by updates and time), else direct optimization
+  // Training runs (by updates and time: a run with epochs, times per part or a test loss), else
+  // direct optimization.
+  bool learning = false;
   IndexedMessage message;
   std::string command;
-  nlohmann::json settings = nlohmann::json::object();  // config.json's "settings"
+  // config.json's "settings" (empty when its text is longer than kIndexMaxSettingsBytes).
+  nlohmann::json settings = nlohmann::json::object();
   std::vector<ComparedGroup> compared;  // in the order the labels first appear
   std::vector<EveryRunRow> rows;
   std::string first_setting;  // direct runs: the setting whose curves are drawn ("alpha = 1")
@@ -72,13 +75,17 @@ inline constexpr std::size_t kIndexMaxRuns = 10000;    // runs of one summary.js
 inline constexpr std::size_t kIndexMaxRows = 100;      // rows of the every-run table
 inline constexpr std::size_t kIndexMaxCompared = 64;   // compared labels
 inline constexpr std::size_t kIndexMaxCurves = 256;    // (label, seed) curves of one metrics.csv
+inline constexpr std::size_t kIndexMaxSettingsBytes = 16384;  // config.json's settings, as text
+// Texts kept (in bytes, cut at a character with "…"): names, labels, settings, metric texts; a
+// message sentence and a command.
+inline constexpr std::size_t kIndexMaxName = 300, kIndexMaxSentence = 2000;
 
 // Reads the run folder at `path` (its summary.json, config.json, and, when `draw` says so for
-// its experiment, metrics.csv), adding what it cuts short to `notes`. Throws Error naming the
-// file (and field) when its summary.json or config.json cannot be shown; a metrics.csv that
+// the folder read so far, metrics.csv), adding what it cuts short to `notes`. Throws Error naming
+// the file (and field) when its summary.json or config.json cannot be shown; a metrics.csv that
 // cannot be read leaves out the folder's curves only.
 IndexedFolder read_index_folder(const std::filesystem::path& path, std::vector<std::string>& notes,
-                                const std::function<bool(const std::string&)>& draw);
+                                const std::function<bool(const IndexedFolder&)>& draw);
 
 // The steps of read_index_folder (run_index_summary.cpp). A run of a summary.json as the index
 // reads it, dropped once the folder is summarized.
@@ -94,8 +101,10 @@ struct IndexedRun {
 std::vector<IndexedRun> read_index_summary(const nlohmann::json& summary, IndexedFolder& folder,
                                            std::vector<std::string>& notes,
                                            const std::filesystem::path& file);
-// The command and settings of a config.json.
-void read_index_config(const nlohmann::json& config, IndexedFolder& folder);
+// The command and settings of a config.json (settings longer than kIndexMaxSettingsBytes noted
+// and left out).
+void read_index_config(const nlohmann::json& config, IndexedFolder& folder,
+                       std::vector<std::string>& notes, const std::filesystem::path& file);
 // The rows of the table of every run: per label and setting (the params that vary among the
 // label's runs, seeds aside), in the order first seen, at most kIndexMaxRows.
 void add_index_rows(IndexedFolder& folder, const std::vector<IndexedRun>& runs,
@@ -115,5 +124,7 @@ bool is_cost_metric(const std::string& metric);
 
 // A JSON value as a cell shows it: text as it is, a number with 4 significant digits.
 std::string index_text(const nlohmann::json& value);
+// `text` cut to at most `bytes` bytes at a character's start, "…" added where it was cut.
+std::string index_clipped(std::string text, std::size_t bytes);
 
 }  // namespace physgrad::experiments
