@@ -1,3 +1,5 @@
+// CSV tables written and read back, atomic file writes (whole or in pieces) and HTML pages:
+// escaping, tables with captions, links and colours, figures, and the page written in parts.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -18,18 +20,11 @@
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/io/csv.hpp"
 #include "physgrad/report/html_report.hpp"
-#include "physgrad/report/colors.hpp"
-#include "physgrad/report/field_plot.hpp"
-#include "physgrad/report/isolines.hpp"
-#include "physgrad/report/landscape.hpp"
+#include "physgrad/report/page_spool.hpp"
 #include "physgrad/report/line_plot.hpp"
-#include "physgrad/report/svg_document.hpp"
-#include "physgrad/report/seed_band.hpp"
-#include "svg_check.hpp"
 
 namespace physgrad {
 namespace {
-
 
 namespace fs = std::filesystem;
 
@@ -41,12 +36,6 @@ std::size_t count(const std::string& text, const std::string& needle) {
   for (auto pos = text.find(needle); pos != std::string::npos; pos = text.find(needle, pos + 1))
     ++n;
   return n;
-}
-
-// True when the text contains "nan" or "inf" in any letter case.
-bool has_non_finite_text(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return text.find("nan") != std::string::npos || text.find("inf") != std::string::npos;
 }
 
 std::vector<std::string> split(const std::string& text, char sep) {
@@ -208,264 +197,47 @@ TEST_F(AtomicFile, TargetThatIsADirectoryThrowsAndCleansUp) {
   EXPECT_EQ(entries(), std::vector<std::string>{"taken"});
 }
 
-// ----- line plot ------------------------------------------------------------------------------
-
-TEST(SvgLinePlot, HasHeaderLegendLabelsAndTitle) {
-  const std::vector<Series> series{{"gradient descent", {0, 1, 2}, {3, 2, 1}, color_for("gd")},
-                                   {"Newton <fast>", {0, 1, 2}, {3, 1, 0.5}, "", true, true}};
-  const std::string svg = line_plot_svg(series, {"Loss & more", "iteration", "loss"});
-  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
-  EXPECT_NE(svg.find("xmlns=\"http://www.w3.org/2000/svg\""), std::string::npos);
-  EXPECT_NE(svg.find("viewBox=\"0 0 640 420\""), std::string::npos);
-  EXPECT_NE(svg.find(">gradient descent<"), std::string::npos);
-  EXPECT_NE(svg.find(">Newton &lt;fast&gt;<"), std::string::npos);
-  EXPECT_NE(svg.find(">Loss &amp; more<"), std::string::npos);
-  EXPECT_NE(svg.find("clipPath"), std::string::npos);
-  EXPECT_NE(svg.find("stroke-dasharray"), std::string::npos);
-  EXPECT_EQ(svg.substr(svg.size() - 7), "</svg>\n");
+TEST_F(AtomicFile, PiecesMakeTheFileAndAProducerThatThrowsLeavesTheOldOne) {
+  write_file_atomic(dir_ / "page.html", [](const ContentSink& sink) {
+    sink("<p>");
+    sink(std::string(100000, 'x'));  // larger than what is gathered into one write
+    sink("</p>");
+  });
+  EXPECT_EQ(read(dir_ / "page.html"), "<p>" + std::string(100000, 'x') + "</p>");
+  EXPECT_THROW(write_file_atomic(dir_ / "page.html",
+                                 [](const ContentSink& sink) {
+                                   sink("half");
+                                   throw Error("the producer failed");
+                                 }),
+               Error);
+  EXPECT_EQ(read(dir_ / "page.html"), "<p>" + std::string(100000, 'x') + "</p>");
+  EXPECT_EQ(entries(), std::vector<std::string>{"page.html"});
 }
 
-TEST(SvgLinePlot, NonFiniteValuesAreSkippedAndNonPositiveOnesSitOnTheLowerEdge) {
-  const std::vector<Series> series{
-      {"adam", {1, 2, 3, 4, 5, 6, 7}, {1, kNaN, 0.1, -1, 0.0, kInf, 1e-3}},
-      {"all bad", {1, 2}, {kNaN, -kInf}}};
-  LinePlotOptions options;
-  options.log_y = true;
-  const std::string svg = line_plot_svg(series, options);
-  EXPECT_FALSE(has_non_finite_text(svg));
-  EXPECT_NE(svg.find(">adam (≤ 0 from 4 ▼)<"), std::string::npos) << svg;
-  options.log_x = true;
-  EXPECT_FALSE(has_non_finite_text(line_plot_svg(series, options)));
-}
-
-TEST(SvgLinePlot, BrokenPointsSplitTheLine) {
-  // Three finite runs separated by a NaN and an infinity: three subpaths.
-  const std::vector<Series> series{{"s", {1, 2, 3, 4, 5, 6, 7}, {1, 2, kNaN, 3, 4, kInf, 5}}};
-  LinePlotOptions options;
-  options.log_y = true;
-  const std::string svg = line_plot_svg(series, options);
-  const auto start = svg.find("<g clip-path");
-  const auto line = svg.find("<path d=\"", start);
-  const auto end = svg.find('"', line + 9);
-  EXPECT_EQ(count(svg.substr(line, end - line), "M"), 3u);
-}
-
-TEST(SvgLinePlot, LogAxisOverManyDecadesHasDecadeLabels) {
-  Series s{"loss", {}, {}};
-  for (int k = 0; k <= 80; ++k) {
-    s.x.push_back(k);
-    s.y.push_back(std::pow(10.0, -k / 10.0));
+TEST_F(AtomicFile, ASpoolGivesBackEachPartInTheOrderItWasWritten) {
+  PageSpool::Part a, b;
+  {
+    PageSpool spool(dir_);
+    spool.append(a, "a1 ");
+    spool.append(b, "b1 ");
+    spool.append(a, "a2 ");
+    spool.append(a, std::string(70000, 'a'));  // copied back in blocks of 64 KiB
+    spool.append(b, "b2");
+    EXPECT_EQ(a.pieces.size(), 2u);  // "a2 " and the long one follow each other: one piece
+    std::string text_a, text_b;
+    std::size_t blocks = 0;
+    spool.copy(a, [&](std::string_view piece) {
+      text_a += piece;
+      ++blocks;
+    });
+    spool.copy(b, [&](std::string_view piece) { text_b += piece; });
+    EXPECT_EQ(text_a, "a1 a2 " + std::string(70000, 'a'));
+    EXPECT_EQ(text_b, "b1 b2");
+    EXPECT_GE(blocks, 3u);
+    EXPECT_TRUE(entries().empty()) << "the spool file has a name";
   }
-  LinePlotOptions options;
-  options.log_y = true;
-  const std::string svg = line_plot_svg({s}, options);
-  for (const char* label : {">1e-8<", ">1e-6<", ">1e-4<", ">0.01<", ">1<"}) {
-    EXPECT_NE(svg.find(label), std::string::npos) << label;
-  }
-}
-
-TEST(SvgLinePlot, LinearTicksAreNiceValues) {
-  const std::string svg = line_plot_svg({{"s", {0, 10}, {0.13, 0.87}}}, {});
-  for (const char* label : {">0.2<", ">0.4<", ">0.6<", ">0.8<", ">0<", ">10<"}) {
-    EXPECT_NE(svg.find(label), std::string::npos) << label;
-  }
-}
-
-TEST(SvgLinePlot, DegenerateInputsProduceFiniteOutput) {
-  const std::vector<std::vector<Series>> cases{
-      {},
-      {{"empty", {}, {}}},
-      {{"single", {3}, {7}}},
-      {{"flat", {0, 1, 2}, {5, 5, 5}}},
-      {{"zero", {1, 1}, {0, 0}}},
-  };
-  for (const auto& series : cases) {
-    for (const bool log : {false, true}) {
-      LinePlotOptions options;
-      options.log_x = options.log_y = log;
-      const std::string svg = line_plot_svg(series, options);
-      EXPECT_EQ(svg.rfind("<svg", 0), 0u);
-      EXPECT_FALSE(has_non_finite_text(svg)) << svg;
-    }
-  }
-}
-
-TEST(SvgLinePlot, InvalidInputThrows) {
-  EXPECT_THROW(line_plot_svg({{"bad", {1, 2, 3}, {1, 2}}}, {}), Error);
-  LinePlotOptions tiny;
-  tiny.width = 10;
-  EXPECT_THROW(line_plot_svg({}, tiny), Error);
-}
-
-TEST(SvgColor, FixedColoursForOptimizerIdsAndStableHashForOthers) {
-  const std::vector<std::string> ids{"gd", "momentum", "adam", "newton", "bfgs", "lbfgs", "gn",
-                                     "lm", "ig",       "pg",   "sgd",    "hig",  "sip"};
-  std::set<std::string> colors;
-  for (const auto& id : ids) colors.insert(color_for(id));
-  EXPECT_EQ(colors.size(), ids.size());
-  EXPECT_EQ(color_for("my-optimizer"), color_for("my-optimizer"));
-  for (const auto& c : {color_for("adam"), color_for("something else")}) {
-    EXPECT_EQ(c.size(), 7u);
-    EXPECT_EQ(c[0], '#');
-  }
-}
-
-
-TEST(SvgCheck, FindsMalformedDocumentsAndStrayCoordinates) {
-  using testing::SvgChecker;
-  const std::string head = "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 100 50\">";
-  EXPECT_TRUE(SvgChecker::check(head + "<path d=\"M1 1L20 30h5v-2Z\"/><text x=\"3\" y=\"4\">a &amp; b</text></svg>").empty());
-  for (const std::string& bad :
-       {head + "<path d=\"M1 1 Lnan 2\"/></svg>", head + "<path d=\"M1 1 L200 2\"/></svg>",
-        head + "<path d=\"M1 1 l99.5 60\"/></svg>", head + "<path d=\"L1 1\"/></svg>",
-        head + "<path d=\"M1 1 C2 2 3 3 4 4\"/></svg>", head + "<path d=\"M1 1 L2\"/></svg>",
-        head + "<g><path d=\"M1 1\"/></svg>", head + "<text x=\"1\" y=\"2\">a & b</text></svg>",
-        head + "<rect x=\"inf\" y=\"0\" width=\"1\" height=\"1\"/></svg>",
-        head + "<circle cx=\"-5\" cy=\"3\" r=\"1\"/></svg>", head + "<path d=M1/></svg>",
-        std::string("<g></g>"), head + "</svg><svg viewBox=\"0 0 1 1\"></svg>"}) {
-    EXPECT_FALSE(SvgChecker::check(bad).empty()) << bad;
-  }
-}
-
-TEST(SvgLinePlot, EveryKindOfSeriesGivesValidSvgInsideItsViewBox) {
-  Series band{"median", {0, 1, 2, 3}, {1, 0.5, 0.2, 0.1}, "", true};
-  band.band_low = {0.5, 0.1, 1e-300, kNaN};
-  band.band_high = {2, 1e300, 0.4, 0.3};
-  Series steps{"steps", {0, 1, 2, 3}, {0.3, 0.6, 0.4, 0.4}};
-  steps.steps = true;
-  Series diverged{"diverged", {0, 1, 2, 3}, {1, 1e10, 1e300, kInf}};
-  diverged.sets_range = false;
-  Series zero{"zero", {0, 1, 2, 3}, {1, 0.1, 0, 0}};
-  for (const bool log : {false, true}) {
-    LinePlotOptions options;
-    options.log_y = log;
-    options.title = "all kinds";
-    for (const auto& series : std::vector<std::vector<Series>>{
-             {band, steps, diverged, zero}, {diverged}, {}, {{"one", {1}, {kNaN}}}}) {
-      const std::string svg = line_plot_svg(series, options);
-      const auto problems = testing::SvgChecker::check(svg);
-      EXPECT_TRUE(problems.empty()) << problems.front() << "\n" << svg;
-    }
-  }
-}
-
-TEST(SvgLinePlot, DivergedSeriesIsMarkedAndDoesNotStretchTheAxis) {
-  Series good{"converging", {0, 1, 2, 3}, {1, 0.1, 0.01, 0.001}};
-  Series bad{"gd", {0, 1, 2, 3}, {1, 1e100, 1e300, kInf}};
-  bad.sets_range = false;
-  bad.end_label = "diverged at 3";
-  LinePlotOptions options;
-  options.log_y = true;
-  const std::string svg = line_plot_svg({good, bad}, options);
-  // It ends above the axis: an arrow at the frame with its last finite value.
-  EXPECT_NE(svg.find(">diverged at 3, ends off scale at 1e+300<"), std::string::npos);
-  EXPECT_NE(svg.find(">1<"), std::string::npos);  // the top decade of the converging series
-  EXPECT_EQ(svg.find(">1e100<"), std::string::npos);
-  EXPECT_EQ(svg.find(">1e300<"), std::string::npos);
-  // Without a label, a series ending in a non-finite value still gets a mark.
-  bad.end_label.clear();
-  EXPECT_NE(line_plot_svg({good, bad}, options)
-                .find(">not finite after x = 2, ends off scale at 1e+300<"),
-            std::string::npos);
-}
-
-// ----- validity, divergence, zeros, legends ---------------------------------------------------
-
-// The points of the first path after the clip group opens (the first series' line or band).
-std::vector<std::pair<double, double>> first_path_points(const std::string& svg, std::size_t skip) {
-  std::size_t at = svg.find("<g clip-path");
-  for (std::size_t k = 0; k <= skip; ++k) at = svg.find("<path d=\"", at + 1);
-  const std::string d = svg.substr(at + 9, svg.find('"', at + 9) - at - 9);
-  std::vector<std::pair<double, double>> points;
-  std::vector<double> numbers;
-  std::string token;
-  for (const char c : d + " ") {
-    if (std::isdigit(static_cast<unsigned char>(c)) || c == '.' || c == '-') {
-      token += c;
-    } else if (!token.empty()) {
-      numbers.push_back(std::stod(token));
-      token.clear();
-    }
-  }
-  for (std::size_t k = 0; k + 1 < numbers.size(); k += 2) points.emplace_back(numbers[k], numbers[k + 1]);
-  return points;
-}
-
-// The legend's frame (x, y, width, height) when it sits inside the plot.
-std::vector<double> legend_frame(const std::string& svg) {
-  const std::size_t g = svg.find("<g class=\"legend\">");
-  const std::size_t rect = svg.find("<rect", g);
-  if (g == std::string::npos || rect != svg.find('<', g + 1)) return {};
-  std::vector<double> frame;
-  for (const char* key : {" x=\"", " y=\"", " width=\"", " height=\""}) {
-    const std::size_t at = svg.find(key, rect) + std::string(key).size();
-    frame.push_back(std::stod(svg.substr(at)));
-  }
-  return frame;
-}
-
-TEST(SvgLinePlot, ZeroOnALogAxisIsMarkedOnTheLowerEdge) {
-  LinePlotOptions options;
-  options.log_y = true;
-  const std::string svg = line_plot_svg({{"lm", {0, 1, 2}, {1, 0.01, 0}}}, options);
-  EXPECT_NE(svg.find("lm (0 from 2 ▼)"), std::string::npos) << svg;
-  // The line reaches the lower edge of the frame: three points, the last on the bottom.
-  const auto points = first_path_points(svg, 0);
-  ASSERT_EQ(points.size(), 3u);
-  EXPECT_DOUBLE_EQ(points[2].second, 420 - 52);  // the frame's bottom
-}
-
-TEST(SvgLinePlot, StepsHoldEachValueUntilTheNextX) {
-  Series s{"cells", {0, 1, 2}, {1, 2, 2}};
-  s.steps = true;
-  const auto points = first_path_points(line_plot_svg({s}, {}), 0);
-  ASSERT_EQ(points.size(), 5u);  // (0,1) (1,1) (1,2) (2,2) (2,2)
-  EXPECT_EQ(points[0].second, points[1].second);
-  EXPECT_EQ(points[1].first, points[2].first);
-  EXPECT_EQ(points[2].second, points[3].second);
-}
-
-TEST(SvgLinePlot, LegendGoesWhereNoDataIsOrBelowThePlot) {
-  // A U: high at both ends, low in the middle, so the top corners hold data.
-  Series u{"u shape with a long label", {}, {}};
-  for (int k = 0; k <= 40; ++k) {
-    u.x.push_back(k);
-    u.y.push_back((k - 20) * (k - 20));
-  }
-  const std::string svg = line_plot_svg({u}, {});
-  const std::vector<double> frame = legend_frame(svg);
-  ASSERT_EQ(frame.size(), 4u) << svg;
-  const auto points = first_path_points(svg, 0);
-  ASSERT_EQ(points.size(), 41u);
-  for (std::size_t k = 1; k < points.size(); ++k) {
-    for (double t = 0; t <= 1; t += 0.05) {
-      const double x = points[k - 1].first + t * (points[k].first - points[k - 1].first);
-      const double y = points[k - 1].second + t * (points[k].second - points[k - 1].second);
-      EXPECT_FALSE(x >= frame[0] && x <= frame[0] + frame[2] && y >= frame[1] &&
-                   y <= frame[1] + frame[3])
-          << x << ", " << y;
-    }
-  }
-  // Data everywhere: the legend moves below and the figure grows.
-  Series zigzag{"zigzag", {}, {}};
-  for (int k = 0; k <= 200; ++k) {
-    zigzag.x.push_back(k);
-    zigzag.y.push_back(k % 2);
-  }
-  const std::string full = line_plot_svg({zigzag}, {});
-  EXPECT_TRUE(legend_frame(full).empty());
-  EXPECT_EQ(full.find("viewBox=\"0 0 640 420\""), std::string::npos);
-  EXPECT_NE(full.find(">zigzag<"), std::string::npos);
-}
-
-TEST(SvgLogAxis, NarrowRangesHaveSeveralLabels) {
-  LinePlotOptions options;
-  options.log_y = true;
-  for (const auto& [lo, hi] : {std::pair{0.93, 0.99}, std::pair{0.55, 1.0}, std::pair{2e-5, 9e-5}}) {
-    const std::string svg = line_plot_svg({{"s", {0, 1}, {lo, hi}}}, options);
-    const std::size_t labels = count(svg, "text-anchor=\"end\"");
-    EXPECT_GE(labels, 3u) << lo << " " << hi << "\n" << svg;
-  }
+  EXPECT_TRUE(entries().empty());
+  EXPECT_THROW(PageSpool(dir_ / "missing"), Error);
 }
 
 TEST(HtmlReport, EscapesTextAndEmbedsFiguresAndTables) {
@@ -529,6 +301,31 @@ TEST(HtmlReport, LinksArePercentEncodedPathsInsideThePagesFolder) {
 TEST(HtmlReport, RaggedTableRowThrows) {
   const HtmlSection section{"S", "", {{{"a", "b"}, {{"1"}}}}, {}};
   EXPECT_THROW(html_report("T", "", {section}), Error);
+}
+
+// html_report() is its parts written one after another, and a table's rows may be written in
+// turns between its opening and its closing.
+TEST(HtmlReport, ThePageInPartsIsThePageAtOnce) {
+  const HtmlTable table{{"rule", "loss"}, {{"adam", "1"}, {"hig", "0.5"}}, "Losses", {}, {}};
+  const HtmlSection section{"Results", "Text.", {table},
+                            {{"A figure", line_plot_svg({{"s", {0, 1}, {1, 2}}}, {}), "f.svg"}},
+                            {{"metrics.csv", "metrics.csv"}, {"index", "index.html", true}}};
+  const std::string whole = html_report("Title", "Intro", {section});
+  HtmlTable first = table, second = table;
+  first.rows.pop_back();
+  second.rows.erase(second.rows.begin());
+  const std::string parts =
+      html_page_open("Title", "Intro") + html_section_open(section) + html_table_open(table) +
+      html_table_rows(first, "here") + html_table_rows(second, "here") +
+      std::string(kHtmlTableClose) + html_figures(section.figures) +
+      std::string(kHtmlSectionClose) + std::string(kHtmlPageClose);
+  EXPECT_EQ(parts, whole);
+  EXPECT_NE(whole.find("<p class=\"links\"><a href=\"./metrics.csv\">metrics.csv</a>"
+                       "<a href=\"../index.html\">index</a></p>"),
+            std::string::npos);
+  HtmlTable ragged = table;
+  ragged.rows[1].pop_back();
+  EXPECT_THROW(html_table_rows(ragged, "here"), Error);
 }
 
 }  // namespace
