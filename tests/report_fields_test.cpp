@@ -40,19 +40,10 @@ namespace fs = std::filesystem;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
+using testing::count;
+using testing::has_non_finite_text;
 
-std::size_t count(const std::string& text, const std::string& needle) {
-  std::size_t n = 0;
-  for (auto pos = text.find(needle); pos != std::string::npos; pos = text.find(needle, pos + 1))
-    ++n;
-  return n;
-}
 
-// True when the text contains "nan" or "inf" in any letter case.
-bool has_non_finite_text(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return text.find("nan") != std::string::npos || text.find("inf") != std::string::npos;
-}
 
 
 Grid2D radial_grid(int n) {

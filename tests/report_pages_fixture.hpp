@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "cli_fixture.hpp"
+#include "svg_check.hpp"
 
 namespace physgrad::testing {
 
@@ -82,11 +83,6 @@ inline std::vector<std::string> inline_svgs(const std::string& html) {
   return svgs;
 }
 
-inline std::size_t count(const std::string& text, const std::string& needle) {
-  std::size_t n = 0;
-  for (auto at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++n;
-  return n;
-}
 
 // Where `text` is not what a page may hold: a byte that is not UTF-8, a character XML forbids
 // (C0 controls but tab, newline and CR; U+FFFE, U+FFFF) or a bidirectional control (U+202A–E,

@@ -22,6 +22,7 @@
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/report/page_spool.hpp"
 #include "physgrad/report/line_plot.hpp"
+#include "svg_check.hpp"
 
 namespace physgrad {
 namespace {
@@ -30,13 +31,8 @@ namespace fs = std::filesystem;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
+using testing::count;
 
-std::size_t count(const std::string& text, const std::string& needle) {
-  std::size_t n = 0;
-  for (auto pos = text.find(needle); pos != std::string::npos; pos = text.find(needle, pos + 1))
-    ++n;
-  return n;
-}
 
 std::vector<std::string> split(const std::string& text, char sep) {
   std::vector<std::string> parts;

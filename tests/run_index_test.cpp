@@ -129,18 +129,20 @@ nlohmann::json hand_run(const std::string& label, const std::string& id, double 
 TEST_F(RunIndex, TheIndexRanksDirectRulesByTheirMessageAndNeverRanksFailedRuns) {
   nlohmann::json runs = nlohmann::json::array();
   const std::vector<double> alphas = {1, 10, 100, 1000};
-  const auto rule = [&](const std::string& label, const std::string& id,
-                        const std::vector<std::pair<int, std::string>>& ends) {
+  const auto add_rule = [&](const std::string& label, const std::string& id,
+                            const std::vector<std::pair<int, std::string>>& ends) {
     for (std::size_t k = 0; k < ends.size(); ++k) {
       runs.push_back(hand_run(label, id, alphas[k], ends[k].first, ends[k].second));
     }
   };
-  rule("GD", "gd", {{10, "converged"}, {30, "converged"}, {77, "numerical_failure"}, {20, "converged"}});
-  rule("Newton", "newton", {{2, "converged"}, {2, "converged"}, {3, "converged"}, {3, "converged"}});
-  rule("BFGS", "bfgs", {{5, "converged"}, {6, "converged"}, {7, "converged"}, {8, "converged"}});
-  rule("L-BFGS", "lbfgs", {{6, "converged"}, {5, "converged"}, {8, "converged"}, {7, "converged"}});
-  rule("IG", "ig", {{4, "converged"}, {4, "converged"}, {300, "max_iterations"}, {300, "max_iterations"}});
-  rule("Levenberg-Marquardt", "lm", {{9, "diverged"}, {9, "diverged"}, {9, "diverged"}, {9, "diverged"}});
+  const std::string c = "converged";
+  add_rule("GD", "gd", {{10, c}, {30, c}, {77, "numerical_failure"}, {20, c}});
+  add_rule("Newton", "newton", {{2, c}, {2, c}, {3, c}, {3, c}});
+  add_rule("BFGS", "bfgs", {{5, c}, {6, c}, {7, c}, {8, c}});
+  add_rule("L-BFGS", "lbfgs", {{6, c}, {5, c}, {8, c}, {7, c}});
+  add_rule("IG", "ig", {{4, c}, {4, c}, {300, "max_iterations"}, {300, "max_iterations"}});
+  add_rule("Levenberg-Marquardt", "lm",
+           {{9, "diverged"}, {9, "diverged"}, {9, "diverged"}, {9, "diverged"}});
   const nlohmann::json summary = {
       {"experiment", "scaled-toy"},
       {"runs", runs},
@@ -211,10 +213,10 @@ TEST_F(RunIndex, TheIndexRanksDirectRulesByTheirMessageAndNeverRanksFailedRuns) 
     ++real_rows;
     const std::string rule = row.at("rule");
     const auto [failed, unconverged] = apart[rule];
-    const std::string runs = " of " + row.at("runs");
-    std::string expected = failed > 0 ? std::to_string(failed) + runs + " failed" : "";
+    const std::string of = " of " + row.at("runs");
+    std::string expected = failed > 0 ? std::to_string(failed) + of + " failed" : "";
     if (unconverged > 0) {
-      expected += (expected.empty() ? std::to_string(unconverged) + runs : ", " +
+      expected += (expected.empty() ? std::to_string(unconverged) + of : ", " +
                    std::to_string(unconverged)) + " did not converge";
     }
     EXPECT_EQ(row.at("apart"), expected) << rule;

@@ -295,4 +295,17 @@ class SvgChecker {
   std::vector<std::string> problems_;
 };
 
+// How many times `needle` occurs in `text` (overlapping occurrences counted).
+inline std::size_t count(const std::string& text, const std::string& needle) {
+  std::size_t n = 0;
+  for (auto at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++n;
+  return n;
+}
+
+// True when the text contains "nan" or "inf" in any letter case (a number that is not finite).
+inline bool has_non_finite_text(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text.find("nan") != std::string::npos || text.find("inf") != std::string::npos;
+}
+
 }  // namespace physgrad::testing

@@ -174,20 +174,37 @@ double distance_to_segment(const Point& p, const Point& a, const Point& b) {
 }
 
 // True when every point of `hidden` lies within 1.5 pixels of the lines of `over`: drawn over it,
-// `over` (about 2 pixels wide) would hide it.
+// `over` (about 2 pixels wide) would hide it. Each point is first tried against the segments
+// near the one the point before lay on, so that two series along each other take linear time.
 bool covers(const std::vector<Polyline>& over, const std::vector<Polyline>& hidden) {
+  constexpr double kNear = 1.5;
+  const auto near_segment = [&](const Point& p, std::size_t piece, std::size_t i) {
+    const Polyline& line = over[piece];
+    return distance_to_segment(p, line[i], line[i + 1 < line.size() ? i + 1 : i]) <= kNear;
+  };
   bool any = false;
-  for (const Polyline& piece : hidden) {
-    for (const Point& p : piece) {
+  std::size_t piece = 0, segment = 0;  // where the point before lay
+  for (const Polyline& part : hidden) {
+    for (const Point& p : part) {
       any = true;
-      bool near = false;
-      for (const Polyline& line : over) {
-        for (std::size_t i = 0; i < line.size() && !near; ++i) {
-          near = distance_to_segment(p, line[i], line[i + 1 < line.size() ? i + 1 : i]) <= 1.5;
+      bool found = false;
+      const auto try_segment = [&](std::size_t k, std::size_t i) {
+        found = near_segment(p, k, i);
+        if (found) {
+          piece = k;
+          segment = i;
         }
-        if (near) break;
+      };
+      if (piece < over.size()) {
+        const std::size_t end = std::min(segment + 3, over[piece].size());
+        for (std::size_t i = segment > 2 ? segment - 2 : 0; i < end && !found; ++i) {
+          try_segment(piece, i);
+        }
       }
-      if (!near) return false;
+      for (std::size_t k = 0; k < over.size() && !found; ++k) {
+        for (std::size_t i = 0; i < over[k].size() && !found; ++i) try_segment(k, i);
+      }
+      if (!found) return false;
     }
   }
   return any;

@@ -151,7 +151,8 @@ IndexedFolder read_index_folder(const fs::path& path, std::vector<std::string>& 
   const fs::path summary = path / kSummaryFile, config = path / kConfigFile,
                  metrics = path / "metrics.csv";
   std::vector<RunRecord> runs;
-  reading(summary, [&] { runs = read_index_summary(read_index_json(summary), folder, cut, summary); });
+  reading(summary,
+          [&] { runs = read_index_summary(read_index_json(summary), folder, cut, summary); });
   std::error_code error;  // a link inside the folder that leads nowhere counts as absent
   if (fs::exists(config, error)) {
     reading(config, [&] {

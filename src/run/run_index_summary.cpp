@@ -105,7 +105,9 @@ IndexedMessage read_index_message(const json& summary) {
   }
   if (const json* labels = index_field(*given, "labels", "message.", &json::is_array, "an array")) {
     for (const json& label : *labels) {
-      if (!label.is_string()) throw Error("message.labels holds " + index_type_name(label) + ", not text");
+      if (!label.is_string()) {
+        throw Error("message.labels holds " + index_type_name(label) + ", not text");
+      }
       message.labels.push_back(index_clipped(label.get<std::string>(), kIndexMaxName));
     }
   }
@@ -127,7 +129,8 @@ std::vector<RunRecord> read_index_summary(const json& summary, IndexedFolder& fo
   if (!summary.is_object() || !summary.contains("runs") || !summary.at("runs").is_array()) {
     throw Error("has no list of runs");
   }
-  folder.experiment = index_clipped(index_text_field(summary, "experiment", "", "?"), kIndexMaxName);
+  folder.experiment =
+      index_clipped(index_text_field(summary, "experiment", "", "?"), kIndexMaxName);
   folder.message = read_index_message(summary);
   const json& runs = summary.at("runs");
   if (folder.message.metric.empty()) {
