@@ -1,8 +1,9 @@
 // Every experiment's report and the index of their folders as a reader sees them: headless
 // Chromium shows each page in frames 420 px (a phone) and 1280 px (a laptop) wide, with a script
 // added that measures the laid-out page. At 420 px no figure or table reaches past the viewport
-// or hides part of itself behind a sideways scroll; at 1280 px every figure shows its wide layout
-// unscaled; at both, no text in a figure is below 11 px and every rule in each figure (each
+// or hides part of itself behind a sideways scroll, and every figure shows its narrow layout; at
+// 1280 px its wide one; at both, no figure is drawn out of its shape, no text in a figure is
+// below 11 px (scaled either way) and every rule in each figure (each
 // <g class="series">: its line and markers) has a visible mark that differs from every other
 // rule's of its panel in colour, dashes or marker shape — and from one it coincides with in
 // dashes or marker shape, colour aside.
@@ -25,11 +26,11 @@ using physgrad::testing::run_chromium;
 namespace fs = std::filesystem;
 
 // The script each framed page runs once laid out. It logs "physgrad-layout FRAME WIDTH RIGHT
-// FIGURES TABLES SMALLEST SERIES WIDE NARROW": the viewport's width, the right edge of the widest
-// figure or table box, how many pixels of figures and of tables are hidden behind a sideways
-// scroll, the
-// smallest text in a figure (px), how many series it checked and how many figures show their
-// wide and narrow layouts; and "physgrad-problem FRAME …" for each rule without a mark of its own.
+// FIGURES TABLES SMALLEST SERIES WIDE NARROW STRETCHED": the viewport's width, the right edge of
+// the widest figure or table box, how many pixels of figures and of tables are hidden behind a
+// sideways scroll, the smallest text in a figure (px), how many series it checked, how many
+// figures show their wide and narrow layouts and how far (‰) the most stretched one is out of
+// its shape; and "physgrad-problem FRAME …" for each rule without a mark of its own.
 constexpr const char* kLayoutScript = R"js(
 window.addEventListener('load', () => {
   const frame = location.hash.slice(1);
@@ -41,11 +42,24 @@ window.addEventListener('load', () => {
     if (e.classList.contains('table')) tables = Math.max(tables, hidden);
     else figures = Math.max(figures, hidden);
   }
+  // Text size on screen: its font size times the smaller of the horizontal and the vertical
+  // scale it is drawn at (a figure stretched one way only shrinks its text the other).
   let smallest = 1e9;
   for (const t of document.querySelectorAll('svg text')) {
-    const box = t.ownerSVGElement.viewBox.baseVal, shown = t.ownerSVGElement.getBoundingClientRect();
-    if (!box || box.width === 0 || shown.width === 0 || t.getBoundingClientRect().width === 0) continue;
-    smallest = Math.min(smallest, parseFloat(getComputedStyle(t).fontSize) * shown.width / box.width);
+    if (t.getBoundingClientRect().width === 0) continue;  // in the hidden layout
+    const m = t.getScreenCTM();
+    smallest = Math.min(smallest, parseFloat(getComputedStyle(t).fontSize) *
+                                      Math.min(Math.hypot(m.a, m.b), Math.hypot(m.c, m.d)));
+  }
+  // How far a figure's shape on screen is from the shape of the layout it shows (‰).
+  let stretched = 0;
+  for (const root of document.querySelectorAll('.figure-scroll > div > svg')) {
+    const shown = [...root.querySelectorAll('svg.pg-wide, svg.pg-narrow')].find(
+        e => getComputedStyle(e).display !== 'none') || root;
+    const box = shown.viewBox.baseVal, r = root.getBoundingClientRect();
+    if (!box || box.height === 0 || r.height === 0) continue;
+    const want = box.width / box.height;
+    stretched = Math.max(stretched, Math.round(1000 * Math.abs(r.width / r.height - want) / want));
   }
   let wide = 0, narrow = 0;
   for (const svg of document.querySelectorAll('svg.pg-wide, svg.pg-narrow')) {
@@ -96,14 +110,14 @@ window.addEventListener('load', () => {
   }
   console.log('physgrad-layout ' + frame + ' ' + innerWidth + ' ' + Math.ceil(right) + ' ' +
               figures + ' ' + tables + ' ' + smallest.toFixed(2) + ' ' + checked + ' ' + wide +
-              ' ' + narrow);
+              ' ' + narrow + ' ' + stretched);
 });
 )js";
 
 struct Layout {
   int width = 0, right = 0, figures_hidden = 0, tables_hidden = 0;
   double smallest = 0;
-  int series = 0, wide = 0, narrow = 0;
+  int series = 0, wide = 0, narrow = 0, stretched = 0;
 };
 
 TEST_F(ReportPages, ChromiumShowsEveryPageAt420And1280PixelsWithAMarkForEveryRule) {
@@ -140,10 +154,10 @@ TEST_F(ReportPages, ChromiumShowsEveryPageAt420And1280PixelsWithAMarkForEveryRul
   for (const std::string& message : console_messages(console, "layout")) {
     std::size_t frame = 0;
     Layout l;
-    ASSERT_EQ(std::sscanf(message.c_str(), "%zu %d %d %d %d %lf %d %d %d", &frame, &l.width,
+    ASSERT_EQ(std::sscanf(message.c_str(), "%zu %d %d %d %d %lf %d %d %d %d", &frame, &l.width,
                           &l.right, &l.figures_hidden, &l.tables_hidden, &l.smallest, &l.series,
-                          &l.wide, &l.narrow),
-              9)
+                          &l.wide, &l.narrow, &l.stretched),
+              10)
         << message;
     ASSERT_LT(frame, layouts.size());
     layouts[frame] = l;
@@ -156,6 +170,7 @@ TEST_F(ReportPages, ChromiumShowsEveryPageAt420And1280PixelsWithAMarkForEveryRul
     ASSERT_EQ(l.width, width) << page << " was not laid out at " << width << " px:\n" << console;
     // Text inside figures stays readable: at least 11 px (figures switch layout, never shrink).
     EXPECT_GE(l.smallest, 10.99) << page << " at " << width << " px";
+    EXPECT_LE(l.stretched, 10) << page << " at " << width << " px: a figure drawn out of shape (‰)";
     series += l.series;
     EXPECT_LE(l.right, width) << page << " at " << width << " px: a box reaches past the page";
     EXPECT_LE(l.figures_hidden, 1) << page << " at " << width << " px: part of a figure is "

@@ -46,7 +46,7 @@ TEST(Significant, DigitsResolveTheRangeToTwoDigits) {
   // One seed, or all alike: two digits and no range.
   EXPECT_EQ(digits_for(spread_of({0.123456})), 2);
   EXPECT_EQ(median_and_range(spread_of({0.123456})), "0.12");
-  EXPECT_EQ(median_and_range(spread_of({0.5, 0.5})), "0.5");
+  EXPECT_EQ(median_and_range(spread_of({0.5, 0.5})), "0.50");  // the zero is a digit shown
 }
 
 TEST(Significant, WholeNumbersInFullOthersRounded) {
@@ -72,6 +72,7 @@ TEST(Significant, RatiosCarryTheDigitsTheirSpreadsAllow) {
   EXPECT_EQ(ratio_digits(spread_of({0.2, 2.0, 20.0}), b), 1);
   EXPECT_EQ(ratio_text(spread_of({3.0}), spread_of({1.3})), "2.3");
   EXPECT_EQ(ratio_text(spread_of({6.0}), spread_of({2.0})), "3");
+  EXPECT_EQ(ratio_text(spread_of({0.5113}), spread_of({0.5108})), "1.0");
 }
 
 // A wide document (640 × 420) and a narrow one (380 × 500) as one responsive document: both
@@ -87,6 +88,8 @@ TEST(ResponsiveSvg, TwoLayoutsInOneDocument) {
   EXPECT_EQ(layouts.narrow, narrow);
   EXPECT_NE(both.find("<svg class=\"pg-narrow\" display=\"none\""), std::string::npos);
   EXPECT_NE(both.find("@media (max-width:639px)"), std::string::npos);
+  // Sized by the narrow layout, its shape kept where a page sizes the figure by its width.
+  EXPECT_NE(both.find("{width:380px;height:500px;aspect-ratio:380/500}"), std::string::npos);
   // A page with margins moves that width; a document of one layout is left as it is.
   const std::string moved = svg::switched_below(both, 700);
   EXPECT_NE(moved.find("@media (max-width:699px)"), std::string::npos);

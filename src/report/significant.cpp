@@ -38,9 +38,12 @@ std::string with_digits(double value, int digits) {
     const double unit = std::pow(10.0, exponent - digits + 1);
     return std::to_string(std::llround(std::round(value / unit) * unit));
   }
+  // Trailing zeros kept (1.0, 0.50): they are digits the spread supports.
   std::array<char, 40> buf{};
-  std::snprintf(buf.data(), buf.size(), "%.*g", digits, value);
-  return buf.data();
+  std::snprintf(buf.data(), buf.size(), "%#.*g", digits, value);
+  std::string out = buf.data();
+  if (out.back() == '.') out.pop_back();
+  return out;
 }
 
 std::string median_and_range(const Spread& s) {

@@ -97,9 +97,12 @@ bool is_responsive(const std::string& document) {
          document.substr(0, tag_end).find(kFigureClass) != std::string::npos;
 }
 
+// The narrow layout's size, and its aspect ratio, which a page that sizes the figure to its width
+// (height:auto) keeps: the root's view box has the wide one's.
 std::string switch_rules(const std::string& name, int width, int height) {
-  return "svg." + name + "{width:" + std::to_string(width) + "px;height:" +
-         std::to_string(height) + "px}svg." + name + " svg.pg-wide{display:none}svg." + name +
+  const std::string w = std::to_string(width), h = std::to_string(height);
+  return "svg." + name + "{width:" + w + "px;height:" + h + "px;aspect-ratio:" + w + "/" + h +
+         "}svg." + name + " svg.pg-wide{display:none}svg." + name +
          " svg.pg-narrow{display:inline}";
 }
 

@@ -17,8 +17,8 @@ Spread spread_of(std::vector<double> values);
 
 // The significant digits the spread supports (2 for fewer than two distinct values).
 int digits_for(const Spread& spread);
-// `value` with `digits` significant digits ("%.*g"); a whole number below 10¹⁵ in full; "–" for
-// NaN.
+// `value` with `digits` significant digits ("%#.*g": 0.50, 1.0); a whole number below 10¹⁵ in
+// full; "–" for NaN.
 std::string with_digits(double value, int digits);
 // "0.0123 (0.0118–0.0131)": the median with the digits its spread supports and the range; a
 // single value (or all equal) without the range; "–" for none.
