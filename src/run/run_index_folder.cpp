@@ -155,9 +155,7 @@ IndexedFolder read_index_folder(const fs::path& path, std::vector<std::string>& 
           [&] { runs = read_index_summary(read_index_json(summary), folder, cut, summary); });
   std::error_code error;  // a link inside the folder that leads nowhere counts as absent
   if (fs::exists(config, error)) {
-    reading(config, [&] {
-      read_index_config(read_index_json(config), folder, cut, config);
-    });
+    reading(config, [&] { read_index_config(read_index_json(config), folder, cut, config); });
   }
   add_index_rows(folder, runs, cut, summary);
   add_index_compared(folder, runs, cut, summary);
@@ -176,7 +174,9 @@ IndexedFolder read_index_folder(const fs::path& path, std::vector<std::string>& 
       }
     }
   }
-  if (!runs.empty()) folder.first_setting = index_setting(runs.front(), setting_keys);
+  if (!runs.empty()) {
+    folder.first_setting = index_clipped(index_setting(runs.front(), setting_keys), kIndexMaxName);
+  }
   if (draw(folder) && fs::exists(metrics, error)) {
     try {
       add_index_curves(folder, metrics, runs.empty() ? nullptr : &runs.front(), setting_keys,

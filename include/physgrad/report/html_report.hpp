@@ -1,9 +1,9 @@
 // html_report — one self-contained HTML5 page of sections with text, links, captioned tables and
 // inline SVG figures; no external resources and no script. Readable down to phone widths: a
-// figure with a narrow layout (svg::responsive) switches to it where the page is narrower than
-// the figure, tables become one block per row ("header: value" lines) below 700 px, and what is
-// still wider scrolls in its own box. Every text goes through xml_escape and every link through
-// local_href.
+// figure scales with the page down to the width w·11/s at which its smallest text (s px) is
+// 11 px, and one with a narrow layout (svg::responsive) switches to it below that; tables become
+// one block per row ("header: value" lines) below 700 px, and what is still wider scrolls in
+// its own box. Every text goes through xml_escape and every link through local_href.
 #pragma once
 
 #include <string>
