@@ -255,6 +255,29 @@ TEST_F(RunIndex, TheIndexRanksDirectRulesByTheirMessageAndNeverRanksFailedRuns) 
             std::string::npos);
 }
 
+// A pretrained run (Adam for --pretrain iterations, then its rule) is marked ◆ where it switched:
+// in the report's loss curves (with a hover title) and in the index's overlay by updates.
+TEST_F(RunIndex, APretrainedRunIsMarkedWhereItSwitched) {
+  ASSERT_EQ(run("run oscillators --train-size 32 --test-size 16 --iters 8 --eval-every 2 "
+                "--batch 16 --pretrain 4 --out runs/osc")
+                .exit_code,
+            0);
+  ASSERT_EQ(run("report runs").exit_code, 0);
+  const std::string figure = read_file(dir_ / "runs" / "osc" / "loss_vs_time_paper.svg");
+  for (const char* rule : {"Adam→Gauss-Newton", "Adam→HIG"}) {
+    EXPECT_NE(figure.find("<g class=\"mark\"><title>" + std::string(rule) +
+                          " (paper): switched from Adam after iteration 4</title>"),
+              std::string::npos)
+        << rule;
+  }
+  const std::string index = read_file(dir_ / "runs" / "index.html");
+  const std::vector<std::string> overlays = inline_svgs(index.substr(index.find("<h2>oscillators")));
+  ASSERT_GE(overlays.size(), 2u);
+  EXPECT_NE(overlays[0].find(">updates (iterations)</text>"), std::string::npos);
+  EXPECT_NE(overlays[0].find(": switched from Adam after 4</title>"), std::string::npos);
+  EXPECT_NE(overlays[0].find("(◆ switched from Adam after 4)"), std::string::npos);
+}
+
 // A run folder may be named index.html: the page then takes the next free name, index-2.html,
 // and the folder is listed like any other.
 TEST_F(RunIndex, ARunFolderNamedIndexHtmlMovesThePageAside) {
