@@ -40,7 +40,8 @@ std::string report_option_text(const nlohmann::json& value) {
   if (!value.is_array()) return format_number(value);
   std::string out;
   for (const nlohmann::json& item : value) {
-    out += (out.empty() ? "" : ",") + report_option_text(item);
+    if (!out.empty()) out += ',';
+    out += report_option_text(item);
   }
   return out;
 }
