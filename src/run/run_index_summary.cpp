@@ -4,16 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <map>
 
-#include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
-#include "physgrad/io/csv.hpp"
-#include "physgrad/io/json_file.hpp"
-#include "physgrad/report/seed_band.hpp"
 #include "physgrad/run/experiment.hpp"
-#include "physgrad/run/run_folder.hpp"
 #include "physgrad/text.hpp"
 
 namespace physgrad::experiments {
