@@ -102,7 +102,8 @@ class Sensitivity final : public Experiment {
     }
     context.set_message("step_vs_alpha.svg", "From α = " + format_value(alphas.front()) +
                                                  " to " + format_value(alphas.back()) +
-                                                 ", the first step |Δx₁|: " + sentence + ".");
+                                                 ", the first step |Δx₁|: " + sentence + ".",
+                        {"iterations", "iterations to the tolerance, over every α"});
   }
 
  private:

@@ -1,7 +1,8 @@
 // Test helper: checks that an SVG document is well-formed XML whose drawing stays inside its view
 // box — every element closed and nested properly, attribute values quoted, entities valid; path
 // data of M/L/H/V/Z (absolute or relative) commands with the right count of numbers; every
-// coordinate (path points, x/y/cx/cy, polygon points, translate) finite and inside the view box.
+// coordinate (path points, x/y/cx/cy, polygon points, translate) finite and inside the view box
+// of the <svg> it is in (a nested <svg>, a figure's other layout, has its own).
 #pragma once
 
 #include <cctype>
@@ -9,6 +10,7 @@
 #include <cstdlib>
 #include <map>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace physgrad::testing {
@@ -85,6 +87,10 @@ class SvgChecker {
         ++at_;
         if (open.empty() || open.back() != n) return fail("end tag </" + n + "> does not match");
         open.pop_back();
+        if (n == "svg" && !boxes_.empty()) {  // back to the enclosing <svg>'s view box
+          std::tie(x0_, y0_, x1_, y1_) = boxes_.back();
+          boxes_.pop_back();
+        }
         continue;
       }
       const std::string n = name();
@@ -115,8 +121,14 @@ class SvgChecker {
         if (!attributes.emplace(key, value).second) fail("attribute " + key + " given twice");
         at_ = close + 1;
       }
-      if (n == "svg" && open.empty()) read_view_box(attributes);
-      check_geometry(n, attributes);
+      // A nested <svg> (a figure's other layout) is placed in the enclosing view box and draws
+      // in a view box of its own.
+      if (n == "svg" && !open.empty()) {
+        check_geometry(n, attributes);
+        boxes_.emplace_back(x0_, y0_, x1_, y1_);
+      }
+      if (n == "svg") read_view_box(attributes);
+      if (n != "svg" || open.empty()) check_geometry(n, attributes);
       if (s_[at_] == '/') {
         at_ += 2;
       } else {
@@ -132,7 +144,7 @@ class SvgChecker {
     const auto it = a.find("viewBox");
     std::vector<double> v;
     if (it == a.end() || !numbers(it->second, v) || v.size() != 4 || v[2] <= 0 || v[3] <= 0) {
-      return fail("the root <svg> has no valid viewBox");
+      return fail("an <svg> has no valid viewBox");
     }
     x0_ = v[0];
     y0_ = v[1];
@@ -278,8 +290,22 @@ class SvgChecker {
 
   const std::string& s_;
   std::size_t at_ = 0;
+  std::vector<std::tuple<double, double, double, double>> boxes_;  // of enclosing <svg>s
   double x0_ = 0, y0_ = 0, x1_ = 0, y1_ = 0;
   std::vector<std::string> problems_;
 };
+
+// How many times `needle` occurs in `text` (overlapping occurrences counted).
+inline std::size_t count(const std::string& text, const std::string& needle) {
+  std::size_t n = 0;
+  for (auto at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) ++n;
+  return n;
+}
+
+// True when the text contains "nan" or "inf" in any letter case (a number that is not finite).
+inline bool has_non_finite_text(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text.find("nan") != std::string::npos || text.find("inf") != std::string::npos;
+}
 
 }  // namespace physgrad::testing

@@ -315,9 +315,9 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (report->parsed()) {
-      const std::size_t folders = ex::write_run_index(report_folder);
-      std::cout << "index of " << folders << " run folders: "
-                << (fs::path(report_folder) / "index.html").string() << '\n';
+      const ex::RunIndex index = ex::write_run_index(report_folder);
+      std::cout << "index of " << index.folders << " run folders: " << index.page.string()
+                << '\n';
       return 0;
     }
     if (describe->parsed()) {

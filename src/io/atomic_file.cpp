@@ -44,7 +44,16 @@ class AtomicWrite {
     const int err = errno;
     if (fd >= 0) ::close(fd);
     ::unlinkat(folder_.fd(), temp_.c_str(), 0);
+    abandoned_ = true;
     fail(step + " " + folder_.shown(temp_), err);
+  }
+
+  // Closes `fd` and removes the temporary file, for a write given up by its caller (unless
+  // abandon() did already).
+  void discard(int fd) {
+    if (abandoned_) return;
+    ::close(fd);
+    ::unlinkat(folder_.fd(), temp_.c_str(), 0);
   }
 
   void rename_into_place() {
@@ -62,6 +71,7 @@ class AtomicWrite {
   const FolderHandle& folder_;
   std::string name_;
   std::string temp_;
+  bool abandoned_ = false;
 };
 
 }  // namespace
@@ -79,16 +89,41 @@ bool is_atomic_write_temp(std::string_view name) {
          digits(numbers.substr(dash + 1));
 }
 
-void write_file_atomic(const FolderHandle& folder, std::string_view name,
-                       std::string_view content) {
+namespace {
+
+// The whole of write_file_atomic: the pieces `produce` gives written to the temporary file in
+// turn, then flushed and renamed over the target.
+void write_pieces_atomic(const FolderHandle& folder, std::string_view name,
+                         const std::function<void(const ContentSink&)>& produce) {
   AtomicWrite write(folder, name);
   const int fd = write.create_temp();
-  for (std::size_t done = 0; done < content.size();) {
-    const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) write.abandon(fd, "write");
-    done += static_cast<std::size_t>(n);
+  const auto write_out = [&](std::string_view content) {
+    for (std::size_t done = 0; done < content.size();) {
+      const ssize_t n = ::write(fd, content.data() + done, content.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) write.abandon(fd, "write");
+      done += static_cast<std::size_t>(n);
+    }
+  };
+  // Small pieces are gathered into writes of at least 64 KiB.
+  constexpr std::size_t kGathered = std::size_t{64} << 10;
+  std::string gathered;
+  const ContentSink sink = [&](std::string_view content) {
+    if (gathered.size() + content.size() < kGathered) {
+      gathered += content;
+      return;
+    }
+    write_out(gathered);
+    gathered.clear();
+    write_out(content);
+  };
+  try {
+    produce(sink);
+  } catch (...) {
+    write.discard(fd);
+    throw;
   }
+  write_out(gathered);
   if (::fsync(fd) != 0) write.abandon(fd, "flush");
   if (::close(fd) != 0) write.abandon(-1, "close");
   write.rename_into_place();
@@ -96,7 +131,7 @@ void write_file_atomic(const FolderHandle& folder, std::string_view name,
   folder.sync();
 }
 
-void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
+FolderHandle parent_folder(const std::filesystem::path& path) {
   const std::filesystem::path parent = path.parent_path();
   const int fd = ::open(parent.empty() ? "." : parent.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd < 0) {
@@ -104,7 +139,23 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view conte
     throw Error("write_file_atomic: cannot open the folder for '" + path.string() +
                 "': " + std::generic_category().message(err));
   }
-  write_file_atomic(FolderHandle(fd, parent.string()), path.filename().string(), content);
+  return FolderHandle(fd, parent.string());
+}
+
+}  // namespace
+
+void write_file_atomic(const FolderHandle& folder, std::string_view name,
+                       std::string_view content) {
+  write_pieces_atomic(folder, name, [&](const ContentSink& sink) { sink(content); });
+}
+
+void write_file_atomic(const std::filesystem::path& path, std::string_view content) {
+  write_file_atomic(parent_folder(path), path.filename().string(), content);
+}
+
+void write_file_atomic(const std::filesystem::path& path,
+                       const std::function<void(const ContentSink&)>& produce) {
+  write_pieces_atomic(parent_folder(path), path.filename().string(), produce);
 }
 
 }  // namespace physgrad

@@ -186,20 +186,22 @@ svg::Box equal_aspect_box(const svg::Box& available, double x_extent, double y_e
 
 }  // namespace plot
 
-std::string field_panels_svg(const std::vector<FieldPanel>& panels,
-                             const FieldPanelsOptions& options) {
-  if (panels.empty()) throw Error("field_panels_svg: no panel to draw");
-  if (options.panel_width < 60) {
-    throw Error("field_panels_svg: panels of " + std::to_string(options.panel_width) +
-                " pixels are too small (at least 60)");
-  }
+namespace {
+
+// The panels in rows of `columns`, the colour bar right of the first row reaching down to the
+// last.
+std::string draw_field_panels(const std::vector<FieldPanel>& panels,
+                              const FieldPanelsOptions& options, std::size_t columns,
+                              int title_width = 100000) {
+  const std::vector<std::string> title = plot::title_lines(options.title, title_width);
   std::vector<const Grid2D*> grids;
   for (const FieldPanel& p : panels) {
     check_grid(p.grid);
     grids.push_back(&p.grid);
   }
   const ColorScale scale = ColorScale::of(grids, options.log, options.diverging);
-  const double top = plot::top_margin(!options.title.empty()) + 10;  // and the panel titles
+  const double first_top = plot::top_margin(options.title, title_width) + 10;  // and panel titles
+  double top = first_top, right = 0;
   // Cells: each node stands for the cell around it, so the axes reach half a cell further.
   const auto cell_extent = [](const Grid2D& g) {
     const double hx = 0.5 * (g.x_max - g.x_min) / (g.nx - 1);
@@ -209,10 +211,14 @@ std::string field_panels_svg(const std::vector<FieldPanel>& panels,
   std::string body;
   double x = 0, row_bottom = top;
   for (std::size_t k = 0; k < panels.size(); ++k) {
+    if (k > 0 && k % columns == 0) {  // a new row
+      x = 0;
+      top = row_bottom + plot::kBottomMargin + 14;
+    }
     const Grid2D& g = panels[k].grid;
     const svg::Box extent = cell_extent(g);
     plot::Axis ay = plot::fixed_axis(extent.top, extent.bottom, false, 1, 0);
-    const double left = x + plot::left_margin(ay, k == 0 && !options.y_label.empty());
+    const double left = x + plot::left_margin(ay, k % columns == 0 && !options.y_label.empty());
     const svg::Box box = plot::equal_aspect_box(
         {left, top, left + options.panel_width, top + 4.0 * options.panel_width},
         extent.width(), extent.height());
@@ -221,23 +227,53 @@ std::string field_panels_svg(const std::vector<FieldPanel>& panels,
     ay.scale.p1 = box.top;
     body += svg::clipped(box, plot::shading(g, ax.scale, ay.scale, scale));
     body += plot::axes(0, box, ax, ay,
-                       {"", options.x_label, k == 0 ? options.y_label : std::string()});
+                       {"", options.x_label, k % columns == 0 ? options.y_label : std::string()});
     body += svg::text((box.left + box.right) / 2, top - 8, panels[k].title,
                       "text-anchor=\"middle\" font-weight=\"bold\"");
     x = box.right + 6;
+    right = std::max(right, x);
     row_bottom = std::max(row_bottom, box.bottom);
   }
-  const svg::Box bar{x + 10, top, x + 10 + kBarWidth, row_bottom};
+  const svg::Box bar{right + 10, first_top, right + 10 + kBarWidth, row_bottom};
   const int width = static_cast<int>(
       std::ceil(std::max(bar.left + plot::color_bar_width(scale, options.value_label) + 4,
-                         svg::text_width(options.title, 14) + 20)));
+                         std::min(svg::text_width(options.title, 14) + 20,
+                                  static_cast<double>(title_width)))));
   const int height = static_cast<int>(std::ceil(row_bottom + plot::kBottomMargin));
   std::string out = svg::open(width, height) + body + plot::color_bar(bar, scale, options.value_label);
-  if (!options.title.empty()) {
-    out += svg::text(width / 2.0, 20, options.title,
+  for (std::size_t k = 0; k < title.size(); ++k) {
+    out += svg::text(width / 2.0, 20 + 17 * static_cast<double>(k), title[k],
                      "text-anchor=\"middle\" font-size=\"14\" font-weight=\"bold\"");
   }
   return out + "</svg>\n";
+}
+
+}  // namespace
+
+std::string field_panels_svg(const std::vector<FieldPanel>& panels,
+                             const FieldPanelsOptions& options) {
+  if (panels.empty()) throw Error("field_panels_svg: no panel to draw");
+  if (options.panel_width < 60) {
+    throw Error("field_panels_svg: panels of " + std::to_string(options.panel_width) +
+                " pixels are too small (at least 60)");
+  }
+  const std::string wide = draw_field_panels(panels, options, panels.size());
+  if (svg::size_of(wide).first <= svg::kNarrowWidth) return wide;
+  // Fewer panels a row until the figure fits; one a row, narrower panels.
+  for (std::size_t columns = panels.size() - 1; columns >= 1; --columns) {
+    const std::string narrow = draw_field_panels(panels, options, columns, svg::kNarrowWidth);
+    if (svg::size_of(narrow).first <= svg::kNarrowWidth) return svg::responsive(wide, narrow);
+  }
+  FieldPanelsOptions smaller = options;
+  smaller.panel_width = 60;
+  for (int w = options.panel_width; w >= 60; w -= 10) {
+    smaller.panel_width = w;
+    if (svg::size_of(draw_field_panels(panels, smaller, 1, svg::kNarrowWidth)).first <=
+        svg::kNarrowWidth) {
+      break;
+    }
+  }
+  return svg::responsive(wide, draw_field_panels(panels, smaller, 1, svg::kNarrowWidth));
 }
 
 }  // namespace physgrad

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "physgrad/error.hpp"
+#include "physgrad/report/svg_document.hpp"
 #include "physgrad/text.hpp"
 
 namespace physgrad {
@@ -21,17 +22,26 @@ p{max-width:60em;overflow-wrap:anywhere}
 table{border-collapse:collapse;font-size:.9em}
 p.caption{font-weight:600;margin:1.2em 0 .3em}
 .table{overflow-x:auto;max-width:100%;margin:0 0 1em}
+p.links a{margin-right:1em}
 th,td{border:1px solid #ccc;padding:.3em .7em;text-align:right;white-space:nowrap}
 th{background:#f3f3f3}
 th:first-child,td:first-child{text-align:left}
 .figures{display:flex;flex-wrap:wrap;gap:1.5em;align-items:flex-start}
 figure{margin:0;min-width:0;max-width:100%}
-figure svg{display:block;max-width:100%;height:auto}
+.figure-scroll>div>svg{display:block;max-width:100%;height:auto}
 .figure-scroll{overflow-x:auto;max-width:100%}
 figcaption{font-size:.9em;color:#555;margin-top:.3em;max-width:640px}
 p.message{font-size:1.15em;font-weight:600;color:#222;margin:.2em 0 .4em}
 .swatch{display:inline-block;width:.8em;height:.8em;margin-right:.4em;vertical-align:-.05em}
+@media (max-width:700px){.table table,.table tbody,.table tr,.table td{display:block}
+  .table thead{display:none}.table tr{border-top:2px solid #bbb;padding:.2em 0}
+  .table td{border:0;text-align:left;white-space:normal;overflow-wrap:anywhere;padding:.1em .3em}
+  .table td::before{content:attr(data-h) ": ";color:#555}}
 )";
+
+// What of a page's width its figures cannot take (px): the body's padding (2 × 0.8 em) and a
+// scroll bar.
+constexpr int kPageMargins = 42;
 
 // The width (px) at which an SVG document of svg::open() shows its smallest text at 11 px: its
 // width × 11 / its smallest font-size (12 when it names none).
@@ -51,30 +61,17 @@ int readable_width(const std::string& svg) {
   return static_cast<int>(std::ceil(width * kSmallestReadable / smallest));
 }
 
-bool blank(std::string_view line) {
-  return line.find_first_not_of(" \t\r") == std::string_view::npos;
+// The narrow layout of a responsive figure (svg::responsive), else the figure itself.
+std::string narrow_layout(const std::string& svg) {
+  try {
+    return svg::layouts(svg).narrow;
+  } catch (const Error&) {
+    return svg;  // not a document of svg::open(): shown as it is
+  }
 }
 
-// Paragraphs separated by blank lines, each as <p>.
-std::string paragraphs(std::string_view text) {
-  std::string out, paragraph;
-  const auto flush = [&] {
-    if (!paragraph.empty()) out += "<p>" + xml_escape(paragraph) + "</p>\n";
-    paragraph.clear();
-  };
-  while (!text.empty()) {
-    const std::size_t end = text.find('\n');
-    const std::string_view line = text.substr(0, end);
-    text = end == std::string_view::npos ? std::string_view{} : text.substr(end + 1);
-    if (blank(line)) {
-      flush();
-    } else {
-      if (!paragraph.empty()) paragraph += '\n';
-      paragraph += line;
-    }
-  }
-  flush();
-  return out;
+bool blank(std::string_view line) {
+  return line.find_first_not_of(" \t\r") == std::string_view::npos;
 }
 
 bool is_hex_colour(const std::string& text) {
@@ -84,14 +81,8 @@ bool is_hex_colour(const std::string& text) {
          });
 }
 
-std::string table_html(const HtmlTable& table, const std::string& where) {
-  const auto check = [&](std::size_t cells, std::size_t r, const char* what) {
-    if (cells != table.header.size()) {
-      throw Error("html_report: " + std::string(what) + " " + std::to_string(r + 1) +
-                  " of a table in " + where + " has " + std::to_string(cells) +
-                  " cells but the header has " + std::to_string(table.header.size()));
-    }
-  };
+// Throws Error when the table's links or colours do not have a row per row.
+void check_table_shape(const HtmlTable& table, const std::string& where) {
   for (const auto& [cells, what] : {std::pair(&table.links, "links"),
                                      std::pair(&table.colours, "colours")}) {
     if (!cells->empty() && cells->size() != table.rows.size()) {
@@ -100,39 +91,6 @@ std::string table_html(const HtmlTable& table, const std::string& where) {
                   std::to_string(cells->size()) + " rows of " + what);
     }
   }
-  // The caption sits above the scroll box, as wide as the text, however narrow the table.
-  std::string out;
-  if (!table.caption.empty()) {
-    out += "<p class=\"caption\">" + xml_escape(table.caption) + "</p>\n";
-  }
-  out += "<div class=\"table\"><table>\n<thead><tr>";
-  for (const std::string& h : table.header) out += "<th>" + xml_escape(h) + "</th>";
-  out += "</tr></thead>\n<tbody>\n";
-  for (std::size_t r = 0; r < table.rows.size(); ++r) {
-    const auto& row = table.rows[r];
-    check(row.size(), r, "row");
-    if (!table.links.empty()) check(table.links[r].size(), r, "row of links");
-    if (!table.colours.empty()) check(table.colours[r].size(), r, "row of colours");
-    out += "<tr>";
-    for (std::size_t c = 0; c < row.size(); ++c) {
-      const std::string link = table.links.empty() ? std::string() : table.links[r][c];
-      const std::string colour = table.colours.empty() ? std::string() : table.colours[r][c];
-      out += "<td>";
-      if (!colour.empty()) {
-        if (!is_hex_colour(colour)) {
-          throw Error("html_report: '" + shown_text(colour) + "' in a table in " + where +
-                      " is not a colour #rrggbb");
-        }
-        out += "<span class=\"swatch\" style=\"background:" + colour + "\"></span>";
-      }
-      out += link.empty()
-                 ? xml_escape(row[c])
-                 : "<a href=\"" + local_href(link) + "\">" + xml_escape(row[c]) + "</a>";
-      out += "</td>";
-    }
-    out += "</tr>\n";
-  }
-  return out + "</tbody>\n</table></div>\n";
 }
 
 }  // namespace
@@ -165,43 +123,147 @@ std::string local_href(std::string_view relative_path) {
   }
 }
 
+std::string html_paragraphs(std::string_view text) {
+  std::string out, paragraph;
+  const auto flush = [&] {
+    if (!paragraph.empty()) out += "<p>" + xml_escape(paragraph) + "</p>\n";
+    paragraph.clear();
+  };
+  while (!text.empty()) {
+    const std::size_t end = text.find('\n');
+    const std::string_view line = text.substr(0, end);
+    text = end == std::string_view::npos ? std::string_view{} : text.substr(end + 1);
+    if (blank(line)) {
+      flush();
+    } else {
+      if (!paragraph.empty()) paragraph += '\n';
+      paragraph += line;
+    }
+  }
+  flush();
+  return out;
+}
+
+std::string html_table_open(const HtmlTable& table) {
+  // The caption sits above the scroll box, as wide as the text, however narrow the table.
+  std::string out;
+  if (!table.caption.empty()) {
+    out += "<p class=\"caption\">" + xml_escape(table.caption) + "</p>\n";
+  }
+  out += "<div class=\"table\"><table>\n<thead><tr>";
+  for (const std::string& h : table.header) out += "<th>" + xml_escape(h) + "</th>";
+  return out + "</tr></thead>\n<tbody>\n";
+}
+
+std::string html_table_rows(const HtmlTable& table, const std::string& where) {
+  check_table_shape(table, where);
+  const auto check = [&](std::size_t cells, std::size_t r, const char* what) {
+    if (cells != table.header.size()) {
+      throw Error("html_report: " + std::string(what) + " " + std::to_string(r + 1) +
+                  " of a table in " + where + " has " + std::to_string(cells) +
+                  " cells but the header has " + std::to_string(table.header.size()));
+    }
+  };
+  std::string out;
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    const auto& row = table.rows[r];
+    check(row.size(), r, "row");
+    if (!table.links.empty()) check(table.links[r].size(), r, "row of links");
+    if (!table.colours.empty()) check(table.colours[r].size(), r, "row of colours");
+    out += "<tr>";
+    for (std::size_t c = 0; c < row.size(); ++c) {
+      const std::string link = table.links.empty() ? std::string() : table.links[r][c];
+      const std::string colour = table.colours.empty() ? std::string() : table.colours[r][c];
+      out += "<td data-h=\"" + xml_escape(table.header[c]) + "\">";
+      if (!colour.empty()) {
+        if (!is_hex_colour(colour)) {
+          throw Error("html_report: '" + shown_text(colour) + "' in a table in " + where +
+                      " is not a colour #rrggbb");
+        }
+        out += "<span class=\"swatch\" style=\"background:" + colour + "\"></span>";
+      }
+      out += link.empty()
+                 ? xml_escape(row[c])
+                 : "<a href=\"" + local_href(link) + "\">" + xml_escape(row[c]) + "</a>";
+      out += "</td>";
+    }
+    out += "</tr>\n";
+  }
+  return out;
+}
+
+std::string html_table(const HtmlTable& table, const std::string& where) {
+  std::string rows = html_table_rows(table, where);  // checked before anything is written
+  return html_table_open(table) + rows + std::string(kHtmlTableClose);
+}
+
+std::string html_page_open(const std::string& title, const std::string& intro) {
+  return "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
+         "<title>" +
+         xml_escape(title) + "</title>\n<style>\n" + kStyle + "</style>\n</head>\n<body>\n" +
+         "<h1>" + xml_escape(title) + "</h1>\n" + html_paragraphs(intro);
+}
+
+std::string html_section_open(const HtmlSection& section) {
+  std::string out = "<section>\n";
+  if (!section.heading.empty()) out += "<h2>" + xml_escape(section.heading) + "</h2>\n";
+  if (!section.links.empty()) {
+    out += "<p class=\"links\">";
+    for (const HtmlLink& link : section.links) {
+      const std::string href = local_href(link.path);
+      out += "<a href=\"" + (link.up ? "." + href : href) + "\">" + xml_escape(link.text) +
+             "</a>";
+    }
+    out += "</p>\n";
+  }
+  return out + html_paragraphs(section.text);
+}
+
+std::string html_figures(const std::vector<HtmlFigure>& figures) {
+  std::string out;
+  for (std::size_t k = 0; k < figures.size(); ++k) {
+    const HtmlFigure& figure = figures[k];
+    if (k == 0 || figure.row != figures[k - 1].row) {
+      out += std::string(k == 0 ? "" : "</div>\n") + "<div class=\"figures\">\n";
+    }
+    // The wide layout scales with the page down to the width at which its smallest text is
+    // 11 px; in a page narrower than that (its margins and a scroll bar aside) the narrow one.
+    const std::string narrow = narrow_layout(figure.svg);
+    const std::string svg =
+        figure.svg == narrow
+            ? figure.svg
+            : svg::switched_below(figure.svg, readable_width(svg::layouts(figure.svg).wide) +
+                                                  kPageMargins);
+    out += (figure.id.empty() ? std::string("<figure>\n")
+                              : "<figure id=\"" + xml_escape(figure.id) + "\">\n") +
+           "<div class=\"figure-scroll\"><div style=\"min-width:" +
+           std::to_string(readable_width(narrow)) + "px\">\n" + svg + "</div></div>\n";
+    if (!figure.message.empty() || !figure.caption.empty()) {
+      out += "<figcaption>" +
+             (figure.message.empty()
+                  ? std::string()
+                  : "<p class=\"message\">" + xml_escape(figure.message) + "</p>") +
+             xml_escape(figure.caption) + "</figcaption>\n";
+    }
+    out += "</figure>\n";
+  }
+  if (!figures.empty()) out += "</div>\n";
+  return out;
+}
+
 std::string html_report(const std::string& title, const std::string& intro,
                         const std::vector<HtmlSection>& sections) {
-  std::string out =
-      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-      "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
-  out += "<title>" + xml_escape(title) + "</title>\n<style>\n" + kStyle + "</style>\n";
-  out += "</head>\n<body>\n<h1>" + xml_escape(title) + "</h1>\n" + paragraphs(intro);
+  std::string out = html_page_open(title, intro);
   for (const HtmlSection& section : sections) {
-    out += "<section>\n";
-    if (!section.heading.empty()) out += "<h2>" + xml_escape(section.heading) + "</h2>\n";
-    out += paragraphs(section.text);
+    out += html_section_open(section);
     for (const HtmlTable& table : section.tables) {
-      out += table_html(table, "section '" + section.heading + "'");
+      out += html_table(table, "section '" + section.heading + "'");
     }
-    for (std::size_t k = 0; k < section.figures.size(); ++k) {
-      const HtmlFigure& figure = section.figures[k];
-      if (k == 0 || figure.row != section.figures[k - 1].row) {
-        out += std::string(k == 0 ? "" : "</div>\n") + "<div class=\"figures\">\n";
-      }
-      out += (figure.id.empty() ? std::string("<figure>\n")
-                                : "<figure id=\"" + xml_escape(figure.id) + "\">\n") +
-             "<div class=\"figure-scroll\"><div style=\"min-width:" +
-             std::to_string(readable_width(figure.svg)) + "px\">\n" + figure.svg +
-             "</div></div>\n";
-      if (!figure.message.empty() || !figure.caption.empty()) {
-        out += "<figcaption>" +
-               (figure.message.empty()
-                    ? std::string()
-                    : "<p class=\"message\">" + xml_escape(figure.message) + "</p>") +
-               xml_escape(figure.caption) + "</figcaption>\n";
-      }
-      out += "</figure>\n";
-    }
-    if (!section.figures.empty()) out += "</div>\n";
-    out += "</section>\n";
+    out += html_figures(section.figures);
+    out += kHtmlSectionClose;
   }
-  return out + "</body>\n</html>\n";
+  return out + std::string(kHtmlPageClose);
 }
 
 }  // namespace physgrad

@@ -48,16 +48,17 @@ void check_options(const Grid2D& grid, const std::vector<Trajectory>& trajectori
 
 }  // namespace
 
-std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& trajectories,
-                          const LandscapeOptions& options) {
-  check_options(grid, trajectories, options);
+namespace {
+
+std::string draw_landscape(const Grid2D& grid, const std::vector<Trajectory>& trajectories,
+                           const LandscapeOptions& options) {
   const ColorScale scale =
       ColorScale::of({&grid}, options.log_levels, false, options.value_range);
   plot::Axis ax = plot::fixed_axis(grid.x_min, grid.x_max, false, 0, 1);
   plot::Axis ay = plot::fixed_axis(grid.y_min, grid.y_max, false, 1, 0);
   const double right = plot::color_bar_width(scale, options.value_label) + 14;
   const Box available{plot::left_margin(ay, !options.y_label.empty()),
-                      plot::top_margin(!options.title.empty()), options.width - right,
+                      plot::top_margin(options.title, options.width), options.width - right,
                       options.height - plot::kBottomMargin};
   const Box box = options.equal_aspect
                       ? plot::equal_aspect_box(available, grid.x_max - grid.x_min,
@@ -83,6 +84,7 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
 
   std::vector<plot::LegendEntry> entries;
   std::vector<std::vector<Polyline>> drawn;
+  std::vector<int> dashes_of;  // each path's dash pattern (-1: solid)
   std::string notes;
   for (std::size_t n = 0; n < trajectories.size(); ++n) {
     const Trajectory& t = trajectories[n];
@@ -113,9 +115,17 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
       }
       if (path.empty()) pieces.clear();
     }
-    const int retraced = plot::retraces(pieces, drawn);
+    // A path that retraces earlier ones gets dashes of its own and says so in the legend.
+    const std::vector<std::size_t> under = plot::retraced(pieces, drawn, box);
     drawn.push_back(pieces);
-    const std::string dashes = retraced > 0 ? plot::dash_pattern(retraced) : "";
+    std::string coincides;
+    std::vector<int> taken;
+    for (const std::size_t k : under) {
+      coincides += (coincides.empty() ? "" : ", ") + trajectories[k].label;
+      taken.push_back(dashes_of[k]);
+    }
+    dashes_of.push_back(under.empty() ? -1 : plot::free_dash_pattern(taken));
+    const std::string dashes = under.empty() ? "" : plot::dash_pattern(dashes_of.back());
     const std::string d = plot::line_path(pieces, bounds);
     // A white halo under the path, but not under one that retraces another (it would hide it).
     if (dashes.empty()) {
@@ -123,12 +133,19 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
                            "fill=\"none\" stroke=\"white\" stroke-opacity=\"0.7\" "
                            "stroke-width=\"3.6\" stroke-linejoin=\"round\" stroke-linecap=\"round\"");
     }
+    // A path with nothing to draw says why, here and in its legend entry.
+    if (pieces.empty() && left_at.empty()) left_at = " (not drawn: no finite point)";
+    const std::string not_drawn = pieces.empty() ? left_at.substr(2, left_at.size() - 3) : "";
+    content += "<g class=\"series\" data-label=\"" + xml_escape(t.label) + "\"" +
+               (not_drawn.empty() ? "" : " data-empty=\"" + xml_escape(not_drawn) + "\"") + ">\n";
     content += svg::path(d, "fill=\"none\" stroke=\"" + color +
                                 "\" stroke-width=\"1.6\" stroke-linejoin=\"round\" "
-                                "stroke-linecap=\"round\"" +
+                                "stroke-linecap=\"round\" class=\"line\"" +
                                 (dashes.empty() ? "" : " stroke-dasharray=\"" + dashes + "\""));
     content += svg::path(plot::dot_path(pieces, bounds),
-                         "stroke=\"" + color + "\" stroke-width=\"3.6\" stroke-linecap=\"round\"");
+                         "stroke=\"" + color + "\" stroke-width=\"3.6\" stroke-linecap=\"round\" "
+                         "class=\"marker\" data-shape=\"0\"");
+    content += "</g>\n";
     if (!pieces.empty() && svg::inside(pieces[0].front(), bounds)) {
       const Point& p = pieces[0].front();
       content += "<circle cx=\"" + num(p.x) + "\" cy=\"" + num(p.y) +
@@ -139,7 +156,9 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
       content += svg::rect({p.x - 4, p.y - 4, p.x + 4, p.y + 4},
                            "fill=\"" + color + "\" stroke=\"white\"");
     }
-    entries.push_back({t.label + left_at, color, true, dashes, true, false});
+    entries.push_back({t.label + left_at + (coincides.empty() ? "" : " (coincides with " +
+                                                                   coincides + ")"),
+                       color, true, dashes, true, false});
   }
   for (const Marker& m : options.markers) {
     const Point p{ax.scale(m.x), ay.scale(m.y)};
@@ -153,9 +172,11 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
                                "paint-order=\"stroke\"");
     }
   }
-  const double title_width = svg::text_width(options.title, 14) + 20;
+  const double title_width =
+      std::min(svg::text_width(options.title, 14) + 20, static_cast<double>(options.width));
   const int width = static_cast<int>(std::ceil(std::max(
-      {box.right + right, title_width, plot::legend_entry_width(entries)})));
+      {box.right + right, title_width,
+       std::min(plot::legend_entry_width(entries), static_cast<double>(options.width))})));
   const double below = box.bottom + 48;
   const plot::LegendLayout legend =
       plot::legend(entries, box, plot::Occupancy(box), below, width, false);
@@ -164,6 +185,18 @@ std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& tra
   return svg::open(width, height) + svg::clipped(box, content) + notes +
          plot::axes(width, box, ax, ay, {options.title, options.x_label, options.y_label}) +
          plot::color_bar(bar, scale, options.value_label) + legend.svg + "</svg>\n";
+}
+
+}  // namespace
+
+std::string landscape_svg(const Grid2D& grid, const std::vector<Trajectory>& trajectories,
+                          const LandscapeOptions& options) {
+  check_options(grid, trajectories, options);
+  const std::string wide = draw_landscape(grid, trajectories, options);
+  if (svg::size_of(wide).first <= svg::kNarrowWidth) return wide;
+  LandscapeOptions narrow = options;
+  narrow.width = svg::kNarrowWidth;
+  return svg::responsive(wide, draw_landscape(grid, trajectories, narrow));
 }
 
 }  // namespace physgrad

@@ -11,6 +11,7 @@
 #include "physgrad/report/plot_axes.hpp"
 #include "physgrad/report/plot_geometry.hpp"
 #include "physgrad/report/plot_legend.hpp"
+#include "physgrad/report/plot_marks.hpp"
 #include "physgrad/types.hpp"
 
 namespace physgrad {
@@ -22,6 +23,7 @@ using plot::Box;
 using plot::Point;
 using plot::Polyline;
 using plot::Scale;
+using plot::short_number;
 using svg::num;
 
 
@@ -83,12 +85,6 @@ void staircase(const Series& s, const std::vector<double>& values, std::vector<d
   y.push_back(values.back());
 }
 
-std::string short_number(double v) {
-  std::array<char, 32> buf{};
-  std::snprintf(buf.data(), buf.size(), "%.4g", v);
-  return buf.data();
-}
-
 // A × centred at p.
 std::string cross(const Point& p, const std::string& color) {
   const std::string d = std::string("M") + num(p.x - 4) + " " + num(p.y - 4) + "l8 8M" + num(p.x - 4) + " " +
@@ -113,20 +109,16 @@ std::string down_triangle(const Point& p, const std::string& color) {
                    "fill=\"" + color + "\" stroke=\"white\" stroke-width=\"0.8\"");
 }
 
-}  // namespace
+// A ◆ at p, outlined in white.
+std::string diamond(const Point& p, const std::string& color) {
+  return svg::path(plot::marker_path(3, p, 9),
+                   "fill=\"" + color + "\" stroke=\"white\" stroke-width=\"1.2\"");
+}
 
-std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptions& options) {
-  if (options.width < 200 || options.height < 150) {
-    throw Error("line_plot_svg: a figure of " + std::to_string(options.width) + "x" +
-                std::to_string(options.height) + " pixels is too small (at least 200x150)");
-  }
-  for (const Series& s : series) {
-    check_lengths("y", s, s.y);
-    if (has_band(s)) {
-      check_lengths("band low", s, s.band_low);
-      check_lengths("band high", s, s.band_high);
-    }
-  }
+// The figure in one layout; the legend inside the plot where it covers no data when
+// `legend_inside`, else below it.
+std::string draw_line_plot(const std::vector<Series>& series, const LinePlotOptions& options,
+                           bool legend_inside) {
   const Range range = data_range(series, options);
   const auto& fixed = options.x_range;
   const bool fixed_x = fixed && plot::usable(fixed->first, options.log_x) &&
@@ -140,7 +132,7 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
   Axis ay = fixed_y ? plot::data_axis(shared->first, shared->second, true, options.log_y, 1, 0)
                     : plot::data_axis(range.y_lo, range.y_hi, range.found(), options.log_y, 1, 0);
   const Box box{std::max(40.0, plot::left_margin(ay, !options.y_label.empty())),
-                plot::top_margin(!options.title.empty()), options.width - 16.0,
+                plot::top_margin(options.title, options.width), options.width - 16.0,
                 options.height - plot::kBottomMargin};
   ax.scale.p0 = box.left;
   ax.scale.p1 = box.right;
@@ -158,9 +150,13 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
   std::vector<plot::LegendEntry> entries;
   std::vector<Box> note_boxes;
   std::vector<std::vector<Polyline>> drawn;  // the pieces of the series before
+  std::vector<int> shapes;                    // the marker shape each series was drawn with
+  std::vector<int> dashes_of;                 // and its dash pattern (-1: solid)
+  std::string hover;
   for (std::size_t n = 0; n < series.size(); ++n) {
     const Series& s = series[n];
     const std::string color = xml_escape(s.color.empty() ? palette_color(n) : s.color);
+    std::string group;  // the series' band, line and markers
     std::vector<double> x, y;
     staircase(s, s.y, x, y);
     std::vector<Polyline> pieces(1);
@@ -186,29 +182,77 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
       staircase(s, s.band_low, band_x, low);
       staircase(s, s.band_high, band_x, high);
       const std::string band = plot::band_path(band_x, low, high, ax.scale, sy, bounds);
-      content += svg::path(band, "fill=\"" + color + "\" fill-opacity=\"0.18\"");
+      group += svg::path(band, "fill=\"" + color + "\" fill-opacity=\"0.18\"");
       for (std::size_t k = 0; k < band_x.size(); ++k) {
         occupied.mark_segment({ax.scale(band_x[k]), sy(low[k])}, {ax.scale(band_x[k]), sy(high[k])});
       }
     }
-    // A series that retraces an earlier one gets its own dashes, so that both stay visible.
-    const int retraced = plot::retraces(pieces, drawn);
+    // A series that retraces earlier ones gets its own dashes and marker shape, its markers set
+    // off from theirs, and says so in the legend: both stay visible.
+    const std::vector<std::size_t> under = plot::retraced(pieces, drawn, box);
     drawn.push_back(pieces);
-    const std::string dashes =
-        retraced > 0 ? plot::dash_pattern(retraced) : s.dashed ? plot::dash_pattern(0) : "";
-    content += svg::path(plot::line_path(pieces, bounds),
-                         "fill=\"none\" stroke=\"" + color +
-                             "\" stroke-width=\"1.8\" stroke-linejoin=\"round\" "
-                             "stroke-linecap=\"round\"" +
-                             (dashes.empty() ? "" : " stroke-dasharray=\"" + dashes + "\""));
-    if (s.markers) {
-      const std::vector<Polyline> points = plot::to_pixels(s.x, s.y, ax.scale, sy, false);
-      const std::size_t count = points.empty() ? 0 : points.front().size();
-      content += svg::path(plot::dot_path(points, bounds),
-                           "stroke=\"" + color + "\" stroke-width=\"" +
-                               (count <= 40 ? "5" : count <= 120 ? "3" : "2") +
-                               "\" stroke-linecap=\"round\"");
+    const int retraced = static_cast<int>(under.size());
+    int dash = s.dashed ? s.dash_pattern : -1;  // -1: solid
+    if (retraced > 0) {  // a pattern none of those it retraces has
+      std::vector<int> taken;
+      for (const std::size_t k : under) taken.push_back(dashes_of[k]);
+      dash = plot::free_dash_pattern(taken);
     }
+    dashes_of.push_back(dash);
+    const std::string dashes = dash < 0 ? "" : plot::dash_pattern(dash);
+    group += svg::path(plot::line_path(pieces, bounds),
+                       "fill=\"none\" stroke=\"" + color +
+                           "\" stroke-width=\"1.8\" stroke-linejoin=\"round\" "
+                           "stroke-linecap=\"round\" class=\"line\"" +
+                           (dashes.empty() ? "" : " stroke-dasharray=\"" + dashes + "\""));
+    int shape = s.markers ? s.shape : -1;
+    std::string coincides;
+    for (const std::size_t k : under) {
+      coincides += (coincides.empty() ? "" : ", ") + series[k].label;
+      if (shape < 0 || shape == shapes[k]) shape = -1;
+    }
+    if (retraced > 0 && shape < 0) {  // a shape none of those it retraces has
+      for (int candidate = 1; candidate < plot::kShapes + 1 && shape < 0; ++candidate) {
+        const bool taken = std::any_of(under.begin(), under.end(),
+                                       [&](std::size_t k) { return shapes[k] == candidate; });
+        if (!taken) shape = candidate;
+      }
+    }
+    shapes.push_back(shape);
+    const std::vector<Polyline> points = plot::to_pixels(s.x, s.y, ax.scale, sy, false);
+    const std::size_t count = points.empty() ? 0 : points.front().size();
+    if (shape >= 0) {
+      // Markers of series drawn on one another are spread over the points in turns (a series
+      // of one point keeps it).
+      std::size_t every = retraced > 0                ? std::max<std::size_t>(2, count / 12)
+                          : shape > 0 && count > 24 ? count / 12
+                                                    : 1;
+      every = std::min(every, std::max<std::size_t>(count, 1));
+      const double size = shape == 0 ? (count <= 40 ? 5 : count <= 120 ? 3 : 2) : 7;
+      group += plot::markers_svg(points, bounds, shape, size, color, every,
+                                 retraced * std::max<std::size_t>(1, every / 3));
+    }
+    std::vector<plot::HoverPoint> targets;
+    for (std::size_t k = 0; k < s.x.size(); ++k) {
+      const Point p{ax.scale(s.x[k]), y_pixel(s.y[k])};
+      if (std::isfinite(p.x) && std::isfinite(p.y)) targets.push_back({p, s.x[k], s.y[k]});
+    }
+    hover += plot::hover_targets(targets, box, s.label,
+                                 options.x_label.empty() ? "x" : options.x_label,
+                                 options.y_label.empty() ? "y" : options.y_label);
+    for (const Series::Mark& mark : s.marks) {
+      const Point p{ax.scale(mark.x), y_pixel(mark.y)};
+      if (!(std::isfinite(p.x) && std::isfinite(p.y) && svg::inside(p, box))) continue;
+      notes += "<g class=\"mark\"><title>" + xml_escape(s.label + ": " + mark.label) +
+               "</title>\n" + diamond(p, color) + "</g>\n";
+      occupied.mark_box({p.x - 6, p.y - 6, p.x + 6, p.y + 6});
+    }
+    // A series with no point to draw says why, here and in its legend entry.
+    const std::string not_drawn =
+        !pieces.empty() ? "" : s.end_label.empty() ? "no finite value" : s.end_label;
+    content += "<g class=\"series\" data-label=\"" + xml_escape(s.label) + "\"" +
+               (not_drawn.empty() ? "" : " data-empty=\"" + xml_escape(not_drawn) + "\"") +
+               ">\n" + group + "</g>\n";
     for (const Polyline& piece : pieces) occupied.mark_polyline(piece);
 
     // The end of a diverged (or otherwise labelled) run: a × and its label inside the frame.
@@ -245,11 +289,14 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
                          "fill=\"" + color +
                              "\" stroke=\"white\" stroke-width=\"3\" paint-order=\"stroke\"");
     }
-    entries.push_back({s.label.empty() ? "" : s.label + zero_note, color, true, dashes,
-                       s.markers, has_band(s)});
+    std::string label = s.label.empty() ? "" : s.label + zero_note;
+    if (!label.empty() && !coincides.empty()) label += " (coincides with " + coincides + ")";
+    if (!label.empty() && !s.marks.empty()) label += " (◆ " + s.marks.front().label + ")";
+    if (!label.empty() && !not_drawn.empty()) label += " (not drawn: " + not_drawn + ")";
+    entries.push_back({label, color, true, dashes, shape == 0, has_band(s), shape});
   }
   const plot::LegendLayout legend =
-      plot::legend(entries, box, occupied, options.height - 4.0, options.width);
+      plot::legend(entries, box, occupied, options.height - 4.0, options.width, legend_inside);
   const int height = options.height + static_cast<int>(std::ceil(legend.height_below));
   // The clip reaches a little past the frame, so that lines along the data range's ends
   // (which the axes end at) show in full.
@@ -257,7 +304,29 @@ std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptio
          svg::clipped(svg::grow(box, 3, 3), content) +
          plot::axes(options.width, box, ax, ay,
                     {options.title, options.x_label, options.y_label}) +
-         notes + legend.svg + "</svg>\n";
+         notes + hover + legend.svg + "</svg>\n";
+}
+
+}  // namespace
+
+std::string line_plot_svg(const std::vector<Series>& series, const LinePlotOptions& options) {
+  if (options.width < 200 || options.height < 150) {
+    throw Error("line_plot_svg: a figure of " + std::to_string(options.width) + "x" +
+                std::to_string(options.height) + " pixels is too small (at least 200x150)");
+  }
+  for (const Series& s : series) {
+    check_lengths("y", s, s.y);
+    if (has_band(s)) {
+      check_lengths("band low", s, s.band_low);
+      check_lengths("band high", s, s.band_high);
+    }
+  }
+  const std::string wide = draw_line_plot(series, options, true);
+  if (!options.narrow || options.width <= svg::kNarrowWidth) return wide;
+  LinePlotOptions narrow = options;
+  narrow.width = svg::kNarrowWidth;
+  narrow.height = std::max(240, options.height * 3 / 4);
+  return svg::responsive(wide, draw_line_plot(series, narrow, false));
 }
 
 }  // namespace physgrad

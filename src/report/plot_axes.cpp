@@ -201,6 +201,24 @@ double left_margin(const Axis& ay, bool has_y_label) {
 
 double top_margin(bool has_title) { return has_title ? 36 : 16; }
 
+std::vector<std::string> title_lines(const std::string& title, int width) {
+  if (title.empty()) return {};
+  if (svg::text_width(title, 14) + 10 <= width) return {title};
+  std::size_t best = std::string::npos;
+  for (std::size_t at = title.find(' '); at != std::string::npos; at = title.find(' ', at + 1)) {
+    const auto off = [&](std::size_t k) {
+      return std::abs(static_cast<double>(k) - static_cast<double>(title.size()) / 2);
+    };
+    if (best == std::string::npos || off(at) < off(best)) best = at;
+  }
+  if (best == std::string::npos) return {title};
+  return {title.substr(0, best), title.substr(best + 1)};
+}
+
+double top_margin(const std::string& title, int width) {
+  return title.empty() ? 16 : 36 + 17 * static_cast<double>(title_lines(title, width).size() - 1);
+}
+
 std::string axes(int width, const svg::Box& b, const Axis& ax, const Axis& ay,
                  const AxisTitles& titles) {
   std::string out = svg::rect(b, "fill=\"none\" stroke=\"#333\"");
@@ -219,8 +237,9 @@ std::string axes(int width, const svg::Box& b, const Axis& ax, const Axis& ay,
   }
   out += svg::path(marks, "stroke=\"#333\" fill=\"none\"");
   out += "<g fill=\"#333\">\n" + labels + "</g>\n";
-  if (!titles.title.empty()) {
-    out += svg::text(width / 2.0, 22, titles.title,
+  const std::vector<std::string> lines = title_lines(titles.title, width);
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    out += svg::text(width / 2.0, 22 + 17 * static_cast<double>(k), lines[k],
                      "text-anchor=\"middle\" font-size=\"14\" font-weight=\"bold\"");
   }
   if (!titles.x_label.empty()) {

@@ -165,31 +165,81 @@ std::string band_path(const std::vector<double>& x, const std::vector<double>& l
 
 namespace {
 
-bool coincide(const std::vector<Polyline>& a, const std::vector<Polyline>& b) {
-  if (a.size() != b.size() || a.empty()) return false;
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    if (a[k].size() != b[k].size()) return false;
-    for (std::size_t i = 0; i < a[k].size(); ++i) {
-      if (std::abs(a[k][i].x - b[k][i].x) > 0.5 || std::abs(a[k][i].y - b[k][i].y) > 0.5) {
-        return false;
+// The distance from p to the segment from a to b.
+double distance_to_segment(const Point& p, const Point& a, const Point& b) {
+  const double dx = b.x - a.x, dy = b.y - a.y, length2 = dx * dx + dy * dy;
+  const double t =
+      length2 > 0 ? std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / length2, 0.0, 1.0) : 0.0;
+  return std::hypot(p.x - (a.x + t * dx), p.y - (a.y + t * dy));
+}
+
+// True when every point of `hidden` lies within 1.5 pixels of the lines of `over`: drawn over it,
+// `over` (about 2 pixels wide) would hide it. Each point is first tried against the segments
+// near the one the point before lay on, so that two series along each other take linear time.
+bool covers(const std::vector<Polyline>& over, const std::vector<Polyline>& hidden) {
+  constexpr double kNear = 1.5;
+  const auto near_segment = [&](const Point& p, std::size_t piece, std::size_t i) {
+    const Polyline& line = over[piece];
+    return distance_to_segment(p, line[i], line[i + 1 < line.size() ? i + 1 : i]) <= kNear;
+  };
+  bool any = false;
+  std::size_t piece = 0, segment = 0;  // where the point before lay
+  for (const Polyline& part : hidden) {
+    for (const Point& p : part) {
+      any = true;
+      bool found = false;
+      const auto try_segment = [&](std::size_t k, std::size_t i) {
+        found = near_segment(p, k, i);
+        if (found) {
+          piece = k;
+          segment = i;
+        }
+      };
+      if (piece < over.size()) {
+        const std::size_t end = std::min(segment + 3, over[piece].size());
+        for (std::size_t i = segment > 2 ? segment - 2 : 0; i < end && !found; ++i) {
+          try_segment(piece, i);
+        }
       }
+      for (std::size_t k = 0; k < over.size() && !found; ++k) {
+        for (std::size_t i = 0; i < over[k].size() && !found; ++i) try_segment(k, i);
+      }
+      if (!found) return false;
     }
   }
-  return true;
+  return any;
 }
 
 }  // namespace
 
-int retraces(const std::vector<Polyline>& pieces,
-             const std::vector<std::vector<Polyline>>& earlier) {
-  int count = 0;
-  for (const auto& other : earlier) count += coincide(pieces, other) ? 1 : 0;
-  return count;
+std::vector<std::size_t> retraced(const std::vector<Polyline>& pieces,
+                                  const std::vector<std::vector<Polyline>>& earlier,
+                                  const Box& bounds) {
+  const auto visible = [&](const std::vector<Polyline>& lines) {
+    std::vector<Polyline> parts;
+    for (const Polyline& line : lines) {
+      for (Polyline& part : clip(line, bounds)) parts.push_back(std::move(part));
+    }
+    return parts;
+  };
+  const std::vector<Polyline> over = visible(pieces);
+  std::vector<std::size_t> out;
+  for (std::size_t k = 0; k < earlier.size(); ++k) {
+    if (covers(over, visible(earlier[k]))) out.push_back(k);
+  }
+  return out;
+}
+
+int free_dash_pattern(const std::vector<int>& taken) {
+  int k = 0;
+  while (k < kDashPatterns && std::find(taken.begin(), taken.end(), k) != taken.end()) ++k;
+  return k % kDashPatterns;
 }
 
 std::string dash_pattern(int k) {
-  static const char* const patterns[] = {"6 4", "2 3", "9 3 2 3", "1 4", "12 4"};
-  return patterns[static_cast<std::size_t>(k) % std::size(patterns)];
+  static const std::array<const char*, kDashPatterns> patterns = {
+      "6 4", "2 3", "9 3 2 3", "1 4", "12 4", "4 2 1 2", "8 2", "3 6"};
+  return patterns[static_cast<std::size_t>(k) % patterns.size()];
 }
 
 }  // namespace physgrad::plot

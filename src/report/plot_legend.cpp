@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "physgrad/report/plot_geometry.hpp"
+#include "physgrad/report/plot_marks.hpp"
 
 namespace physgrad::plot {
 
@@ -63,8 +64,30 @@ namespace {
 
 constexpr double kRow = 17, kSwatch = 24, kPad = 8;
 
-// One entry's swatch and label with the swatch's left end at x and its centre line at y.
-std::string entry_svg(const LegendEntry& e, double x, double y) {
+// The lines of a label no wider than `width` pixels, broken at spaces (a word wider than that
+// stays whole).
+std::vector<std::string> wrapped(const std::string& label, double width) {
+  std::vector<std::string> lines(1);
+  std::size_t start = 0;
+  while (start <= label.size()) {
+    std::size_t end = label.find(' ', start);
+    if (end == std::string::npos) end = label.size();
+    const std::string word = label.substr(start, end - start);
+    const std::string joined = lines.back().empty() ? word : lines.back() + " " + word;
+    if (!lines.back().empty() && svg::text_width(joined) > width) {
+      lines.push_back(word);
+    } else {
+      lines.back() = joined;
+    }
+    start = end + 1;
+  }
+  return lines;
+}
+
+// One entry's swatch and label with the swatch's left end at x and its centre line at y; a label
+// of several lines continues kRow below.
+std::string entry_svg(const LegendEntry& e, double x, double y,
+                      const std::vector<std::string>& lines) {
   const std::string color = xml_escape(e.color);
   std::string out;
   if (e.band) {
@@ -76,11 +99,18 @@ std::string entry_svg(const LegendEntry& e, double x, double y) {
                      "stroke=\"" + color + "\" stroke-width=\"2\"" +
                          (e.dashes.empty() ? "" : " stroke-dasharray=\"" + e.dashes + "\""));
   }
-  if (e.dot || !e.line) {
+  if (e.shape > 0) {
+    out += svg::path(marker_path(e.shape, {x + kSwatch / 2, y}, 7),
+                     "fill=\"white\" stroke=\"" + color + "\" stroke-width=\"1.6\"");
+  } else if (e.dot || !e.line || e.shape == 0) {
     out += "<circle cx=\"" + num(x + kSwatch / 2) + "\" cy=\"" + num(y) + "\" r=\"" +
            (e.line ? "2.5" : "4") + "\" fill=\"" + color + "\"/>\n";
   }
-  return out + svg::text(x + kSwatch + 6, y + 4, e.label, "fill=\"#222\"");
+  for (std::size_t k = 0; k < lines.size(); ++k) {
+    out += svg::text(x + kSwatch + 6, y + 4 + kRow * static_cast<double>(k), lines[k],
+                     "fill=\"#222\"");
+  }
+  return out;
 }
 
 double entry_width(const LegendEntry& e) { return kSwatch + 6 + svg::text_width(e.label) + 4; }
@@ -118,23 +148,32 @@ LegendLayout legend(const std::vector<LegendEntry>& entries, const svg::Box& box
                         svg::rect(frame, "fill=\"white\" fill-opacity=\"0.9\" stroke=\"#999\" "
                                          "rx=\"3\"");
       for (std::size_t k = 0; k < shown.size(); ++k) {
-        out += entry_svg(*shown[k], at.x + kPad, at.y + kPad / 2 + kRow * (static_cast<double>(k) + 0.5));
+        out += entry_svg(*shown[k], at.x + kPad,
+                         at.y + kPad / 2 + kRow * (static_cast<double>(k) + 0.5),
+                         {shown[k]->label});
       }
       return {out + "</g>\n", 0};
     }
   }
-  // Below the plot, in columns.
-  const double usable = std::max(widest, static_cast<double>(width) - 2 * kPad);
-  const auto columns = std::max<std::size_t>(1, static_cast<std::size_t>(usable / widest));
-  const std::size_t rows = (shown.size() + columns - 1) / columns;
+  // Below the plot, in columns; labels wider than the figure wrapped.
+  const double usable = std::max(1.0, static_cast<double>(width) - 2 * kPad);
+  const double fits = std::min(widest, usable);
+  const auto columns = std::max<std::size_t>(1, static_cast<std::size_t>(usable / fits));
   const double column_width = usable / static_cast<double>(columns);
   std::string out = "<g class=\"legend\">\n";
-  for (std::size_t k = 0; k < shown.size(); ++k) {
-    const double x = kPad + column_width * static_cast<double>(k % columns);
-    const double y = below_top + kRow * (static_cast<double>(k / columns) + 0.5);
-    out += entry_svg(*shown[k], x, y);
+  double row = 0;  // rows of the entries placed so far, per line of columns
+  for (std::size_t k = 0; k < shown.size(); k += columns) {
+    std::size_t tallest = 1;
+    for (std::size_t c = 0; c < columns && k + c < shown.size(); ++c) {
+      const std::vector<std::string> lines =
+          wrapped(shown[k + c]->label, column_width - kSwatch - 10);
+      tallest = std::max(tallest, lines.size());
+      out += entry_svg(*shown[k + c], kPad + column_width * static_cast<double>(c),
+                       below_top + kRow * (row + 0.5), lines);
+    }
+    row += static_cast<double>(tallest);
   }
-  return {out + "</g>\n", kRow * static_cast<double>(rows) + 4};
+  return {out + "</g>\n", kRow * row + 4};
 }
 
 }  // namespace physgrad::plot

@@ -53,37 +53,162 @@ std::string rect(const Box& b, const std::string& attributes) {
 
 std::string dot(const Point& p) { return std::string("M") + num(p.x) + " " + num(p.y) + "h0"; }
 
-std::string open(int width, int height) {
+namespace {
+
+std::string open_tag(int width, int height, const std::string& extra = "") {
   const std::string w = std::to_string(width), h = std::to_string(height);
   return "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + w + "\" height=\"" + h +
-         "\" viewBox=\"0 0 " + w + " " + h +
-         "\" font-family=\"Helvetica, Arial, sans-serif\" font-size=\"12\">\n"
-         "<rect width=\"" +
-         w + "\" height=\"" + h + "\" fill=\"white\"/>\n";
+         "\" viewBox=\"0 0 " + w + " " + h + "\"" + extra +
+         " font-family=\"Helvetica, Arial, sans-serif\" font-size=\"12\">\n";
 }
 
-std::string side_by_side(const std::vector<std::string>& documents, int gap) {
+constexpr std::string_view kRoot = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"";
+constexpr std::string_view kWide = "<svg class=\"pg-wide\"", kNarrow = "<svg class=\"pg-narrow\"";
+
+// What follows the opening tag of a document of open() up to its closing tag: the background and
+// the drawing.
+std::string body_of(const std::string& document) {
+  const std::size_t tag_end = document.find(">\n");
+  const std::size_t close = document.rfind("</svg>");
+  if (document.rfind(kRoot, 0) != 0 || tag_end == std::string::npos ||
+      close == std::string::npos || close < tag_end) {
+    throw Error("svg: a figure is not an SVG document of svg::open()");
+  }
+  return document.substr(tag_end + 2, close - tag_end - 2);
+}
+
+// The content of the nested <svg> that starts with `marker` in a responsive() document, up to
+// its closing tag (which precedes `end`).
+std::string nested_body(const std::string& document, std::string_view marker,
+                        std::string_view end) {
+  const std::size_t at = document.find(marker);
+  const std::size_t tag_end = at == std::string::npos ? at : document.find(">\n", at);
+  const std::size_t stop = tag_end == std::string::npos ? tag_end : document.find(end, tag_end);
+  if (stop == std::string::npos) throw Error("svg: a figure is not a responsive SVG document");
+  const std::size_t close = document.rfind("</svg>\n", stop);
+  return document.substr(tag_end + 2, close - tag_end - 2);
+}
+
+constexpr std::string_view kFigureClass = " class=\"pg-fig ";
+
+bool is_responsive(const std::string& document) {
+  const std::size_t tag_end = document.find(">\n");
+  return document.rfind(kRoot, 0) == 0 &&
+         document.substr(0, tag_end).find(kFigureClass) != std::string::npos;
+}
+
+// The narrow layout's size, and its aspect ratio, which a page that sizes the figure to its width
+// (height:auto) keeps: the root's view box has the wide one's.
+std::string switch_rules(const std::string& name, int width, int height) {
+  const std::string w = std::to_string(width), h = std::to_string(height);
+  return "svg." + name + "{width:" + w + "px;height:" + h + "px;aspect-ratio:" + w + "/" + h +
+         "}svg." + name + " svg.pg-wide{display:none}svg." + name +
+         " svg.pg-narrow{display:inline}";
+}
+
+}  // namespace
+
+std::string open(int width, int height) {
+  return open_tag(width, height) + "<rect width=\"" + std::to_string(width) + "\" height=\"" +
+         std::to_string(height) + "\" fill=\"white\"/>\n";
+}
+
+std::pair<int, int> size_of(const std::string& document) {
+  int w = 0, h = 0;
+  if (document.rfind(kRoot, 0) != 0 ||
+      std::sscanf(document.c_str() + kRoot.size(), "%d\" height=\"%d\"", &w, &h) != 2) {
+    throw Error("svg: a figure is not an SVG document of svg::open()");
+  }
+  return {w, h};
+}
+
+std::string responsive(const std::string& wide, const std::string& narrow) {
+  const auto [w, h] = size_of(wide);
+  const auto [nw, nh] = size_of(narrow);
+  const std::string wide_body = body_of(wide), narrow_body = body_of(narrow);
+  std::array<char, 24> id{};
+  std::snprintf(id.data(), id.size(), "pg-f%016llx",
+                static_cast<unsigned long long>(fnv1a64(wide_body + narrow_body)));
+  const std::string name = id.data();
+  const std::string box = " x=\"0\" y=\"0\" width=\"" + std::to_string(w) + "\" height=\"" +
+                          std::to_string(h) + "\" preserveAspectRatio=\"none\" viewBox=\"0 0 ";
+  return open_tag(w, h,
+                  " preserveAspectRatio=\"none\" class=\"pg-fig " + name + "\" data-narrow=\"" +
+                      std::to_string(nw) + " " + std::to_string(nh) + "\"") +
+         "<style>svg." + name + " svg.pg-narrow{display:none}@media (max-width:" +
+         std::to_string(w - 1) + "px){" + switch_rules(name, nw, nh) + "}</style>\n" +
+         std::string(kWide) + box + std::to_string(w) + " " + std::to_string(h) + "\">\n" +
+         wide_body + "</svg>\n" + std::string(kNarrow) + " display=\"none\"" + box +
+         std::to_string(nw) + " " + std::to_string(nh) + "\">\n" + narrow_body + "</svg>\n</svg>\n";
+}
+
+Layouts layouts(const std::string& document) {
+  if (!is_responsive(document)) {
+    body_of(document);  // checks it
+    return {document, document};
+  }
+  const auto [w, h] = size_of(document);
+  const std::size_t at = document.find("data-narrow=\"");
+  int nw = 0, nh = 0;
+  if (at == std::string::npos || std::sscanf(document.c_str() + at + 13, "%d %d", &nw, &nh) != 2) {
+    throw Error("svg: a figure is not a responsive SVG document");
+  }
+  return {open_tag(w, h) + nested_body(document, kWide, kNarrow) + "</svg>\n",
+          open_tag(nw, nh) + nested_body(document, kNarrow, "</svg>\n</svg>") + "</svg>\n"};
+}
+
+std::string switched_below(const std::string& document, int below) {
+  if (!is_responsive(document)) return document;
+  // responsive() writes one "@media (max-width:Npx)" in its <style>: N becomes below − 1.
+  constexpr std::string_view kQuery = "@media (max-width:";
+  const std::size_t style_end = document.find("</style>");
+  const std::size_t at = document.find(kQuery);
+  const std::size_t end = at == std::string::npos ? at : document.find("px)", at);
+  if (end == std::string::npos || end > style_end) {
+    throw Error("svg: a figure is not a responsive SVG document");
+  }
+  std::string out = document;
+  out.replace(at + kQuery.size(), end - at - kQuery.size(), std::to_string(std::max(0, below - 1)));
+  return out;
+}
+
+namespace {
+
+// Documents of open() side by side (or stacked), `gap` pixels apart, as one document of open().
+std::string arranged(const std::vector<std::string>& documents, int gap, bool stacked) {
   std::string body;
   int width = 0, height = 0;
   for (const std::string& document : documents) {
-    // open() writes the size first and the white background right after the opening tag.
-    int w = 0, h = 0;
-    const std::size_t tag_end = document.find(">\n");
-    const std::size_t background = document.find("/>\n", tag_end);
-    const std::size_t close = document.rfind("</svg>");
-    if (document.rfind("<svg ", 0) != 0 || tag_end == std::string::npos ||
-        background == std::string::npos || close == std::string::npos ||
-        std::sscanf(document.c_str(), "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" "
-                                      "height=\"%d\"", &w, &h) != 2) {
-      throw Error("side_by_side: a figure is not an SVG document of svg::open()");
-    }
-    if (width > 0) width += gap;
-    body += "<g transform=\"translate(" + std::to_string(width) + " 0)\">\n" +
-            document.substr(background + 3, close - background - 3) + "</g>\n";
-    width += w;
-    height = std::max(height, h);
+    const auto [w, h] = size_of(document);
+    const std::string content = body_of(document);
+    // open() writes its white background right after the opening tag: drop it.
+    const std::size_t background = content.find("/>\n");
+    int& along = stacked ? height : width;
+    if (along > 0) along += gap;
+    body += "<g transform=\"translate(" + std::to_string(stacked ? 0 : width) + " " +
+            std::to_string(stacked ? height : 0) + ")\">\n" + content.substr(background + 3) +
+            "</g>\n";
+    along += stacked ? h : w;
+    int& across = stacked ? width : height;
+    across = std::max(across, stacked ? w : h);
   }
   return open(width, height) + body + "</svg>\n";
+}
+
+}  // namespace
+
+std::string side_by_side(const std::vector<std::string>& documents, int gap) {
+  std::vector<std::string> wide, narrow;
+  bool any_responsive = false;
+  for (const std::string& document : documents) {
+    any_responsive = any_responsive || is_responsive(document);
+    Layouts both = layouts(document);
+    wide.push_back(std::move(both.wide));
+    narrow.push_back(std::move(both.narrow));
+  }
+  const std::string row = arranged(wide, gap, false);
+  if (!any_responsive && size_of(row).first <= kNarrowWidth) return row;
+  return responsive(row, arranged(narrow, gap, true));
 }
 
 std::string clipped(const Box& b, const std::string& content) {

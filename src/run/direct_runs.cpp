@@ -1,5 +1,6 @@
 #include "physgrad/run/direct_runs.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -110,7 +111,11 @@ DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Object
   const MinimizeSummary& s = result.summary;
   // The final entry also holds the extra columns of the last iterate (e.g. its simulator passes).
   nlohmann::json final = {{"loss", s.loss}, {"x", std::vector<double>(s.x.begin(), s.x.end())}};
-  if (columns) final.update(columns(s.history.back()));
+  if (columns) {  // with the whole run's work, that of a last step that failed included
+    IterationRecord last = s.history.back();
+    last.counts = s.counts;
+    final.update(columns(last));
+  }
   context.add_run({{"label", rule.label},
                    {"optimizer", rule.id},
                    {"params", params},
@@ -169,9 +174,17 @@ std::string loss_curves_svg(const std::vector<DirectResult>& results, const std:
     }
     line.markers = line.x.size() <= 40;
     line.steps = static_cast<bool>(x_of);
-    // Dashed: PG through a numerical local inverse (solid: analytic or time-reversal inverse).
+    // Dashed: PG through a numerical local inverse (solid: analytic or time-reversal inverse),
+    // each inverse with a marker shape of its own, so that PG's variants differ beyond colour.
     const std::string inverse = result.rule.extra_params.value("inverse", std::string());
     line.dashed = !inverse.empty() && inverse != "analytic" && inverse != "time_reversal";
+    if (!inverse.empty()) {
+      static const std::vector<std::string> kInverses = {"analytic", "time_reversal", "lbfgs",
+                                                         "gn", "ig"};
+      const auto at = std::find(kInverses.begin(), kInverses.end(), inverse);
+      line.markers = true;
+      line.shape = 1 + static_cast<int>(at - kInverses.begin()) % 4;
+    }
     // A run that diverged is marked at its end instead of stretching the loss axis.
     const MinimizeSummary& s = result.summary;
     if (s.termination == Termination::kNumericalFailure || s.loss > result.initial_loss) {

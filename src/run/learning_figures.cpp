@@ -8,6 +8,7 @@
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
+#include "physgrad/report/significant.hpp"
 #include "physgrad/report/svg_document.hpp"
 
 namespace physgrad::experiments {
@@ -106,6 +107,21 @@ RunContext::Figure LearningSweep::metric_figure(
     // median and band change in steps.
     s.steps = n > 1 && progress == Progress::kTime;
     if (log_y) mark_if_diverging(s);
+    // Where a pretrained run switched from Adam to its rule (it did when it ran past it).
+    const nlohmann::json switch_at = first.params.value("pretrain_iterations", nlohmann::json());
+    if (switch_at.is_number_integer() && first.summary.iterations > switch_at.get<long long>()) {
+      for (const TrainingRecord& r : first.summary.history) {
+        if (r.iteration < switch_at.get<long long>()) continue;
+        const double x = progress == Progress::kTime    ? r.train_seconds
+                         : progress == Progress::kEpoch ? r.epoch
+                                                        : static_cast<double>(r.iteration);
+        double y = NAN;  // the drawn curve where the rule took over
+        for (std::size_t i = 0; i < s.x.size() && s.x[i] <= x; ++i) y = s.y[i];
+        s.marks.push_back({x, y, "switched from Adam after iteration " +
+                                     std::to_string(switch_at.get<long long>())});
+        break;
+      }
+    }
     if (stopped > 0) {
       s.end_label = n > 1 ? std::to_string(stopped) + " of " + std::to_string(n) +
                                 " runs stopped: not finite"
@@ -251,6 +267,7 @@ void LearningSweep::add_tables() const {
     }
     losses.header.insert(losses.header.end(), {"median", "worst", "median / lowest"});
     std::vector<double> medians;
+    std::vector<Spread> spreads;  // the digits of a row and of its ratio follow its spread
     for (const std::string& id : ids) {
       // A pretrained run none of whose seeds switched is Adam's, and reads so.
       bool switched = pretrained_rule(id).empty();
@@ -263,7 +280,14 @@ void LearningSweep::add_tables() const {
                    : learning_run_label(kPretrainingRule) + " (never switched to " +
                          learning_run_label(pretrained_rule(id)) + ")";
       std::vector<std::string> row = {label}, saturated = {label};
+      // A run that failed, diverged or never switched is shown, never counted in a median.
       std::vector<double> values;
+      for (const long long seed : seeds) {
+        const LearningResult* r = find(tag, id, seed);
+        if (r != nullptr && credited(*r)) values.push_back(final_test_loss(*r));
+      }
+      spreads.push_back(spread_of(values));
+      const auto shown = [&](double v) { return with_digits(v, digits_for(spreads.back())); };
       for (const long long seed : seeds) {
         const LearningResult* r = find(tag, id, seed);
         if (r == nullptr) {
@@ -271,22 +295,17 @@ void LearningSweep::add_tables() const {
           saturated.push_back("–");
           continue;
         }
-        // A run that failed, diverged or never switched is shown, never counted in a median.
-        const bool counts = credited(*r);
-        if (counts) values.push_back(final_test_loss(*r));
-        row.push_back(format_value(final_test_loss(*r)) +
-                      (counts ? std::string()
-                       : r->params.value("switched", true) == false
-                           ? " (never switched)"
-                           : " (" + to_string(*r->summary.termination) + ")"));
+        row.push_back(shown(final_test_loss(*r)) +
+                      (credited(*r)                                ? std::string()
+                       : r->params.value("switched", true) == false ? " (never switched)"
+                                                    : " (" + to_string(*r->summary.termination) + ")"));
         if (has_saturation) {
           saturated.push_back(format_value(r->summary.history.back().extras["saturated_fraction"]));
         }
       }
       medians.push_back(median(values));
-      row.push_back(format_value(medians.back()));
-      row.push_back(values.empty() ? "–"
-                                   : format_value(*std::max_element(values.begin(), values.end())));
+      row.push_back(shown(medians.back()));
+      row.push_back(values.empty() ? "–" : shown(*std::max_element(values.begin(), values.end())));
       losses.rows.push_back(std::move(row));
       saturation.rows.push_back(std::move(saturated));
     }
@@ -295,10 +314,15 @@ void LearningSweep::add_tables() const {
     for (const double m : medians) {
       if (std::isfinite(m)) lowest = std::min(lowest, m);
     }
+    // A finite median as a multiple of the lowest, with the digits their spreads support.
+    const auto multiple = [&](std::size_t k) {
+      const auto best = std::find(medians.begin(), medians.end(), lowest) - medians.begin();
+      return with_digits(medians[k] / lowest, ratio_digits(spreads[k], spreads[best]));
+    };
     for (std::size_t k = 0; k < losses.rows.size(); ++k) {
       losses.rows[k].push_back(!std::isfinite(medians[k]) ? "–"
                                : medians[k] == lowest     ? "best"
-                                                          : "×" + format_value(medians[k] / lowest));
+                                                          : "×" + multiple(k));
     }
     losses.title += "; the last column marks the lowest median (best) and gives the others as "
                     "multiples of it. A run in brackets (failed, diverged, never switched) counts "

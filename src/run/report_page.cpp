@@ -1,12 +1,64 @@
 #include "physgrad/run/report_page.hpp"
 
+#include <chrono>
+#include <ctime>
 #include <sstream>
 
 #include "physgrad/report/html_report.hpp"
+#include "physgrad/run/run_folder.hpp"
 
 namespace physgrad::experiments {
 
 namespace {
+
+// "2026-11-27 08:40 UTC": now.
+std::string report_time_now() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm utc{};
+  ::gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M UTC", &utc);
+  return text;
+}
+
+// The links to the folder's files and to the index of the folder above (`physgrad report`).
+std::vector<HtmlLink> report_links(const RunContext& context) {
+  std::vector<HtmlLink> links = {{"metrics.csv (every evaluation)", "metrics.csv"},
+                                 {"summary.json (how each run ended)", kSummaryFile},
+                                 {"config.json (the settings)", kConfigFile}};
+  if (!context.networks().empty()) {
+    links.push_back({"networks.json (the trained networks)", "networks.json"});
+  }
+  links.push_back({"index of the run folders (physgrad report)", "index.html", true});
+  return links;
+}
+
+// A setting's value as the table of options shows it: lists joined by commas, "unset" for none.
+std::string report_option_text(const nlohmann::json& value) {
+  if (value.is_null()) return "unset";
+  if (value.is_string()) return value.get<std::string>();
+  if (!value.is_array()) return format_number(value);
+  std::string out;
+  for (const nlohmann::json& item : value) {
+    if (!out.empty()) out += ',';
+    out += report_option_text(item);
+  }
+  return out;
+}
+
+// Every option with the value the run had and the default, those changed first marked.
+HtmlTable report_options_table(const Experiment& experiment, const Settings& settings) {
+  HtmlTable table{{"option", "value", "default"},
+                  {},
+                  "The options of this run (config.json holds them as given to rerun it); the "
+                  "default is the value when the option is not given"};
+  for (const OptionSpec& spec : all_options(experiment)) {
+    const nlohmann::json value = settings.json().value(spec.name, nlohmann::json());
+    table.rows.push_back({"--" + spec.name, report_option_text(value),
+                          spec.default_text.empty() ? "unset" : spec.default_text});
+  }
+  return table;
+}
 
 bool is_learning(const RunContext& context) {
   return !context.runs().empty() && context.runs().front().contains("seconds_per_part");
@@ -53,6 +105,10 @@ std::string format_number(const nlohmann::json& value) {
 std::string report_page_html(const Experiment& experiment, const Settings& settings,
                              const RunContext& context, const std::string& command_line) {
   std::vector<HtmlSection> sections;
+  // What the page is of, when and by what, and the links to the folder's files.
+  sections.push_back({"", "Written " + report_time_now() + " by physgrad " + PHYSGRAD_VERSION +
+                              "; the command and every option are under Settings at the end.",
+                      {}, {}, report_links(context)});
   // The message figure first, in a section of its own, with its sentence under it.
   HtmlSection message{"", "", {}, {}}, figures{"Figures", "", {}, {}};
   for (const RunContext::Figure& figure : context.figures()) {
@@ -77,10 +133,15 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
   sections.push_back(std::move(results));
 
   if (!figures.figures.empty()) sections.push_back(std::move(figures));
-  sections.push_back({"Every run", "metrics.csv in this folder has every evaluation of every run.",
-                      {runs_table(context)}, {}});
-  sections.push_back({"Settings", "Command: " + command_line + "\n\n" + settings.json().dump(),
-                      {}, {}});
+  sections.push_back({"Every run", "", {runs_table(context)}, {},
+                      {{"metrics.csv: every evaluation of every run", "metrics.csv"}}});
+  sections.push_back({"Settings",
+                      "physgrad " + std::string(PHYSGRAD_VERSION) + ", report written " +
+                          report_time_now() + ".\n\nCommand: " +
+                          (command_line.empty() ? "(not recorded)" : command_line),
+                      {report_options_table(experiment, settings)},
+                      {},
+                      {{"config.json", kConfigFile}}});
   return html_report(experiment.name() + " — physgrad", experiment.description(), sections);
 }
 

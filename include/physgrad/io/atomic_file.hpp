@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string_view>
 
 #include "physgrad/io/folder_handle.hpp"
@@ -17,6 +18,12 @@ void write_file_atomic(const FolderHandle& folder, std::string_view name,
                        std::string_view content);
 // The same for the file at `path`, in the folder its parent path opens.
 void write_file_atomic(const std::filesystem::path& path, std::string_view content);
+// The same with the content given in pieces, for one too large to hold at once: `produce` calls
+// its argument with each piece in turn. When `produce` throws, the temporary file is removed and
+// the exception passes on; the target keeps its old content.
+using ContentSink = std::function<void(std::string_view)>;
+void write_file_atomic(const std::filesystem::path& path,
+                       const std::function<void(const ContentSink&)>& produce);
 
 // True for the name of a temporary file that write_file_atomic() makes next to its target
 // (".NAME.tmpPID-N"); one left behind by a killed process can be removed by the folder's owner.

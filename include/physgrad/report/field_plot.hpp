@@ -77,7 +77,8 @@ struct FieldPanelsOptions {
 };
 
 // The panels side by side in one row, at equal aspect, with one colour range spanning all
-// of them and one colour bar. Throws Error for no panel or an invalid grid.
+// of them and one colour bar; in its narrow layout (svg::responsive) in rows of as many as fit
+// svg::kNarrowWidth. Throws Error for no panel or an invalid grid.
 std::string field_panels_svg(const std::vector<FieldPanel>& panels,
                              const FieldPanelsOptions& options);
 

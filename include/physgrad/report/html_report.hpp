@@ -1,8 +1,9 @@
-// html_report — one self-contained HTML5 page of sections with text, captioned tables and inline
-// SVG figures; no external resources and no script. Readable down to phone widths: wide tables
-// scroll in their own box, and figures scale to the page down to the width at which their
-// smallest text is 11 px, below which they scroll in their own box too. Every text goes through xml_escape and
-// every link through local_href.
+// html_report — one self-contained HTML5 page of sections with text, links, captioned tables and
+// inline SVG figures; no external resources and no script. Readable down to phone widths: a
+// figure scales with the page down to the width w·11/s at which its smallest text (s px) is
+// 11 px, and one with a narrow layout (svg::responsive) switches to it below that; tables become
+// one block per row ("header: value" lines) below 700 px, and what is still wider scrolls in
+// its own box. Every text goes through xml_escape and every link through local_href.
 #pragma once
 
 #include <string>
@@ -33,11 +34,20 @@ struct HtmlFigure {
   std::string row{};
 };
 
+// A link in a section's line of links: to a file inside the page's folder (a path as for
+// HtmlTable::links), or with `up`, to one in the folder above it (e.g. the index of the run
+// folders, "../index.html").
+struct HtmlLink {
+  std::string text, path;
+  bool up = false;
+};
+
 struct HtmlSection {
   std::string heading;
   std::string text;  // plain text; blank lines separate paragraphs
   std::vector<HtmlTable> tables;
   std::vector<HtmlFigure> figures;
+  std::vector<HtmlLink> links{};  // one line of links under the heading
 };
 
 // The address of a file inside the page's folder, for href and src: "./" and the path's
@@ -51,5 +61,24 @@ std::string local_href(std::string_view relative_path);
 // header's, a link is not a path local_href takes, or a colour is not "#rrggbb".
 std::string html_report(const std::string& title, const std::string& intro,
                         const std::vector<HtmlSection>& sections);
+
+// The page in parts, in the order they are written, for a page too large to hold at once
+// (html_report() is their concatenation): the page's start (head, title, intro); per section its
+// opening (heading, links, text), its tables — each whole (html_table), or as its opening
+// (caption and header), its rows written in turns and kHtmlTableClose — its figures and
+// kHtmlSectionClose; then kHtmlPageClose. `where` names the table in errors ("section 'Runs'").
+std::string html_page_open(const std::string& title, const std::string& intro);
+// Plain text as paragraphs (<p>), blank lines separating them.
+std::string html_paragraphs(std::string_view text);
+std::string html_section_open(const HtmlSection& section);
+std::string html_table(const HtmlTable& table, const std::string& where);
+std::string html_table_open(const HtmlTable& table);
+std::string html_table_rows(const HtmlTable& table, const std::string& where);
+inline constexpr std::string_view kHtmlTableClose = "</tbody>\n</table></div>\n";
+// The figures in rows (HtmlFigure::row); a responsive figure carries the rule that switches it to
+// its narrow layout where the page is narrower than the wide one (its margins included).
+std::string html_figures(const std::vector<HtmlFigure>& figures);
+inline constexpr std::string_view kHtmlSectionClose = "</section>\n";
+inline constexpr std::string_view kHtmlPageClose = "</body>\n</html>\n";
 
 }  // namespace physgrad

@@ -50,6 +50,12 @@ std::string tick_label(double v, double step);
 double widest_label(const Axis& axis);
 double left_margin(const Axis& ay, bool has_y_label);
 double top_margin(bool has_title);
+// The room above the plot box for `title` in a figure `width` pixels wide: a title wider than the
+// figure is broken into two lines (title_lines).
+double top_margin(const std::string& title, int width);
+// The lines a title is drawn in: one, or two broken at the space nearest its middle when it is
+// wider than the figure.
+std::vector<std::string> title_lines(const std::string& title, int width);
 inline constexpr double kBottomMargin = 52;
 
 // Light grid lines at the labelled ticks inside the box.
@@ -59,8 +65,9 @@ struct AxisTitles {
   std::string title, x_label, y_label;
 };
 
-// Frame, tick marks (outside the box), tick labels, the title centred above the box and the axis
-// labels. `width` is the figure's width (the title is centred in it).
+// Frame, tick marks (outside the box), tick labels, the title centred above the box (in two
+// lines when wider than the figure) and the axis labels. `width` is the figure's width (the
+// title is centred in it).
 std::string axes(int width, const svg::Box& box, const Axis& ax, const Axis& ay,
                  const AxisTitles& titles);
 

@@ -38,13 +38,19 @@ std::string band_path(const std::vector<double>& x, const std::vector<double>& l
                       const std::vector<double>& high, const Scale& sx, const Scale& sy,
                       const Box& bounds);
 
-// How many of the earlier series `pieces` retraces (0: none). Two series coincide when they
-// have as many points and each lies within half a pixel of the other's.
-int retraces(const std::vector<Polyline>& pieces,
-             const std::vector<std::vector<Polyline>>& earlier);
-// The stroke-dasharray of the k-th dash pattern: k = 0 the usual dashes of a dashed series,
-// k ≥ 1 the patterns of series that retrace k earlier ones ("2 3", "9 3 2 3", …).
+// The positions in `earlier` of the series `pieces` retraces (empty: none): those whose every
+// point inside `bounds` lies within 1.5 pixels of its lines there, so that drawn over them it
+// would hide them.
+std::vector<std::size_t> retraced(const std::vector<Polyline>& pieces,
+                                  const std::vector<std::vector<Polyline>>& earlier,
+                                  const Box& bounds);
+// The stroke-dasharray of the k-th dash pattern (cycled): k = 0 the usual dashes of a dashed
+// series, the others for series told apart from those they retrace ("2 3", "9 3 2 3", …).
+inline constexpr int kDashPatterns = 8;
 std::string dash_pattern(int k);
+// The first dash pattern not in `taken` (the patterns of the series one retraces; −1 for solid
+// ones), or 0 when every pattern is taken.
+int free_dash_pattern(const std::vector<int>& taken);
 
 // The box grown by a few pixels: geometry is cut to it, so that every coordinate stays inside
 // the figure, and a clip path trims it to the box.

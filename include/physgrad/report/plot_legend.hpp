@@ -16,6 +16,7 @@ struct LegendEntry {
   std::string dashes{};  // the line's stroke-dasharray; empty: solid
   bool dot = false;   // a dot on the swatch (markers at data points)
   bool band = false;  // a shaded patch behind the swatch (a min–max band)
+  int shape = -1;     // a marker shape on the swatch (plot_marks.hpp; 0 is the dot); -1: none
 };
 
 // The cells (square, `cell` pixels) of a box that hold drawn data.
@@ -48,7 +49,8 @@ double legend_entry_width(const std::vector<LegendEntry>& entries);
 // The legend inside `box` at the first position (top right, top left, bottom right, bottom
 // left, top centre, bottom centre, middle right, middle left) that covers no occupied cell;
 // when `inside` is false or every position covers data, below the plot from y = below_top, in
-// as many columns as fit in `width`.
+// as many columns as fit in `width`; there a label wider than the figure is wrapped at spaces
+// onto further lines.
 LegendLayout legend(const std::vector<LegendEntry>& entries, const svg::Box& box,
                     const Occupancy& occupied, double below_top, int width, bool inside = true);
 

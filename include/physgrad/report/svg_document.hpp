@@ -4,6 +4,7 @@
 
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "physgrad/text.hpp"  // xml_escape
@@ -43,9 +44,30 @@ std::string dot(const Point& p);
 // The document's opening tag (width × height, viewBox from 0) with a white background; close
 // it with "</svg>\n".
 std::string open(int width, int height);
-// Documents of open() placed side by side, tops aligned, `gap` pixels apart, as one document.
-// Throws Error for a text that is not such a document.
+// Documents of open() or responsive() placed side by side, tops aligned, `gap` pixels apart, as
+// one document; where any is responsive, a responsive one whose narrow layout stacks the
+// panels' narrow layouts. Throws Error for a text that is not such a document.
 std::string side_by_side(const std::vector<std::string>& documents, int gap = 12);
+
+// A figure in two layouts, documents of open(): `wide` as it is, and `narrow` (at most
+// kNarrowWidth pixels wide: panels stacked, legend below) where the screen is narrower than the
+// wide one. One root <svg> of the wide size holds both as nested <svg>s; a <style> inside it
+// shows the narrow one and resizes the root where the viewport is narrower than the wide one (a
+// page that embeds it may move that width: switched_below). Without CSS the wide one shows.
+// Throws Error for a text that is not a document of open().
+inline constexpr int kNarrowWidth = 380;
+std::string responsive(const std::string& wide, const std::string& narrow);
+// The two layouts of a document (for a document of open(), itself twice), as documents of
+// open(). Throws Error for a text that is neither.
+struct Layouts {
+  std::string wide, narrow;
+};
+Layouts layouts(const std::string& document);
+// A responsive() document that switches to its narrow layout where the viewport is narrower than
+// `below` pixels (e.g. embedded in a page with margins); any other document as it is.
+std::string switched_below(const std::string& document, int below);
+// The width and height of a document of open() or responsive() (its root's).
+std::pair<int, int> size_of(const std::string& document);
 
 // `content` clipped to the box. The clip path's id derives from what it clips, so figures
 // embedded side by side in one HTML page do not pick up each other's clip paths.
