@@ -109,7 +109,8 @@ RunContext::Figure LearningSweep::metric_figure(
     if (log_y) mark_if_diverging(s);
     // Where a pretrained run switched from Adam to its rule (it did when it ran past it).
     const nlohmann::json switch_at = first.params.value("pretrain_iterations", nlohmann::json());
-    if (switch_at.is_number_integer() && first.summary.iterations > switch_at.get<long long>()) {
+    if (switch_at.is_number_integer() && first.params.value("switched", true) &&
+        first.summary.iterations > switch_at.get<long long>()) {
       for (const TrainingRecord& r : first.summary.history) {
         if (r.iteration < switch_at.get<long long>()) continue;
         const double x = progress == Progress::kTime    ? r.train_seconds

@@ -62,7 +62,7 @@ std::string differing_options(const json& settings, const json& defaults) {
   return index_clipped(std::move(out), kIndexMaxName);
 }
 
-// "1 of 4 failed, 1 did not converge"; empty when every run counts.
+// "1 of 4 failed, 1 did not converge, 1 never switched from Adam"; empty when every run counts.
 std::string apart_text(const ComparedGroup& g) {
   std::string out;
   if (g.failed > 0) out = std::to_string(g.failed) + " of " + std::to_string(g.runs) + " failed";
@@ -70,6 +70,11 @@ std::string apart_text(const ComparedGroup& g) {
     out += (out.empty() ? std::to_string(g.unreached) + " of " + std::to_string(g.runs)
                         : ", " + std::to_string(g.unreached)) +
            " did not converge";
+  }
+  if (g.unswitched > 0) {
+    out += (out.empty() ? std::to_string(g.unswitched) + " of " + std::to_string(g.runs)
+                        : ", " + std::to_string(g.unswitched)) +
+           " never switched from Adam";
   }
   return out;
 }

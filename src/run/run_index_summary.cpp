@@ -279,6 +279,8 @@ void add_index_compared(IndexedFolder& folder, const std::vector<RunRecord>& run
       seconds.push_back(run->seconds);
       if (index_failed_end(run->termination)) {
         ++group.failed;
+      } else if (run->params.is_object() && run->params.value("switched", true) == false) {
+        ++group.unswitched;
       } else if (cost && !index_converged_end(run->termination)) {
         ++group.unreached;
       } else {

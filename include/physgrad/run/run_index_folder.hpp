@@ -31,10 +31,13 @@ struct IndexedMessage {
 struct ComparedGroup {
   std::string label, rule;
   std::size_t runs = 0, failed = 0, unreached = 0;
+  std::size_t unswitched = 0;  // pretrained runs whose rule never took over: Adam's runs
   Spread metric, seconds;
   std::string ended;         // the distinct terminations, in the order first seen
   long long switched_at = -1;  // a pretrained run's last Adam iteration, when it switched
-  bool ranked() const { return failed == 0 && unreached == 0 && metric.count > 0; }
+  bool ranked() const {
+    return failed == 0 && unreached == 0 && unswitched == 0 && metric.count > 0;
+  }
 };
 
 // A row of the table of every run: the runs of one label and setting, medians over them.
