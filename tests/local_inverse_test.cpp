@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "physgrad/error.hpp"
-#include "physgrad/inversion/local_inverse.hpp"
+#include "physgrad/optim/local_inverse.hpp"
 #include "physgrad/physics/comparison_toy.hpp"
 #include "physgrad/physics/heat_diffusion.hpp"
 #include "test_problems.hpp"

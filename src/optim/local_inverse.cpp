@@ -1,4 +1,4 @@
-#include "physgrad/inversion/local_inverse.hpp"
+#include "physgrad/optim/local_inverse.hpp"
 
 #include <cmath>
 #include <memory>
