@@ -45,7 +45,7 @@ std::string format_number(double value) {
 // Decimal notation, the one form of a number on the command line and in config files: an
 // optional sign, digits with at most one point (reals), and for reals an optional exponent
 // (e or E, an optional sign, digits). What strtod would read besides — hexadecimal (0x10,
-// 0x1p4), inf, nan, leading white space — is not a number here.
+// 0x1p4), inf, nan, white space — is not a number here.
 bool is_decimal(const std::string& item, bool whole) {
   std::size_t at = item.empty() || (item[0] != '+' && item[0] != '-') ? 0 : 1;
   const auto digits = [&item, &at] {
@@ -67,8 +67,11 @@ bool is_decimal(const std::string& item, bool whole) {
   return at == item.size();
 }
 
+// A number is exactly its decimal text: blanks around it ('5 ', ' 5') make it no number, as
+// any other character would (a list's entries are cut at the commas and their blanks dropped
+// before they get here).
 double parse_real(const OptionSpec& spec, const std::string& text) {
-  const std::string item = trim(text);
+  const std::string& item = text;
   if (!is_decimal(item, false)) {
     throw Error(spec.flag() + ": " + in_quotes(text) +
                 " is not a number (decimal, like 16, -2.5 or 1e-3)");
@@ -92,7 +95,7 @@ double parse_real(const OptionSpec& spec, const std::string& text) {
 }
 
 long long parse_integer(const OptionSpec& spec, const std::string& text) {
-  const std::string item = trim(text);
+  const std::string& item = text;
   if (!is_decimal(item, true)) {
     throw Error(spec.flag() + ": " + in_quotes(text) +
                 " is not a whole number (decimal digits, like 16)");
