@@ -14,9 +14,9 @@ namespace physgrad {
 // that the other ranks have not all joined after `timeout_seconds` throws RanksNotAnswering
 // (communicator.hpp) and breaks the communicator; destroyed broken, it ends the job
 // (MPI_Abort, exit code 1) instead of waiting in MPI_Finalize for the missing rank. A large
-// collective (16384 doubles or more) runs blocking once every rank has joined it; should it
-// still last longer than the limit (a rank stopped inside it), a watch thread ends the process
-// (exit code 2, one line on stderr).
+// collective (1024 doubles or more) moves its data by the blocking call once every rank has
+// joined it; should that still last longer than the limit (a rank stopped inside it), a watch
+// thread ends the process (exit code 2, one line on stderr).
 std::shared_ptr<Communicator> mpi_world_communicator(int* argc, char*** argv,
                                                      double timeout_seconds = kDefaultRankTimeout);
 
