@@ -45,8 +45,8 @@ pid_t rank_pid(pid_t launcher, int rank) {
     pid_t parent = 0;
     rest >> state >> parent;
     if (parent != launcher) continue;
-    std::ifstream environ(entry.path() / "environ");
-    for (std::string variable; std::getline(environ, variable, '\0');) {
+    std::ifstream variables(entry.path() / "environ");
+    for (std::string variable; std::getline(variables, variable, '\0');) {
       if (variable == wanted) return static_cast<pid_t>(std::stol(name));
     }
   }
