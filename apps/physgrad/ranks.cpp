@@ -28,7 +28,7 @@ std::shared_ptr<Communicator>& current() {
   return communicator;
 }
 
-double& timeout() {
+double& time_limit() {
   static double seconds = kDefaultRankTimeout;
   return seconds;
 }
@@ -58,12 +58,12 @@ Ranks::Ranks([[maybe_unused]] int* argc, [[maybe_unused]] char*** argv) {
 #ifdef PHYSGRAD_WITH_MPI
   if (launched_by_mpi()) {
     try {
-      timeout() = rank_timeout_seconds();
+      time_limit() = rank_timeout_seconds();
     } catch (const Error& e) {
       std::cerr << "physgrad: error: " + one_line(e.what()) + "\n";
       std::exit(kErrorExit);  // before MPI_Init: the launcher ends the other ranks
     }
-    current() = mpi_world_communicator(argc, argv, timeout());
+    current() = mpi_world_communicator(argc, argv, time_limit());
   }
 #else
   // Several copies of a build without MPI would each train alone and race for the run folder.
@@ -93,7 +93,7 @@ std::string rank_prefix() {
 
 std::string rank_timeout_text() {
   std::ostringstream text;
-  text << timeout();
+  text << time_limit();
   return text.str();
 }
 
