@@ -103,7 +103,7 @@ bool same_on_all_ranks(Communicator& communicator, std::uint64_t hash);
 using RankCommand = std::vector<std::pair<std::string, std::string>>;
 // Checks, in one allgather of every rank's `command`, that all ranks were started alike; throws
 // Error on every rank naming the first entry that differs: "the ranks were not started alike:
-// --iters is 100 on rank 0 but 300 on rank 1; start every rank with the same command and
+// --iters is '100' on rank 0 but '300' on rank 1; start every rank with the same command and
 // settings". RanksNotAnswering when a rank does not take part within the time limit.
 void require_same_command(Communicator& communicator, const RankCommand& command);
 
