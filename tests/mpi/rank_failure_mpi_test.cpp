@@ -55,6 +55,11 @@ pid_t rank_pid(pid_t launcher, int rank) {
 
 class MpiRanks : public physgrad::testing::MpiFixture {
  protected:
+  void TearDown() override {
+    fs::remove(err_file());
+    MpiFixture::TearDown();
+  }
+
   // `first` on rank 0 and `second` on rank 1 (each "PROGRAM ARGS"), at most 120 s; the exit
   // code, stderr in `err` and the seconds it took in `took`.
   int run_two(const std::string& first, const std::string& second, std::string& err,
