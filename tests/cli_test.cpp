@@ -29,6 +29,9 @@ TEST_F(Cli, BadInputIsOneLineExitTwoAndWritesNothing) {
   expect_rejected("run scaled-toy --lr fast", "'fast'");
   expect_rejected("run scaled-toy --iters 0", "'0'");
   expect_rejected("run scaled-toy --iters 2.5", "'2.5'");
+  // A number is its text and nothing around it.
+  expect_rejected("run scaled-toy --iters '5 '", "--iters: '5 ' is not a whole number");
+  expect_rejected("run scaled-toy --lr ' 0.5'", "--lr: ' 0.5' is not a number");
   expect_rejected("run scaled-toy --alpha 1,0", "'0'");
   expect_rejected("run scaled-toy --start 1,2,3", "got 3");
   expect_rejected("run scaled-toy --start 0,0", "(0, 0)");
@@ -123,6 +126,7 @@ TEST_F(Cli, BadConfigFileIsOneLineExitTwoAndWritesNothing) {
       {"{\"lr\": 0.1,\n", "invalid JSON at line 2, column 0: "},
       {"[1, 2]", "expected a JSON object of option values, got [1,2]"},
       {R"({"lr": "1\n2"})", "--lr: '1\\x0a2' is not a number"},  // one line even so
+      {R"({"iters": "5 "})", "--iters: '5 ' is not a whole number"},
   };
   for (std::size_t i = 0; i < cases.size(); ++i) {
     const std::string path = write_config("bad" + std::to_string(i) + ".json", cases[i].first);

@@ -193,8 +193,13 @@ TEST(ExperimentSettings, NumbersAreDecimal) {
   EXPECT_EQ(read("lr", "2.5E-1").real("lr"), 0.25);
   EXPECT_EQ(read("lr", "1e+2").real("lr"), 100);
   EXPECT_EQ(read("iters", "+12").integer("iters"), 12);
-  EXPECT_EQ(read("iters", " 12 ").integer("iters"), 12);
+  // A list's entries are cut at the commas and the blanks around them dropped; a number alone
+  // is its text and nothing around it.
   EXPECT_EQ(read("start", "+1, -0.5e1 ").reals("start"), (std::vector<double>{1, -5}));
+  for (const std::string text : {" 12 ", "12 ", " 12", "12\t"}) {
+    EXPECT_THROW(read("iters", text), Error) << text;
+  }
+  EXPECT_THROW(read("lr", " 0.5"), Error);
   for (const std::string text : {"0x10", "0X1P4", "inf", "-Infinity", "nan", "1e", "1e+", ".",
                                  "+", "-.e1", "1.2.3", "١", "1 2", "\n5", "5f", "--5", "+-5"}) {
     EXPECT_THROW(read("lr", text), Error) << text;

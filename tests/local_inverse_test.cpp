@@ -1,18 +1,111 @@
 // The numerical local inverse's options: the tolerance relative to the start residual, the stall
 // test on an unreachable y, the gn inverse's cutoff on the singular values of an ill-conditioned
-// J (heat diffusion), the box, and the option checks.
+// J (heat diffusion), the box, and the option checks; every method reports converged only when
+// the tolerance was met, and refuses non-finite input.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "physgrad/error.hpp"
-#include "physgrad/inversion/local_inverse.hpp"
+#include "physgrad/optim/local_inverse.hpp"
 #include "physgrad/physics/comparison_toy.hpp"
 #include "physgrad/physics/heat_diffusion.hpp"
 #include "test_problems.hpp"
 
 namespace physgrad {
 namespace {
+
+// P(x) = 2x on R², with an inverse y/2 + offset and a time reversal R(y) = y/2 + curl·y⊙y (the
+// anchored reversal is exact for curl = 0, off by about curl·|Δy|² otherwise).
+class Doubling final : public Simulator {
+ public:
+  Doubling(double offset, double curl) : offset_(offset), curl_(curl) {}
+  std::string name() const override { return "doubling"; }
+  Index input_dim() const override { return 2; }
+  Index output_dim() const override { return 2; }
+  Matrix forward_batch(const Matrix& x, const Matrix& context) const override {
+    check_batch(x, context, "forward_batch");
+    return 2 * x;
+  }
+  Matrix vjp_batch(const Matrix& x, const Matrix& context, const Matrix& gy) const override {
+    check_batch(x, context, "vjp_batch");
+    return 2 * gy;
+  }
+  bool has_inverse() const override { return true; }
+  Vector inverse(const Vector& y, const Vector&, const Vector&) const override {
+    return (0.5 * y).array() + offset_;
+  }
+  bool has_time_reversal() const override { return true; }
+  Vector time_reversal(const Vector& y, const Vector&) const override {
+    return 0.5 * y + curl_ * y.cwiseProduct(y);
+  }
+
+ private:
+  double offset_, curl_;
+};
+
+TEST(LocalInverse, ClosedFormsAreConvergedOnlyWhenTheToleranceIsMet) {
+  const Vector x0{{0.0, 0.0}}, y{{3.0, -4.0}};  // ‖P(x₀) − y‖ = 5
+  const LocalInverseOptions analytic{.method = InverseMethod::kAnalytic};
+  const LocalInverseResult exact = local_inverse(Doubling(0, 0), y, x0, {}, analytic);
+  EXPECT_TRUE(exact.converged);
+  EXPECT_EQ(exact.residual, 0.0);
+  EXPECT_EQ(exact.evaluations, 2);
+  // An inverse that is off by 1 in each entry: residual 2√2, far above 1e-10·(1 + 5).
+  const LocalInverseResult off = local_inverse(Doubling(1, 0), y, x0, {}, analytic);
+  EXPECT_NEAR(off.residual, 2 * std::sqrt(2.0), 1e-12);
+  EXPECT_FALSE(off.converged);
+  // Off by 1e-9: 2.8e-9 misses the absolute test (6e-10) but meets the relative one
+  // (1e-8·5 = 5e-8), for which P(x₀) costs one more forward pass.
+  const LocalInverseResult close = local_inverse(Doubling(1e-9, 0), y, x0, {}, analytic);
+  EXPECT_TRUE(close.converged);
+  EXPECT_EQ(close.evaluations, 3);
+  LocalInverseOptions absolute_only = analytic;
+  absolute_only.relative_tolerance = 0;
+  EXPECT_FALSE(local_inverse(Doubling(1e-9, 0), y, x0, {}, absolute_only).converged);
+
+  const LocalInverseOptions reversal{.method = InverseMethod::kTimeReversal};
+  EXPECT_TRUE(local_inverse(Doubling(0, 0), y, x0, {}, reversal).converged);
+  const LocalInverseResult curled = local_inverse(Doubling(0, 0.1), y, x0, {}, reversal);
+  EXPECT_GT(curled.residual, 1.0);
+  EXPECT_FALSE(curled.converged);
+}
+
+TEST(LocalInverse, NonFiniteInputIsRefusedByEveryMethodNamingTheEntry) {
+  const Vector x0{{0.0, 0.0}};
+  for (const InverseMethod method : {InverseMethod::kAuto, InverseMethod::kAnalytic,
+                                     InverseMethod::kTimeReversal, InverseMethod::kLbfgs,
+                                     InverseMethod::kInverseGradient}) {
+    const auto message = [&](const Simulator& physics, const Vector& y, const Vector& x) {
+      try {
+        local_inverse(physics, y, x, {}, {.method = method});
+      } catch (const NumericalError& e) {
+        return std::string(e.what());
+      }
+      return std::string("no NumericalError");
+    };
+    const Doubling exact(0, 0);
+    EXPECT_EQ(message(exact, Vector{{1.0, NAN}}, x0),
+              "local inverse: y has a non-finite entry at index 1 (nan)")
+        << to_string(method);
+    EXPECT_EQ(message(exact, Vector{{1.0, 1.0}}, Vector{{-INFINITY, 0.0}}),
+              "local inverse: x0 has a non-finite entry at index 0 (-inf)")
+        << to_string(method);
+  }
+  // An inverse that answers NaN is named, not handed on.
+  EXPECT_EQ(
+      [] {
+        try {
+          local_inverse(Doubling(NAN, 0), Vector{{1.0, 1.0}}, Vector{{0.0, 0.0}}, {},
+                        {.method = InverseMethod::kAnalytic});
+        } catch (const NumericalError& e) {
+          return std::string(e.what());
+        }
+        return std::string("no NumericalError");
+      }(),
+      "the local inverse (analytic) gave no finite preimage: the simulator's inverse (analytic) "
+      "has a non-finite entry at index 0 (nan)");
+}
 
 TEST(LocalInverse, RelativeToleranceStopsAtAFractionOfTheStartResidual) {
   // y = (2, 2) from (3, 3): start residual ‖(3, 9) − (2, 2)‖ = √50.
@@ -76,6 +169,7 @@ TEST(LocalInverse, NumericalInversesStayInTheBoxAndClosedFormsAreProjected) {
     EXPECT_NEAR(r.x(0), 2.0, 1e-8) << to_string(method);
     EXPECT_NEAR(r.x(1), 1.0, 1e-8) << to_string(method);
     EXPECT_LE(r.x(1), 1.0) << to_string(method);
+    EXPECT_FALSE(r.converged) << to_string(method);  // ‖P(x) − y‖ = 1
   }
 }
 

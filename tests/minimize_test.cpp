@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
@@ -199,6 +202,46 @@ TEST(StoppingRules, OutOfRangeOptionsAreErrorsNamingThem) {
             "minimize: max_evaluations must be ≥ 0 (0: no budget), got -1");
   EXPECT_EQ(message({.max_seconds = INFINITY}),
             "minimize: max_seconds must be in [0, inf), got inf");
+}
+
+// max_iterations has no "off": 0 is refused, and no page of the docs lists it among the
+// options that are off at 0.
+TEST(StoppingRules, MaxIterationsIsAtLeastOneInTheCodeAndTheDocs) {
+  const DiagonalScale physics(Vector{{1.0}});
+  const L2Loss loss;
+  const Objective objective(physics, loss, Vector::Zero(1));
+  const auto gd = make_optimizer("gd");
+  EXPECT_THROW(
+      {
+        try {
+          minimize(*gd, objective, Vector{{1.0}}, {.max_iterations = 0});
+        } catch (const Error& e) {
+          EXPECT_STREQ(e.what(), "minimize: max_iterations must be ≥ 1, got 0");
+          throw;
+        }
+      },
+      Error);
+  for (const char* page : {"docs/python.md", "docs/update_rules.md", "docs/concepts.md",
+                           "docs/cli.md", "README.md"}) {
+    std::ifstream in(std::string(PHYSGRAD_SOURCE_DIR) + "/" + page);
+    ASSERT_TRUE(in) << page;
+    std::stringstream text;
+    text << in.rdbuf();
+    // Paragraphs and list items: what follows "off at" up to the next one names the options.
+    std::string block;
+    std::istringstream lines(text.str() + "\n\n");
+    for (std::string line; std::getline(lines, line);) {
+      const bool item = line.rfind("- ", 0) == 0;
+      if (line.empty() || item) {
+        const std::size_t off = block.find("off at");
+        EXPECT_TRUE(off == std::string::npos ||
+                    block.find("`max_iterations`", off) == std::string::npos)
+            << page << ": " << block;
+        block.clear();
+      }
+      block += line + "\n";
+    }
+  }
 }
 
 TEST(Reports, FullReportListsTheRunAndWhyItEnded) {

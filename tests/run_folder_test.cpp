@@ -329,6 +329,25 @@ TEST_F(RunFolderCli, ARunRenamedAwayMidRunWritesIntoItsOwnFolderNeverIntoTheOneN
   expect_same_results("l-moved");
 }
 
+TEST_F(RunFolderCli, ACommitThatFailsAfterARenameNamesTheFolderWhereItIsNow) {
+  // Stopped after config.json was moved in; renamed; a folder put in the way of loss.svg.
+  const pid_t pid = spawn("run comparison --out d", "PHYSGRAD_FAULT=stop@commit:1", "failed");
+  int status = 0;
+  ::waitpid(pid, &status, WUNTRACED);
+  ASSERT_TRUE(WIFSTOPPED(status));
+  fs::rename(dir_ / "d", dir_ / "d-moved");
+  fs::create_directories(dir_ / "d-moved" / "loss.svg" / "in-the-way");
+  ::kill(pid, SIGCONT);
+  ::waitpid(pid, &status, 0);
+  const std::string err = error_line(read_file(configs_ / "failed.err"));
+  EXPECT_EQ(WEXITSTATUS(status), 2) << err;
+  EXPECT_EQ(err.rfind("physgrad: error: '" + (dir_ / "d-moved").string() +
+                          "': cannot move loss.svg into place: ",
+                      0),
+            0u)
+      << err;
+}
+
 TEST_F(RunFolderCli, SymbolicLinksAreFollowedOrRefusedBeforeAnythingIsWritten) {
   fs::create_directory(dir_ / "target");
   fs::create_directory_symlink("target", dir_ / "link");

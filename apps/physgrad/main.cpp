@@ -3,7 +3,8 @@
 // `physgrad bench NAME [options]`, `physgrad report DIR`.
 // Every error is one line on stderr and exit code 2; a run writes its folder only on success.
 // SIGINT/SIGTERM stop a run: learning runs leave a checkpoint in the run folder (exit 128 +
-// signal), other runs write nothing.
+// signal), other runs write nothing. Under mpirun the ranks first check that they were all
+// started alike, and every exchange between them is bounded in time (ranks.hpp).
 #include <CLI/CLI.hpp>
 #include <cblas.h>
 #include <unistd.h>
@@ -15,6 +16,7 @@
 #include <iostream>
 #include <map>
 #include <new>
+#include <optional>
 
 #include "bench_command.hpp"
 #include "physgrad/catalogue.hpp"
@@ -92,8 +94,7 @@ void check_subcommand(CLI::App& app, const std::string& name) {
 }
 
 int usage_error(const std::string& message) {
-  std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << physgrad::one_line(message)
-            << '\n';
+  physgrad::cli::print_error(message);
   return physgrad::cli::end_run(kUsageError);  // under mpirun: ends the other ranks too
 }
 
@@ -108,8 +109,7 @@ void reserve_blas_buffer() {
     physgrad::require_memory(160 * kMiB,
                              "the BLAS library's 128 MiB work buffer with 32 MiB to spare");
   } catch (const physgrad::Error& e) {
-    std::cerr << "physgrad: error: " << physgrad::cli::rank_prefix() << physgrad::one_line(e.what())
-              << std::endl;
+    physgrad::cli::print_error(e.what());
     std::_Exit(kUsageError);
   }
   const double one = 1;
@@ -210,11 +210,11 @@ int report_outcome(const ex::RunOutcome& outcome) {
   return 0;
 }
 
-// A new run of `experiment` with the options `given`. A blank --out is refused (as Run::start
-// refuses it) as it was typed, from `given`: the settings hold it without surrounding blanks.
-int start_run(const ex::Experiment& experiment, const ex::OptionTexts& given,
-              const std::string& command_line) {
-  const ex::Settings settings = ex::resolve_settings(experiment, given);
+// A new run of `experiment` with `settings`, resolved from the options `given`. A blank --out is
+// refused (as Run::start refuses it) as it was typed, from `given`: the settings hold it without
+// surrounding blanks.
+int start_run(const ex::Experiment& experiment, const ex::Settings& settings,
+              const ex::OptionTexts& given, const std::string& command_line) {
   fs::path out;
   if (settings.has("out") && settings.text("out").empty()) {
     for (const auto& [name, text] : given) {
@@ -226,10 +226,8 @@ int start_run(const ex::Experiment& experiment, const ex::OptionTexts& given,
       ex::Run::start(experiment, settings, out, cli_hooks(progress, command_line)));
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  const physgrad::cli::Ranks ranks(&argc, &argv);
+// The command of this process: parses, checks that every rank was started alike, runs.
+int run_command(int argc, char** argv) {
   std::string command_line;
   for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
 
@@ -287,15 +285,38 @@ int main(int argc, char** argv) {
       ex::registry().find(argv[2]);
     }
     app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
+  } catch (const CLI::Success& e) {  // --help: the ranks compare it too, then print it
+    namespace cli = physgrad::cli;
+    const int code = cli::require_same_command(cli::rank_command(argc, argv, nullptr, nullptr));
+    return code != 0 ? code : app.exit(e);
   } catch (const std::exception& e) {
     return usage_error(e.what());
   }
 
   try {
+    // The run's experiment and settings first: the ranks compare them before anything is done.
+    const ex::Experiment* chosen = nullptr;
+    ex::OptionTexts given;
+    std::optional<ex::Settings> settings;
+    for (const auto& candidate : ex::registry()) {
+      if (!run->get_subcommand(candidate->name())->parsed()) continue;
+      chosen = candidate.get();
+      // File values first, so that flags given on the command line override them.
+      if (config_file_options[chosen->name()]->count() > 0) {
+        given = ex::read_config_file(*chosen, config_files[chosen->name()]);
+      }
+      for (CLI::Option* option : cli_options[chosen->name()]) {
+        if (option->count() == 0) continue;
+        const std::string name = option->get_name().substr(2);  // drop "--"
+        given.emplace_back(name, texts[chosen->name()][name]);
+      }
+      settings.emplace(ex::resolve_settings(*chosen, given));
+    }
+    if (const int code = physgrad::cli::require_same_command(
+            physgrad::cli::rank_command(argc, argv, chosen, settings ? &*settings : nullptr));
+        code != 0) {
+      return code;
+    }
     if (list->parsed()) {
       std::size_t width = 0;
       for (const auto& experiment : ex::registry()) width = std::max(width, experiment->name().size());
@@ -330,21 +351,7 @@ int main(int argc, char** argv) {
       StderrProgress progress;
       return report_outcome(ex::Run::resume(resume_folder, cli_hooks(progress, command_line)));
     }
-    for (const auto& experiment : ex::registry()) {
-      CLI::App* sub = run->get_subcommand(experiment->name());
-      if (!sub->parsed()) continue;
-      // File values first, so that flags given on the command line override them.
-      ex::OptionTexts given;
-      if (config_file_options[experiment->name()]->count() > 0) {
-        given = ex::read_config_file(*experiment, config_files[experiment->name()]);
-      }
-      for (CLI::Option* option : cli_options[experiment->name()]) {
-        if (option->count() == 0) continue;
-        const std::string name = option->get_name().substr(2);  // drop "--"
-        given.emplace_back(name, texts[experiment->name()][name]);
-      }
-      return start_run(*experiment, given, command_line);
-    }
+    if (chosen != nullptr) return start_run(*chosen, *settings, given, command_line);
   } catch (const std::bad_alloc&) {
     return usage_error("out of memory: a size given (samples, batch, grid, list) needs more than "
                        "this machine or its limits (ulimit -v) allow");
@@ -352,4 +359,11 @@ int main(int argc, char** argv) {
     return usage_error(e.what());
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const physgrad::cli::Ranks ranks(&argc, &argv);
+  return physgrad::cli::finish(run_command(argc, argv));
 }

@@ -6,11 +6,14 @@
 #include <string>
 
 #include "physgrad/parallel/communicator.hpp"
+#include "physgrad/run/experiment.hpp"
 
 namespace physgrad::cli {
 
 // Made once at the start of main(): initializes MPI only when the build has it and a launcher
-// started this process; finalizes it when destroyed.
+// started this process, with the time limit of rank_timeout_seconds() (a bad
+// PHYSGRAD_RANK_TIMEOUT ends the process with exit code 2 before MPI starts); finalizes it when
+// destroyed.
 class Ranks {
  public:
   Ranks(int* argc, char*** argv);
@@ -25,8 +28,28 @@ const std::shared_ptr<Communicator>& communicator();
 bool is_writer();
 // "rank R of K: " in a run of several ranks, empty otherwise.
 std::string rank_prefix();
+// Prints "physgrad: error: rank R of K: MESSAGE" (without the rank alone) as one line in one
+// write, so that the lines of several ranks do not run into each other.
+void print_error(const std::string& message);
+// The ranks' time limit as the ranks compare it ("300").
+std::string rank_timeout_text();
+// What this process was started to do, for the ranks to compare: for a run of `experiment`
+// its name and every resolved setting in `settings`, else the whole command line after the
+// program; then the rank time limit.
+RankCommand rank_command(int argc, char** argv, const experiments::Experiment* experiment,
+                         const experiments::Settings* settings);
+// Before anything is done: checks that every rank was started with the same `command`. Returns
+// 0, or, after printing the error line, 2 — every rank sees the same difference and ends by
+// itself — or end_run(2) when a rank did not take part within the time limit.
+int require_same_command(const RankCommand& command);
 // After an error on this rank: in a run of several ranks ends all of them with `exit_code`
-// (MPI_Abort), so none waits forever; otherwise returns `exit_code`.
+// (MPI_Abort), so none waits forever; otherwise returns `exit_code`. A rank other than 0 that
+// lost contact with the others first leaves rank 0 a few seconds to save its checkpoint and end
+// the job itself.
 int end_run(int exit_code);
+// The end of main(): in a run of several ranks, waits (at most the time limit) until every rank
+// has come to its end, and returns `exit_code`; when that wait fails, or this rank lost contact
+// before, ends the job by end_run() (exit code 2 for a failed wait).
+int finish(int exit_code);
 
 }  // namespace physgrad::cli

@@ -57,6 +57,7 @@
 #include "physgrad/optim/lbfgs.hpp"
 #include "physgrad/optim/levenberg_marquardt.hpp"
 #include "physgrad/optim/line_search.hpp"
+#include "physgrad/optim/local_inverse.hpp"
 #include "physgrad/optim/minimize.hpp"
 #include "physgrad/optim/momentum.hpp"
 #include "physgrad/optim/newton.hpp"
@@ -66,7 +67,6 @@
 #include "physgrad/optim/quasi_newton.hpp"
 
 #include "physgrad/inversion/jacobian_operator.hpp"
-#include "physgrad/inversion/local_inverse.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
 #include "physgrad/inversion/tridiagonal_eigen.hpp"
 #include "physgrad/inversion/y_step.hpp"

@@ -45,7 +45,7 @@ std::string format_number(double value) {
 // Decimal notation, the one form of a number on the command line and in config files: an
 // optional sign, digits with at most one point (reals), and for reals an optional exponent
 // (e or E, an optional sign, digits). What strtod would read besides — hexadecimal (0x10,
-// 0x1p4), inf, nan, leading white space — is not a number here.
+// 0x1p4), inf, nan, white space — is not a number here.
 bool is_decimal(const std::string& item, bool whole) {
   std::size_t at = item.empty() || (item[0] != '+' && item[0] != '-') ? 0 : 1;
   const auto digits = [&item, &at] {
@@ -67,15 +67,17 @@ bool is_decimal(const std::string& item, bool whole) {
   return at == item.size();
 }
 
+// A number is exactly its decimal text: blanks around it ('5 ', ' 5') make it no number, as
+// any other character would (a list's entries are cut at the commas and their blanks dropped
+// before they get here).
 double parse_real(const OptionSpec& spec, const std::string& text) {
-  const std::string item = trim(text);
-  if (!is_decimal(item, false)) {
+  if (!is_decimal(text, false)) {
     throw Error(spec.flag() + ": " + in_quotes(text) +
                 " is not a number (decimal, like 16, -2.5 or 1e-3)");
   }
   // strtod, not stod: a value below the normal range (1e-310) is kept as the subnormal it is.
   errno = 0;
-  const double value = std::strtod(item.c_str(), nullptr);
+  const double value = std::strtod(text.c_str(), nullptr);
   if (errno == ERANGE && std::isinf(value)) {
     throw Error(spec.flag() + ": " + in_quotes(text) + " is out of the range of a double");
   }
@@ -92,13 +94,12 @@ double parse_real(const OptionSpec& spec, const std::string& text) {
 }
 
 long long parse_integer(const OptionSpec& spec, const std::string& text) {
-  const std::string item = trim(text);
-  if (!is_decimal(item, true)) {
+  if (!is_decimal(text, true)) {
     throw Error(spec.flag() + ": " + in_quotes(text) +
                 " is not a whole number (decimal digits, like 16)");
   }
   errno = 0;
-  const long long value = std::strtoll(item.c_str(), nullptr, 10);
+  const long long value = std::strtoll(text.c_str(), nullptr, 10);
   const bool beyond = errno == ERANGE;  // a whole number beyond ±9.2e18
   const auto as_double = static_cast<double>(value);
   if (beyond || as_double < spec.min || as_double > spec.max || (spec.nonzero && value == 0)) {

@@ -101,6 +101,11 @@ RunOutcome run_in(const Experiment& experiment, const Settings& settings,
     outcome.folder = folder->shown_now();
     outcome.report = outcome.folder / "report.html";
   } catch (const Interrupted& e) {
+    // A rank that stopped answering (RanksNotAnswering, or a training run that ended on it and
+    // saved its checkpoint) is an error, not a stop: the job cannot go on.
+    if (const std::string lost = communicator->failure(); !lost.empty()) {
+      throw Error(writer ? lost + "; " + folder->abandon() : lost);
+    }
     outcome = RunOutcome{};
     outcome.signal = received_signal();
     outcome.stopped = e.what();

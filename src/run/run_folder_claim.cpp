@@ -291,7 +291,7 @@ std::string RunFolder::shown_now() const {
 }
 
 void RunFolder::fail(const std::string& step, int err) const {
-  throw Error(in_quotes(shown()) + ": cannot " + step + ": " + system_reason(err));
+  throw Error(in_quotes(shown_now()) + ": cannot " + step + ": " + system_reason(err));
 }
 
 const FolderHandle& RunFolder::staging() {
@@ -303,7 +303,7 @@ const FolderHandle& RunFolder::staging() {
 }
 
 void RunFolder::commit() {
-  if (!staging_.is_open()) throw Error(in_quotes(shown()) + ": there are no staged results");
+  if (!staging_.is_open()) throw Error(in_quotes(shown_now()) + ": there are no staged results");
   std::vector<std::string> names = staging_.names();
   const auto move = [&](const FolderHandle& from, const std::string& name, const std::string& to) {
     if (::renameat(from.fd(), name.c_str(), folder_.fd(), to.c_str()) != 0) {

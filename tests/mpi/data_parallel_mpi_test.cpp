@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../cli_fixture.hpp"
+#include "mpi_fixture.hpp"
 
 namespace {
 
@@ -48,53 +49,8 @@ Csv read_csv(const fs::path& path) {
   return csv;
 }
 
-class MpiRun : public ::testing::Test {
+class MpiRun : public physgrad::testing::MpiFixture {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("physgrad_mpi_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  // The command line of `program` (default the CLI) with `args` in the test folder, under
-  // mpiexec with `ranks` > 0.
-  std::string command(int ranks, const std::string& args,
-                      const std::string& program = PHYSGRAD_CLI) const {
-    std::string launcher;
-    if (ranks > 0) {
-      // Open MPI refuses root (containers, CI) and more ranks than cores unless told. In a
-      // sanitizer build LeakSanitizer ignores what Open MPI keeps until exit (full stacks, so
-      // that the suppressions see its libraries).
-      launcher = std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                             "OMPI_MCA_rmaps_base_oversubscribe=1 "
-                             "LSAN_OPTIONS=suppressions=") +
-                 PHYSGRAD_LSAN_SUPPRESSIONS + ":fast_unwind_on_malloc=0 exec " +
-                 PHYSGRAD_MPIEXEC + " " + PHYSGRAD_MPIEXEC_NUMPROC_FLAG + " " +
-                 std::to_string(ranks) + " ";
-    }
-    return "cd '" + dir_.string() + "' && " + launcher + "'" + program + "' " + args;
-  }
-
-  // Runs the CLI in the test folder, with `ranks` > 0 under mpiexec; returns the exit code.
-  int run(int ranks, const std::string& args, std::string* err = nullptr,
-          const std::string& program = PHYSGRAD_CLI) const {
-    const fs::path err_file = dir_ / "stderr.txt";
-    const std::string command =
-        this->command(ranks, args, program) + " > /dev/null 2> '" + err_file.string() + "'";
-    const int status = std::system(command.c_str());
-    if (err != nullptr) {
-      std::ifstream in(err_file);
-      std::stringstream text;
-      text << in.rdbuf();
-      *err = text.str();
-    }
-    fs::remove(err_file);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-
   // The one-process run and the `ranks`-rank run of `args`: every metrics.csv cell equal, the
   // numeric ones (losses and experiment figures) to 1e-10 relative, wall-clock and
   // kept_condition columns skipped.
@@ -155,8 +111,6 @@ class MpiRun : public ::testing::Test {
     }
     return worst;
   }
-
-  fs::path dir_;
 };
 
 // hig-toy: 1-7-2 network, B·m = 256 > |θ| = 30, so gn and hig take the normal path.

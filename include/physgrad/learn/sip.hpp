@@ -4,7 +4,7 @@
 
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/optim/adam.hpp"
-#include "physgrad/inversion/local_inverse.hpp"
+#include "physgrad/optim/local_inverse.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {

@@ -2,7 +2,7 @@
 // with y₀ = P(x₀), Δy = η·(Newton step of L in y), and P⁻¹(·; x₀) a local inverse.
 #pragma once
 
-#include "physgrad/inversion/local_inverse.hpp"
+#include "physgrad/optim/local_inverse.hpp"
 #include "physgrad/optim/optimizer.hpp"
 #include "physgrad/rule_option.hpp"
 

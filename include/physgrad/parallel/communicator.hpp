@@ -6,11 +6,24 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include "physgrad/stop.hpp"
 
 namespace physgrad {
 
 class DistributedEigensolver;  // distributed_eigen.hpp
+
+// Thrown by a collective that the other ranks did not all join within the communicator's time
+// limit (a rank stopped, hung or gone). It is a StopRequested, so that training that meets it
+// inside a step drops that step and saves its checkpoint as on a stop request. The
+// communicator is broken from then on (Communicator::failure()): every later collective throws
+// it again, and the process ends by abort(), since MPI_Finalize would wait for the missing rank.
+class RanksNotAnswering : public StopRequested {
+ public:
+  using StopRequested::StopRequested;
+};
 
 // Every rank calls each collective in the same order with matching sizes. Results are the same
 // bits on every rank (the sum is reduced on rank 0 and broadcast, so no reduction order can make
@@ -36,6 +49,9 @@ class Communicator {
   // The ranks' solver for symmetric eigenproblems held by columns (distributed_eigen.hpp), or
   // null when they have none (then every rank solves the whole problem itself).
   virtual DistributedEigensolver* eigensolver() { return nullptr; }
+  // Why this rank can exchange no more (the message of the RanksNotAnswering it threw); empty
+  // while it can.
+  virtual std::string failure() const { return {}; }
 
   // Convenience forms on vectors.
   void allreduce_sum(std::vector<double>& data) { allreduce_sum(data.data(), data.size()); }
@@ -81,5 +97,23 @@ std::uint64_t hash_doubles(const double* data, std::size_t count);
 
 // True when every rank passed the same hash (one allgather).
 bool same_on_all_ranks(Communicator& communicator, std::uint64_t hash);
+
+// What one rank was started to do, as (name, value) pairs in a fixed order: the command, then
+// its settings.
+using RankCommand = std::vector<std::pair<std::string, std::string>>;
+// Checks, in one allgather of every rank's `command`, that all ranks were started alike; throws
+// Error on every rank naming the first entry that differs: "the ranks were not started alike:
+// --iters is '100' on rank 0 but '300' on rank 1; start every rank with the same command and
+// settings". RanksNotAnswering when a rank does not take part within the time limit.
+void require_same_command(Communicator& communicator, const RankCommand& command);
+
+// Returns once every rank has called it (one sum); RanksNotAnswering after the time limit.
+void wait_for_all_ranks(Communicator& communicator);
+
+// The seconds a collective of the MPI communicator waits for the other ranks before it throws
+// RanksNotAnswering: PHYSGRAD_RANK_TIMEOUT, a decimal number of seconds > 0 (up to 10⁶), or
+// kDefaultRankTimeout when it is unset; throws Error naming the variable for any other value.
+inline constexpr double kDefaultRankTimeout = 300;
+double rank_timeout_seconds();
 
 }  // namespace physgrad

@@ -75,7 +75,8 @@ class RunFolder {
 
  private:
   RunFolder(const FolderPath& where, FolderHandle folder, bool resuming);
-  // Throws Error "'FOLDER': cannot STEP: REASON" (err: the errno of the failed call).
+  // Throws Error "'FOLDER': cannot STEP: REASON" (err: the errno of the failed call), the folder
+  // named where it is now (shown_now()).
   [[noreturn]] void fail(const std::string& step, int err) const;
 
   std::filesystem::path path_;  // where the folder was claimed (it may be moved since)

@@ -1,4 +1,4 @@
-#include "physgrad/inversion/local_inverse.hpp"
+#include "physgrad/optim/local_inverse.hpp"
 
 #include <cmath>
 #include <memory>
@@ -25,10 +25,35 @@ constexpr NameTable<InverseMethod, 5> kMethodNames{{
     {InverseMethod::kInverseGradient, "ig"},
 }};
 
-// The simulator's own inverse or its anchored time reversal, projected onto the box.
+// Throws NumericalError "WHO: WHAT has a non-finite entry at index I (nan)" unless every entry
+// of v is finite.
+void require_finite_inverse_entries(const Vector& v, const std::string& who, const char* what) {
+  for (Index i = 0; i < v.size(); ++i) {
+    if (std::isfinite(v(i))) continue;
+    std::ostringstream msg;
+    msg << who << ": " << what << " has a non-finite entry at index " << i << " (" << v(i) << ")";
+    throw NumericalError(msg.str());
+  }
+}
+
+// The tolerance every method is judged by: ‖P(x) − y‖ ≤ tolerance·(1 + ‖y‖), or
+// ≤ relative_tolerance·‖P(x₀) − y‖ (`start`, asked only when the first test fails). A NaN
+// residual meets neither.
+template <class StartResidual>
+bool meets_inverse_tolerance(double residual, const Vector& y, const LocalInverseOptions& options,
+                             StartResidual start) {
+  if (residual <= options.tolerance * (1 + y.norm())) return true;
+  return options.relative_tolerance > 0 && residual <= options.relative_tolerance * start();
+}
+
+// The simulator's own inverse or its anchored time reversal, projected onto the box, judged by
+// the tolerances.
 LocalInverseResult closed_form(const Simulator& simulator, InverseMethod method, const Vector& y,
-                               const Vector& x0, const Vector& context, const Domain& domain) {
+                               const Vector& x0, const Vector& context,
+                               const LocalInverseOptions& options, const Domain& domain) {
   LocalInverseResult result;
+  const std::string who = "local inverse (" + to_string(method) + ")";
+  std::optional<Vector> y0;  // P(x₀), when computed
   if (method == InverseMethod::kAnalytic) {
     if (!simulator.has_inverse()) {
       throw Error("simulator '" + simulator.name() +
@@ -43,13 +68,27 @@ LocalInverseResult closed_form(const Simulator& simulator, InverseMethod method,
     }
     // x₀ + R(y) − R(P(x₀)): maps P(x₀) to x₀ exactly, so the reversal's own error (the
     // truncation error of a scheme that is not reversible) cancels to first order near x₀.
-    const Vector y0 = simulator.forward(x0, context);
-    result.x = x0 + (simulator.time_reversal(y, context) - simulator.time_reversal(y0, context));
+    y0 = simulator.forward(x0, context);
+    result.x = x0 + (simulator.time_reversal(y, context) - simulator.time_reversal(*y0, context));
     result.evaluations = 4;
   }
+  // Named as the caller asked for it (auto, say), then as it ran.
+  require_finite_inverse_entries(
+      result.x, "the local inverse (" + to_string(options.method) + ") gave no finite preimage",
+      method == InverseMethod::kAnalytic ? "the simulator's inverse (analytic)"
+                                         : "the anchored reversal (time_reversal)");
   result.x = domain.project(result.x);
   result.residual = (simulator.forward(result.x, context) - y).norm();
-  result.converged = std::isfinite(result.residual);
+  if (!std::isfinite(result.residual)) {
+    throw NumericalError(who + ": P(x) at the preimage is not finite");
+  }
+  result.converged = meets_inverse_tolerance(result.residual, y, options, [&] {
+    if (!y0) {  // the analytic inverse: one more forward pass, only for this test
+      y0 = simulator.forward(x0, context);
+      ++result.evaluations;
+    }
+    return (*y0 - y).norm();
+  });
   return result;
 }
 
@@ -63,9 +102,7 @@ LocalInverseResult numerical(const Simulator& simulator, InverseMethod method, c
   const double start = misfit.value(x0);
   result.evaluations = 1;
   if (!std::isfinite(start)) {
-    result.x = Vector::Constant(x0.size(), NAN);
-    result.residual = NAN;
-    return result;
+    throw NumericalError("local inverse (" + to_string(method) + "): P(x0) is not finite");
   }
   std::unique_ptr<Optimizer> solver;
   if (method == InverseMethod::kLbfgs) {
@@ -75,7 +112,6 @@ LocalInverseResult numerical(const Simulator& simulator, InverseMethod method, c
   }
   // ‖r‖ ≤ a ⟺ ½‖r‖² ≤ ½a², and ‖r‖ ≤ ρ‖r₀‖ ⟺ ½‖r‖² ≤ ρ²·½‖r₀‖².
   const double absolute = options.tolerance * (1 + y.norm());
-  const double relative = options.relative_tolerance * std::sqrt(2 * start);
   MinimizeOptions run;
   run.max_iterations = options.max_iterations;
   run.loss_tolerance = 0.5 * absolute * absolute;
@@ -95,7 +131,10 @@ LocalInverseResult numerical(const Simulator& simulator, InverseMethod method, c
   result.residual = std::sqrt(2 * summary.loss);
   result.iterations = summary.iterations;
   result.evaluations = 1 + summary.evaluations;
-  result.converged = result.residual <= absolute || result.residual <= relative;
+  // Judged by the residual, not by why minimize() stopped: a stall (function_tolerance) or the
+  // iteration budget leaves it unconverged.
+  result.converged = meets_inverse_tolerance(result.residual, y, options,
+                                             [start] { return std::sqrt(2 * start); });
   return result;
 }
 
@@ -160,6 +199,9 @@ LocalInverseResult local_inverse(const Simulator& user_simulator, const Vector& 
   }
   if (!msg.str().empty()) throw Error(msg.str());
   domain.check_dim(x0.size(), "local inverse");
+  check_options("local inverse", options);
+  require_finite_inverse_entries(y, "local inverse", "y");
+  require_finite_inverse_entries(x0, "local inverse", "x0");
   InverseMethod method = options.method;
   if (method == InverseMethod::kAuto) {
     method = simulator.has_inverse()         ? InverseMethod::kAnalytic
@@ -168,9 +210,8 @@ LocalInverseResult local_inverse(const Simulator& user_simulator, const Vector& 
   }
   LocalInverseResult result;
   if (method == InverseMethod::kAnalytic || method == InverseMethod::kTimeReversal) {
-    result = closed_form(simulator, method, y, x0, context, domain);
+    result = closed_form(simulator, method, y, x0, context, options, domain);
   } else {
-    check_options("local inverse", options);
     result = numerical(simulator, method, y, x0, context, options, domain);
   }
   result.counts = simulator.counts() - counts_at_start;

@@ -23,8 +23,10 @@ std::string to_string(InverseMethod method);
 // otherwise.
 InverseMethod parse_inverse_method(const std::string& text);
 
-// The options of the numerical inverses (lbfgs, ig); the analytic and time-reversal inverses
-// have none. The member initialisers are the defaults (the rule catalogue's, for pg and sip).
+// The options of the numerical inverses (lbfgs, ig). The analytic and time-reversal inverses
+// take none, but their result is judged by the same tolerance and relative_tolerance (which
+// then change no result, and which params() therefore lists for the numerical methods only).
+// The member initialisers are the defaults (the rule catalogue's, for pg and sip).
 struct LocalInverseOptions {
   InverseMethod method = InverseMethod::kAuto;
   // Stop once ‖P(x) − y‖ ≤ tolerance·(1 + ‖y‖) (absolute), > 0.
@@ -51,21 +53,25 @@ struct LocalInverseResult {
   double residual = 0;  // ‖P(x) − y‖
   int iterations = 0;
   // Simulator evaluations spent: forward (+ VJP) passes of the numerical inverse; for the
-  // closed forms the inverse or reversals and the forward pass of the residual.
+  // closed forms the inverse or reversals and the forward pass of the residual (and, for the
+  // analytic inverse, one at x₀ when the relative test is needed).
   int evaluations = 0;
   SimulatorCounts counts;  // the simulator's work in this solve (CheckedSimulator)
-  bool converged = false;  // the residual meets the absolute or the relative tolerance
+  // ‖P(x) − y‖ ≤ tolerance·(1 + ‖y‖) or ≤ relative_tolerance·‖P(x₀) − y‖, for every method:
+  // an inverse that is off, a result projected onto the box or a numerical solve that stalled
+  // or ran out of iterations short of both is not converged.
+  bool converged = false;
 };
 
 // The preimage of y from x₀, inside `domain`: the numerical inverses minimize over the box (in
 // the domain's scaled variables); the analytic and time-reversal results are projected onto it.
-// kAnalytic and kTimeReversal throw Error when the simulator lacks them. When the misfit at x₀ is
-// not finite (a NaN from the simulator or in y) the numerical inverse cannot start: the result
-// is x = NaN, not converged, for the caller's numerical guard to see. Numerical trouble inside
-// the numerical inverse (a non-finite Jacobian, say) throws NumericalError naming it. Throws
-// Error on out-of-range options or mismatched sizes, also of what the simulator returns: it is
-// called through a CheckedSimulator (that of the calling run, whose counts and budget then
-// include this solve, or one of its own).
+// x is always finite: a non-finite entry in y or x₀, a non-finite P(x₀) (numerical methods),
+// preimage or P(x) at it (closed forms), or numerical trouble inside the numerical inverse (a
+// non-finite Jacobian, say) throws NumericalError naming it, for the caller's numerical guard.
+// kAnalytic and kTimeReversal throw Error when the simulator lacks them. Throws Error on
+// out-of-range options or mismatched sizes, also of what the simulator returns: it is called
+// through a CheckedSimulator (that of the calling run, whose counts and budget then include
+// this solve, or one of its own).
 LocalInverseResult local_inverse(const Simulator& simulator, const Vector& y, const Vector& x0,
                                  const Vector& context, const LocalInverseOptions& options,
                                  const Domain& domain = {});
