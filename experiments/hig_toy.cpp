@@ -159,7 +159,7 @@ class HigToy final : public LearningExperiment {
       }
     }
     const auto range = lo <= hi ? std::optional(std::pair(lo, hi)) : std::nullopt;
-    std::vector<std::string> panels;
+    std::vector<std::vector<std::string>> rows;  // one per λ: per update, per second
     std::string sentence;
     for (auto lambda = lambdas.rbegin(); lambda != lambdas.rend(); ++lambda) {
       const std::string tag = "λ=" + format_value(*lambda);
@@ -170,10 +170,11 @@ class HigToy final : public LearningExperiment {
     }
     for (auto lambda = lambdas.rbegin(); lambda != lambdas.rend(); ++lambda) {
       const std::string tag = "λ=" + format_value(*lambda);
+      rows.emplace_back();
       for (const auto progress :
            {LearningSweep::Progress::kIteration, LearningSweep::Progress::kTime}) {
         const bool by_time = progress == LearningSweep::Progress::kTime;
-        panels.push_back(LearningSweep::metric_figure(
+        rows.back().push_back(LearningSweep::metric_figure(
                              sweep.rule_groups(tag), "",
                              "Test loss (" + tag + ") per " + (by_time ? "second" : "update"),
                              "mean test loss", test_loss, progress, true, range)
@@ -182,10 +183,10 @@ class HigToy final : public LearningExperiment {
     }
     const std::string file = "loss_by_lambda.svg";
     context.add_figure({file,
-                        "Test loss per update and per second of training for each λ (the "
-                        "hardest first), one y axis. Line: median over the seeds; band: their "
+                        "Test loss per update (left) and per second of training (right), one "
+                        "row per λ (the hardest first), one y axis. Line: median over the seeds; band: their "
                         "minimum to maximum. Dots: evaluations.",
-                        svg::side_by_side(panels)});
+                        svg::grid(rows)});
     // The index compares run folders at the hardest λ (the smallest: the most ill-conditioned).
     const double hardest = *std::min_element(lambdas.begin(), lambdas.end());
     context.set_message(file, sentence,

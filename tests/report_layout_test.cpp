@@ -117,6 +117,22 @@ TEST(ResponsiveSvg, PanelsSideBySideStackWhenNarrow) {
             svg::side_by_side({small, small}));
 }
 
+// A grid places its rows side by side, one row above the next, and stacks all its panels in
+// reading order when narrow.
+TEST(ResponsiveSvg, GridRowsStackAndAllPanelsStackWhenNarrow) {
+  const std::string panel = line_plot_svg({{"s", {0, 1, 2}, {1, 2, 1}}}, {});
+  const auto [nw, nh] = svg::size_of(svg::layouts(panel).narrow);
+  const auto [pw, ph] = svg::size_of(panel);
+  const std::string grid = svg::grid({{panel, panel}, {panel, panel}});
+  for (const std::string& problem : testing::SvgChecker::check(grid)) ADD_FAILURE() << problem;
+  EXPECT_EQ(svg::size_of(grid), std::make_pair(2 * pw + 12, 2 * ph + 12));
+  EXPECT_EQ(svg::size_of(svg::layouts(grid).narrow), std::make_pair(nw, 4 * nh + 3 * 12));
+  const std::string row = svg::grid({{panel, panel}});
+  EXPECT_EQ(svg::size_of(row), svg::size_of(svg::side_by_side({panel, panel})));
+  EXPECT_EQ(svg::size_of(svg::layouts(row).narrow),
+            svg::size_of(svg::layouts(svg::side_by_side({panel, panel})).narrow));
+}
+
 // In a page, a figure switches to its narrow layout below the width at which its wide layout's
 // smallest text (12 px in a 640 px figure) would be 11 px — ⌈640 · 11 / 12⌉ = 587 px — plus the
 // page's margins (42 px); above that the wide one scales with the page.

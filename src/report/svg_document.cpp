@@ -211,6 +211,24 @@ std::string side_by_side(const std::vector<std::string>& documents, int gap) {
   return responsive(row, arranged(narrow, gap, true));
 }
 
+std::string grid(const std::vector<std::vector<std::string>>& rows, int gap) {
+  std::vector<std::string> wide_rows, narrow;
+  bool any_responsive = false;
+  for (const std::vector<std::string>& row : rows) {
+    std::vector<std::string> wide;
+    for (const std::string& document : row) {
+      any_responsive = any_responsive || is_responsive(document);
+      Layouts both = layouts(document);
+      wide.push_back(std::move(both.wide));
+      narrow.push_back(std::move(both.narrow));
+    }
+    wide_rows.push_back(arranged(wide, gap, false));
+  }
+  const std::string wide = arranged(wide_rows, gap, true);
+  if (!any_responsive && size_of(wide).first <= kNarrowWidth) return wide;
+  return responsive(wide, arranged(narrow, gap, true));
+}
+
 std::string clipped(const Box& b, const std::string& content) {
   const std::string box = "x=\"" + num(b.left) + "\" y=\"" + num(b.top) + "\" width=\"" +
                           num(b.width()) + "\" height=\"" + num(b.height()) + "\"";

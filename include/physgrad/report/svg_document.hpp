@@ -48,6 +48,9 @@ std::string open(int width, int height);
 // one document; where any is responsive, a responsive one whose narrow layout stacks the
 // panels' narrow layouts. Throws Error for a text that is not such a document.
 std::string side_by_side(const std::vector<std::string>& documents, int gap = 12);
+// Rows of documents as side_by_side() places them, one row above the next; the narrow layout
+// stacks every panel's narrow layout in reading order.
+std::string grid(const std::vector<std::vector<std::string>>& rows, int gap = 12);
 
 // A figure in two layouts, documents of open(): `wide` as it is, and `narrow` (at most
 // kNarrowWidth pixels wide: panels stacked, legend below) where the screen is narrower than the
