@@ -52,7 +52,8 @@ TEST(Catalogue, EveryRuleHasOneEntryWithLabelFormulaAndColour) {
     }
   }
   EXPECT_EQ(rule_ids(RuleKind::kLearning),
-            (std::vector<std::string>{"sgd", "adam", "gn", "hig", "sip"}));
+            (std::vector<std::string>{"sgd", "adam", "gn", "hig", "sip", "kfac", "kfac-hig",
+                                      "lanczos-gn", "lanczos-hig"}));
   EXPECT_EQ(rule_ids(RuleKind::kDirect).size(), 10u);
   // A rule present in both kinds is drawn in one colour.
   EXPECT_EQ(find_rule(RuleKind::kDirect, "adam").colour,
@@ -86,7 +87,9 @@ TEST(Catalogue, SettingsReachEveryOptionTheRulesReport) {
       {"c1", 1e-3},          {"c2", 0.5},            {"initial_damping", 0.01},
       {"min_damping", 1e-12}, {"inverse", "ig"},     {"inverse_tolerance", 1e-7},
       {"inverse_iterations", 17}, {"inverse_relative_tolerance", 1e-3},
-      {"inverse_function_tolerance", 1e-9}, {"inverse_rcond", 1e-8}, {"y_step", 0.75}};
+      {"inverse_function_tolerance", 1e-9}, {"inverse_rcond", 1e-8}, {"y_step", 0.75},
+      {"damping", 0.2},      {"refresh", 3},         {"decay", 0.5},
+      {"products", 9}};
   nlohmann::json expected(settings);
   expected["initial_step"] = 0.123;  // bfgs and lbfgs take lr as their first trial step
   for (const RuleInfo& rule : rule_catalogue()) {

@@ -66,6 +66,7 @@
 #include "physgrad/optim/quasi_newton.hpp"
 
 #include "physgrad/inversion/jacobian_operator.hpp"
+#include "physgrad/inversion/lanczos.hpp"
 #include "physgrad/inversion/local_inverse.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
 #include "physgrad/inversion/tridiagonal_eigen.hpp"
@@ -73,6 +74,8 @@
 
 #include "physgrad/learn/adam.hpp"
 #include "physgrad/learn/hig.hpp"
+#include "physgrad/learn/kronecker_hig.hpp"
+#include "physgrad/learn/lanczos_hig.hpp"
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/learn/mapped_jacobian.hpp"
 #include "physgrad/learn/sgd.hpp"
