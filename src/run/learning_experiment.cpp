@@ -69,13 +69,16 @@ void require_learning_sizes(const Settings& settings, Index outputs,
         settings.has("iters")
             ? static_cast<double>(settings.integer("iters"))
             : static_cast<double>(settings.integer("epochs")) * std::ceil(train_size / batch);
-    // A pretrained run (--pretrain) next to each gn or hig run.
+    // A pretrained run (--pretrain) next to each run of a rule on the stacked Jacobian.
     double runs = 1;
     if (settings.has("optimizers")) {
       const std::vector<std::string> ids = settings.texts("optimizers");
       const bool pretrained = settings.has("pretrain") && settings.integer("pretrain") > 0;
       runs = static_cast<double>(ids.size());
-      for (const std::string& id : ids) runs += pretrained && (id == "gn" || id == "hig") ? 1 : 0;
+      for (const std::string& id : ids) {
+        const bool twin = make_learning_update(id)->need() == UpdateNeed::kStackedJacobian;
+        runs += pretrained && twin ? 1 : 0;
+      }
     }
     const long long every = settings.integer("eval-every");
     require_memory(1024 * runs * (iterations / static_cast<double>(every) + 2),
@@ -97,6 +100,10 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
       rule_option_spec("rcond", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
       rule_option_spec("precision", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
       rule_option_spec("eigensolver", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("products", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("refresh", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("damping", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("decay", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
       integer_option("epochs", "", "epochs per run (at most 10⁹, as --iters)")
           .at_least(1)
           .at_most(1e9),
@@ -132,12 +139,14 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
 }  // namespace
 
 std::unique_ptr<LearningUpdate> ReferenceCase::update(const std::string& id) const {
-  const auto found = defaults.find(id);
+  auto found = defaults.find(id);
+  if (found == defaults.end()) found = defaults.find(settings_source(id));
   return make_learning_update(id, found == defaults.end() ? RuleSettings{} : found->second.settings);
 }
 
 Index ReferenceCase::batch_size(const std::string& id) const {
-  const auto found = defaults.find(id);
+  auto found = defaults.find(id);
+  if (found == defaults.end()) found = defaults.find(settings_source(id));
   const std::optional<Index> own = found == defaults.end() ? std::nullopt : found->second.batch;
   return own.value_or(TrainerOptions{}.batch_size);
 }
