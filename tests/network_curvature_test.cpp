@@ -34,8 +34,9 @@ Matrix curvature_inputs() {
   return x;
 }
 
-// Mlp without its own jvp: the Network default (gradient rows per output).
-class RowsOnlyNetwork final : public Network {
+// An Mlp seen only through the members a Network must have: jvp is the Network default
+// (gradient rows per output), and it has no layer factors.
+class RowsOnlyNetwork : public Network {
  public:
   explicit RowsOnlyNetwork(Mlp inner) : inner_(std::move(inner)) {}
   Index input_dim() const override { return inner_.input_dim(); }
@@ -55,7 +56,7 @@ class RowsOnlyNetwork final : public Network {
     inner_.per_sample_gradients(cache, gy, out);
   }
 
- private:
+ protected:
   Mlp inner_;
 };
 
@@ -162,25 +163,9 @@ TEST(DenseLayerFactors, AreTheInputsGramAndTheBiasDerivativesGram) {
 }
 
 // A network whose layers lie outside θ, or whose jvp has the wrong shape, is named.
-class MisplacedLayers final : public Network {
+class MisplacedLayers final : public RowsOnlyNetwork {
  public:
-  explicit MisplacedLayers(Mlp inner) : inner_(std::move(inner)) {}
-  Index input_dim() const override { return inner_.input_dim(); }
-  Index output_dim() const override { return inner_.output_dim(); }
-  Index num_parameters() const override { return inner_.num_parameters(); }
-  const Vector& parameters() const override { return inner_.parameters(); }
-  Vector& parameters() override { return inner_.parameters(); }
-  std::unique_ptr<NetworkCache> new_cache() const override { return inner_.new_cache(); }
-  Matrix forward(const Matrix& x, NetworkCache& cache) const override {
-    return inner_.forward(x, cache);
-  }
-  Vector backward(const NetworkCache& cache, const Matrix& gy) const override {
-    return inner_.backward(cache, gy);
-  }
-  void per_sample_gradients(const NetworkCache& cache, const Matrix& gy,
-                            StridedMatrixRef out) const override {
-    inner_.per_sample_gradients(cache, gy, out);
-  }
+  using RowsOnlyNetwork::RowsOnlyNetwork;
   Matrix jvp(const NetworkCache& cache, Index batch, const Vector& v) const override {
     return inner_.jvp(cache, batch, v).leftCols(batch - 1);
   }
@@ -190,9 +175,6 @@ class MisplacedLayers final : public Network {
     layers.back().offset += 1;
     return layers;
   }
-
- private:
-  Mlp inner_;
 };
 
 TEST(CheckedNetwork, NamesAWrongJvpAndLayersOutsideTheParameters) {
