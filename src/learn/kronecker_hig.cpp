@@ -143,6 +143,10 @@ Step KroneckerHigUpdate::step(const BatchState& batch) {
         layer.input_factor = a;
         layer.cotangent_factor = f.cotangent_gram;
       }
+      if (!all_finite(layer.input_factor) || !all_finite(layer.cotangent_factor)) {
+        throw NumericalError(id() + ": non-finite Kronecker factor of dense layer " +
+                             std::to_string(l));
+      }
     }
     step.jacobian_seconds = seconds_since(start);
   }
@@ -164,7 +168,7 @@ Step KroneckerHigUpdate::step(const BatchState& batch) {
       throw;
     }
   }
-  step.delta.resize(gradient.size());
+  step.delta = Vector::Zero(gradient.size());
   for (std::size_t l = 0; l < layers_.size(); ++l) {
     const Layer& layer = layers_[l];
     const Eigen::Map<const Matrix> g(gradient.data() + layer.offset, layer.outputs,
