@@ -92,6 +92,18 @@ const std::vector<RuleInfo>& rule_catalogue() {
        "#00633a", HigOptions{}},
       {Kind::kLearning, "sip", "SIP", "x̃ = P⁻¹(y + ηΔy; x), Adam on ½‖f(in; θ) − x̃‖²",
        "#000000", SipOptions{}},
+      {Kind::kLearning, "kfac", "K-FAC",
+       "Δ[W b] = −η S⁻¹ ∇[W b] A⁻¹ per dense layer, JᵀJ ≈ A ⊗ S (running averages)", "#9e6b3b",
+       KroneckerHigOptions{.kappa = 1.0}},
+      {Kind::kLearning, "kfac-hig", "Kronecker HIG",
+       "Δ[W b] = −η S^{−3/4} ∇[W b] A^{−3/4} per dense layer, JᵀJ ≈ A ⊗ S (running averages)",
+       "#66c2a4", KroneckerHigOptions{}},
+      {Kind::kLearning, "lanczos-gn", "Lanczos GN",
+       "Δθ = −η Jᵀ (J Jᵀ)⁻¹ ∂L/∂y by q Lanczos steps on J Jᵀ, matrix-free", "#c49c94",
+       LanczosHigOptions{.kappa = 1.0}},
+      {Kind::kLearning, "lanczos-hig", "Lanczos HIG",
+       "Δθ = −η Jᵀ (J Jᵀ)^{−3/4} ∂L/∂y by q Lanczos steps on J Jᵀ, matrix-free", "#2ca25f",
+       LanczosHigOptions{}},
   };
   return rules;
 }
@@ -129,6 +141,12 @@ std::string learning_run_label(const std::string& id) {
   if (rule.empty()) return find_rule(Kind::kLearning, id).label;
   return find_rule(Kind::kLearning, kPretrainingRule).label + "→" +
          find_rule(Kind::kLearning, rule).label;
+}
+
+std::string settings_source(const std::string& id) {
+  if (id == "kfac" || id == "lanczos-gn") return "gn";
+  if (id == "kfac-hig" || id == "lanczos-hig") return "hig";
+  return id;
 }
 
 std::vector<OptionDescription> rule_options(const RuleInfo& rule) {
@@ -210,8 +228,8 @@ std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSetti
 }
 
 std::unique_ptr<LearningUpdate> make_learning_update(const RuleOptions& options) {
-  return build<LearningUpdate, SgdUpdate, AdamUpdate, HigUpdate, SipUpdate>(options,
-                                                                           Kind::kLearning);
+  return build<LearningUpdate, SgdUpdate, AdamUpdate, HigUpdate, SipUpdate, KroneckerHigUpdate,
+               LanczosHigUpdate>(options, Kind::kLearning);
 }
 
 std::unique_ptr<LearningUpdate> make_learning_update(const std::string& id,

@@ -129,7 +129,7 @@ TEST(ExperimentSettings, TheSharedRuleOptionsTakeTheRulesRanges) {
       EXPECT_EQ(rcond.max_exclusive, option.range.max_open) << rule.id;
     }
   }
-  EXPECT_EQ(rules, 2);  // gn and hig
+  EXPECT_EQ(rules, 6);  // gn, hig and their structured approximations
   EXPECT_EQ(resolve_settings(experiment, {{"rcond", "0.7"}}).real("rcond"), 0.7);
   try {
     resolve_settings(experiment, {{"rcond", "1"}});
@@ -137,7 +137,9 @@ TEST(ExperimentSettings, TheSharedRuleOptionsTakeTheRulesRanges) {
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), "--rcond: must be in [0, 1), got '1'");
   }
-  EXPECT_NE(rcond.help.find("(gn, hig; default: each rule's own)"), std::string::npos)
+  EXPECT_NE(rcond.help.find("(gn, hig, kfac, kfac-hig, lanczos-gn, lanczos-hig; default: each "
+                            "rule's own)"),
+            std::string::npos)
       << rcond.help;
   for (const auto& any : registry()) {
     const std::string& name = any->name();

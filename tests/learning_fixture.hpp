@@ -63,10 +63,12 @@ struct NetworkThroughPhysics {
   }
 };
 
-// The settings the learning tests train gn and hig with (their default η = 1 overshoots here).
+// The settings the learning tests train gn and hig, and the rules that approximate them, with
+// (their default η = 1 overshoots here).
 inline RuleSettings test_settings(const std::string& id) {
   RuleSettings settings;
-  if (id == "gn" || id == "hig") settings["lr"] = 0.1;
+  const std::string source = settings_source(id);
+  if (source == "gn" || source == "hig") settings["lr"] = 0.1;
   return settings;
 }
 

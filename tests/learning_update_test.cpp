@@ -52,7 +52,8 @@ TEST(Catalogue, EveryRuleHasOneEntryWithLabelFormulaAndColour) {
     }
   }
   EXPECT_EQ(rule_ids(RuleKind::kLearning),
-            (std::vector<std::string>{"sgd", "adam", "gn", "hig", "sip"}));
+            (std::vector<std::string>{"sgd", "adam", "gn", "hig", "sip", "kfac", "kfac-hig",
+                                      "lanczos-gn", "lanczos-hig"}));
   EXPECT_EQ(rule_ids(RuleKind::kDirect).size(), 10u);
   // A rule present in both kinds is drawn in one colour.
   EXPECT_EQ(find_rule(RuleKind::kDirect, "adam").colour,
@@ -90,7 +91,8 @@ TEST(Catalogue, SettingsReachEveryOptionTheRulesReport) {
       {"inverse_iterations", 17}, {"inverse_relative_tolerance", 1e-3},
       {"inverse_function_tolerance", 1e-9}, {"inverse_rcond", 1e-8}, {"y_step", 0.75},
       {"schedule", "plateau"}, {"decay", 0.5}, {"min_lr", 1e-6}, {"patience", 3},
-      {"threshold", 0.01}};
+      {"threshold", 0.01},   {"damping", 0.2},       {"refresh", 3},
+      {"factor_decay", 0.25}, {"products", 9}};
   nlohmann::json expected(settings);
   expected["initial_step"] = 0.123;  // bfgs and lbfgs take lr as their first trial step
   for (const RuleInfo& rule : rule_catalogue()) {

@@ -480,7 +480,7 @@ class Fuzz {
     const std::vector<std::string> ids = rule_ids(RuleKind::kLearning);
     const std::string id = ids[static_cast<std::size_t>(pick(static_cast<int>(ids.size())))];
     RuleSettings settings;
-    if (id == "gn" || id == "hig") settings["lr"] = 0.1;
+    if (settings_source(id) == "gn" || settings_source(id) == "hig") settings["lr"] = 0.1;
     if (id == "sip") {
       settings["inverse"] = to_string(draw_inverse());
       settings["inverse_iterations"] = 20;

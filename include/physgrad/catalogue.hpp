@@ -12,6 +12,8 @@
 
 #include "physgrad/learn/adam.hpp"
 #include "physgrad/learn/hig.hpp"
+#include "physgrad/learn/kronecker_hig.hpp"
+#include "physgrad/learn/lanczos_hig.hpp"
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/learn/sgd.hpp"
 #include "physgrad/learn/sip.hpp"
@@ -39,7 +41,8 @@ using RuleOptions =
     std::variant<GradientDescentOptions, MomentumOptions, AdamOptions, NewtonOptions, BfgsOptions,
                  LbfgsOptions, GaussNewtonOptions, LevenbergMarquardtOptions,
                  InverseGradientOptions, PhysicalGradientOptions, SgdOptions,
-                 LearningAdamOptions, HigOptions, SipOptions>;
+                 LearningAdamOptions, HigOptions, SipOptions, KroneckerHigOptions,
+                 LanczosHigOptions>;
 
 struct RuleInfo {
   RuleKind kind;
@@ -67,6 +70,11 @@ std::string pretrained_rule(const std::string& id);
 // The label of learning run `id`: its rule's ("HIG"), or "Adam→HIG" for "adam-hig". Throws Error
 // like find_rule for an id that is neither.
 std::string learning_run_label(const std::string& id);
+
+// The rule whose settings in an experiment (η, τ, batch) learning rule `id` takes where the
+// experiment gives it none: the exact gn or hig for their structured approximations (kfac,
+// lanczos-gn → gn; kfac-hig, lanczos-hig → hig), else `id` itself.
+std::string settings_source(const std::string& id);
 
 // Overrides of rules' options by name, e.g. {{"lr", 0.5}, {"inverse", "lbfgs"}} or from the
 // command line; values as params() reports them (numbers; names for the choices). A name replaces

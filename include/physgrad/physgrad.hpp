@@ -67,12 +67,15 @@
 #include "physgrad/optim/quasi_newton.hpp"
 
 #include "physgrad/inversion/jacobian_operator.hpp"
+#include "physgrad/inversion/lanczos.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
 #include "physgrad/inversion/tridiagonal_eigen.hpp"
 #include "physgrad/inversion/y_step.hpp"
 
 #include "physgrad/learn/adam.hpp"
 #include "physgrad/learn/hig.hpp"
+#include "physgrad/learn/kronecker_hig.hpp"
+#include "physgrad/learn/lanczos_hig.hpp"
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/learn/mapped_jacobian.hpp"
 #include "physgrad/learn/schedule.hpp"

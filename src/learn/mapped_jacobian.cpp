@@ -40,6 +40,8 @@ Matrix MappedJacobian::gram() const {
 
 Vector MappedJacobian::apply_transpose(const Vector& c) const { return transposed_ * c; }
 
+Vector MappedJacobian::apply(const Vector& w) const { return transposed_.transpose() * w; }
+
 Matrix MappedJacobian::materialize() const { return transposed_.transpose(); }
 
 StackedJacobian::Normal MappedJacobian::normal(const Vector& g) const {

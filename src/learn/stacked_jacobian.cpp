@@ -125,6 +125,35 @@ Vector LocalJacobian::apply_transpose(const Vector& c) const {
   return network_->backward(*cache_, weighted_cotangents(output_cotangents_, weights));
 }
 
+Vector LocalJacobian::apply(const Vector& w) const {
+  if (w.size() != cols()) {
+    throw Error("LocalJacobian::apply: a vector of " + std::to_string(w.size()) +
+                " entries, J has " + std::to_string(cols()) + " columns");
+  }
+  const Matrix tangent = network_->jvp(*cache_, batch(), w);  // n × B
+  Vector out(rows());
+  // Entry k·B + i: the dot product of sample i's cotangent of output k with its tangent, summed
+  // in one fixed order (the same bits whichever matrix holds the columns).
+  for (Index k = 0; k < outputs(); ++k) {
+    const Matrix& c = output_cotangents_[static_cast<std::size_t>(k)];
+    for (Index i = 0; i < batch(); ++i) {
+      double sum = 0;
+      for (Index e = 0; e < c.rows(); ++e) sum += c(e, i) * tangent(e, i);
+      out(k * batch() + i) = sum;
+    }
+  }
+  return out;
+}
+
+std::vector<DenseLayerFactors> LocalJacobian::dense_layer_factors() const {
+  return network_->dense_layer_factors(*cache_, output_cotangents_);
+}
+
+std::vector<DenseLayerFactors> StackedJacobian::dense_layer_factors() const {
+  throw Error("this stacked Jacobian knows no network layers (a formed J): the "
+              "Kronecker-factored rules need the network's own Jacobian");
+}
+
 Matrix LocalJacobian::materialize() const {
   Matrix j(rows(), cols());
   for (Index k = 0; k < outputs(); ++k) {

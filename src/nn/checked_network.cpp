@@ -106,4 +106,30 @@ Matrix CheckedNetwork::per_sample_gram_columns(const NetworkCache& cache,
   return gram;
 }
 
+Matrix CheckedNetwork::jvp(const NetworkCache& cache, Index batch, const Vector& v) const {
+  Matrix out = inner_->jvp(cache, batch, v);
+  check_result("jvp", out, output_dim_, batch);
+  return out;
+}
+
+std::vector<DenseLayerFactors> CheckedNetwork::dense_layer_factors(
+    const NetworkCache& cache, const std::vector<Matrix>& cotangents) const {
+  std::vector<DenseLayerFactors> layers = inner_->dense_layer_factors(cache, cotangents);
+  for (std::size_t l = 0; l < layers.size(); ++l) {
+    const DenseLayerFactors& f = layers[l];
+    const bool inside = f.offset >= 0 && f.outputs >= 1 && f.inputs >= 1 &&
+                        f.offset + f.outputs * (f.inputs + 1) <= parameters_;
+    if (!inside) {
+      std::ostringstream msg;
+      msg << "network '" << name() << "': dense_layer_factors layer " << l << " holds "
+          << f.outputs << "×(" << f.inputs << " + 1) weights from entry " << f.offset
+          << ", outside the " << parameters_ << " parameters";
+      throw Error(msg.str());
+    }
+    check_result("dense_layer_factors (input_gram)", f.input_gram, f.inputs + 1, f.inputs + 1);
+    check_result("dense_layer_factors (cotangent_gram)", f.cotangent_gram, f.outputs, f.outputs);
+  }
+  return layers;
+}
+
 }  // namespace physgrad

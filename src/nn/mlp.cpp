@@ -1,5 +1,7 @@
 #include "physgrad/nn/mlp.hpp"
 
+#include <cblas.h>
+
 #include <array>
 #include <cmath>
 #include <random>
@@ -53,8 +55,8 @@ const MlpCache& mlp_cache(const NetworkCache& cache) {
   return *own;
 }
 
-// Checks that `cache` comes from forward() on this network and gy matches it; returns B.
-Index check_cache(const Mlp& mlp, const MlpCache& cache, const Matrix& gy) {
+// Checks that `cache` comes from forward() on this network; returns B.
+Index check_cache(const Mlp& mlp, const MlpCache& cache) {
   check_parameters(mlp);
   const auto& widths = mlp.widths();
   if (cache.activations.size() != widths.size() ||
@@ -78,7 +80,16 @@ Index check_cache(const Mlp& mlp, const MlpCache& cache, const Matrix& gy) {
              std::string("cache.derivatives[") + std::to_string(l - 1) + "]");
     }
   }
-  expect(gy, mlp.output_dim(), "output cotangent gy");
+  return batch;
+}
+
+// The same, and that gy (output_dim × B) matches it; returns B.
+Index check_cache(const Mlp& mlp, const MlpCache& cache, const Matrix& gy) {
+  const Index batch = check_cache(mlp, cache);
+  if (gy.rows() != mlp.output_dim() || gy.cols() != batch) {
+    throw Error(std::string("Mlp: output cotangent gy is ") + shape_text(gy.rows(), gy.cols()) +
+                ", expected " + shape_text(mlp.output_dim(), batch));
+  }
   return batch;
 }
 
@@ -232,8 +243,10 @@ void Mlp::per_sample_gradients(const NetworkCache& network_cache, const Matrix& 
   });
 }
 
-void Mlp::add_layer_factors(const NetworkCache& network_cache,
-                            const std::vector<Matrix>& cotangents, DenseLayerGram& gram) const {
+void Mlp::sweep_cotangents(
+    const NetworkCache& network_cache, const std::vector<Matrix>& cotangents,
+    const std::function<void(Index layer, const Matrix& deltas, const Matrix& inputs)>& visit)
+    const {
   const MlpCache& cache = mlp_cache(network_cache);
   for (const Matrix& block : cotangents) check_cache(*this, cache, block);
   const Index batch = cache.activations[0].cols();
@@ -250,7 +263,7 @@ void Mlp::add_layer_factors(const NetworkCache& network_cache,
   times_slope(delta, cache.derivatives.back());
   Matrix next;
   for (Index l = num_layers() - 1;; --l) {
-    gram.add(delta, cache.activations[static_cast<std::size_t>(l)]);
+    visit(l, delta, cache.activations[static_cast<std::size_t>(l)]);
     if (l == 0) break;
     next.noalias() = weight(l).transpose() * delta;
     times_slope(next, cache.derivatives[static_cast<std::size_t>(l - 1)]);
@@ -259,6 +272,17 @@ void Mlp::add_layer_factors(const NetworkCache& network_cache,
 }
 
 namespace {
+
+// M Mᵀ (symmetric) by BLAS dsyrk on the lower triangle, mirrored.
+Matrix mlp_outer_gram(const Matrix& m) {
+  Matrix out = Matrix::Zero(m.rows(), m.rows());
+  if (m.size() == 0) return out;
+  cblas_dsyrk(CblasColMajor, CblasLower, CblasNoTrans, static_cast<blasint>(m.rows()),
+              static_cast<blasint>(m.cols()), 1.0, m.data(), static_cast<blasint>(m.rows()), 0.0,
+              out.data(), static_cast<blasint>(m.rows()));
+  out.triangularView<Eigen::StrictlyUpper>() = out.transpose();
+  return out;
+}
 
 // K·B columns of the Gram matrix of K cotangent blocks over `batch` samples.
 Index gram_columns(const std::vector<Matrix>& cotangents, Index batch) {
@@ -271,7 +295,10 @@ Matrix Mlp::per_sample_gram(const NetworkCache& network_cache,
                             const std::vector<Matrix>& cotangents) const {
   const Index batch = mlp_cache(network_cache).activations[0].cols();
   DenseLayerGram gram(gram_columns(cotangents, batch), batch);
-  add_layer_factors(network_cache, cotangents, gram);
+  sweep_cotangents(network_cache, cotangents,
+                   [&gram](Index, const Matrix& deltas, const Matrix& inputs) {
+                     gram.add(deltas, inputs);
+                   });
   return gram.finish();
 }
 
@@ -280,8 +307,50 @@ Matrix Mlp::per_sample_gram_columns(const NetworkCache& network_cache,
                                     const std::vector<Index>& selected) const {
   const Index batch = mlp_cache(network_cache).activations[0].cols();
   DenseLayerGram gram(gram_columns(cotangents, batch), batch, selected);
-  add_layer_factors(network_cache, cotangents, gram);
+  sweep_cotangents(network_cache, cotangents,
+                   [&gram](Index, const Matrix& deltas, const Matrix& inputs) {
+                     gram.add(deltas, inputs);
+                   });
   return gram.finish();
+}
+
+Matrix Mlp::jvp(const NetworkCache& network_cache, Index batch, const Vector& v) const {
+  const MlpCache& cache = mlp_cache(network_cache);
+  if (check_cache(*this, cache) != batch || v.size() != num_parameters()) {
+    throw Error("Mlp::jvp: a direction of " + std::to_string(v.size()) + " entries on " +
+                std::to_string(batch) + " samples, expected " +
+                std::to_string(num_parameters()) + " on the " +
+                std::to_string(cache.activations[0].cols()) + " cached");
+  }
+  Matrix tangent;  // ȧ_{l−1}; none for the input
+  for (Index l = 0; l < num_layers(); ++l) {
+    const Eigen::Map<const Matrix> dw(v.data() + offsets_[l], widths_[l + 1], widths_[l]);
+    const Eigen::Map<const Vector> db(v.data() + offsets_[l] + widths_[l + 1] * widths_[l],
+                                      widths_[l + 1]);
+    Matrix dz = dw * cache.activations[static_cast<std::size_t>(l)];
+    if (l > 0) dz.noalias() += weight(l) * tangent;
+    dz.colwise() += db;
+    tangent = dz.cwiseProduct(cache.derivatives[static_cast<std::size_t>(l)]);
+  }
+  return tangent;
+}
+
+std::vector<DenseLayerFactors> Mlp::dense_layer_factors(
+    const NetworkCache& network_cache, const std::vector<Matrix>& cotangents) const {
+  std::vector<DenseLayerFactors> layers(static_cast<std::size_t>(num_layers()));
+  sweep_cotangents(network_cache, cotangents,
+                   [&](Index l, const Matrix& deltas, const Matrix& inputs) {
+                     DenseLayerFactors& f = layers[static_cast<std::size_t>(l)];
+                     f.offset = offsets_[l];
+                     f.outputs = widths_[l + 1];
+                     f.inputs = widths_[l];
+                     Matrix extended(f.inputs + 1, inputs.cols());  // ā = [a; 1]
+                     extended.topRows(f.inputs) = inputs;
+                     extended.row(f.inputs).setOnes();
+                     f.input_gram = mlp_outer_gram(extended);
+                     f.cotangent_gram = mlp_outer_gram(deltas);
+                   });
+  return layers;
 }
 
 }  // namespace physgrad

@@ -79,4 +79,31 @@ Matrix Network::per_sample_gram_columns(const NetworkCache& cache,
   return out;
 }
 
+Matrix Network::jvp(const NetworkCache& cache, Index batch, const Vector& v) const {
+  const Index parameters = num_parameters();
+  if (v.size() != parameters) {
+    throw Error("network '" + name() + "': jvp along " + std::to_string(v.size()) +
+                " entries, num_parameters() says " + std::to_string(parameters));
+  }
+  // Row o of the result is (∂f_o(x_b)/∂θ) · v: the gradient rows of the unit cotangent e_o.
+  const Index outputs = output_dim();
+  Matrix out(outputs, batch);
+  Matrix unit(outputs, batch);
+  Matrix rows(batch, parameters);
+  for (Index o = 0; o < outputs; ++o) {
+    unit.setZero();
+    unit.row(o).setOnes();
+    per_sample_gradients(cache, unit, rows);
+    out.row(o) = (rows * v).transpose();
+  }
+  return out;
+}
+
+std::vector<DenseLayerFactors> Network::dense_layer_factors(
+    const NetworkCache& /*cache*/, const std::vector<Matrix>& /*cotangents*/) const {
+  throw Error("network '" + name() +
+              "' does not describe its dense layers (dense_layer_factors), which the "
+              "Kronecker-factored rules need");
+}
+
 }  // namespace physgrad

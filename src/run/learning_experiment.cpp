@@ -100,6 +100,10 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
       rule_option_spec("rcond", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
       rule_option_spec("precision", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
       rule_option_spec("eigensolver", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("products", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("refresh", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("damping", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
+      rule_option_spec("factor_decay", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
       integer_option("epochs", "", "epochs per run (at most 10⁹, as --iters)")
           .at_least(1)
           .at_most(1e9),
@@ -172,12 +176,14 @@ long long pretrain_iterations(const std::string& text) {
 }
 
 std::unique_ptr<LearningUpdate> ReferenceCase::update(const std::string& id) const {
-  const auto found = defaults.find(id);
+  auto found = defaults.find(id);
+  if (found == defaults.end()) found = defaults.find(settings_source(id));
   return make_learning_update(id, found == defaults.end() ? RuleSettings{} : found->second.settings);
 }
 
 Index ReferenceCase::batch_size(const std::string& id) const {
-  const auto found = defaults.find(id);
+  auto found = defaults.find(id);
+  if (found == defaults.end()) found = defaults.find(settings_source(id));
   const std::optional<Index> own = found == defaults.end() ? std::nullopt : found->second.batch;
   return own.value_or(TrainerOptions{}.batch_size);
 }

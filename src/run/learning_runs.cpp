@@ -307,7 +307,8 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
 }
 
 std::unique_ptr<LearningUpdate> LearningSweep::make_update(const std::string& rule) const {
-  const auto found = defaults_.find(rule);
+  auto found = defaults_.find(rule);
+  if (found == defaults_.end()) found = defaults_.find(settings_source(rule));
   RuleSettings options = found == defaults_.end() ? RuleSettings{} : found->second.settings;
   for (const auto& [name, value] : rule_settings(settings_, RuleKind::kLearning)) {
     options[name] = value;
@@ -317,7 +318,8 @@ std::unique_ptr<LearningUpdate> LearningSweep::make_update(const std::string& ru
 
 Index LearningSweep::batch_size(const std::string& rule) const {
   if (settings_.has("batch")) return settings_.integer("batch");
-  const auto found = defaults_.find(rule);
+  auto found = defaults_.find(rule);
+  if (found == defaults_.end()) found = defaults_.find(settings_source(rule));
   const std::optional<Index> own = found == defaults_.end() ? std::nullopt : found->second.batch;
   return own.value_or(TrainerOptions{}.batch_size);
 }

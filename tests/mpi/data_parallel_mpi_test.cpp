@@ -159,6 +159,23 @@ TEST_F(MpiRun, PretrainedRunsSwitchWhereOneProcessDoes) {
   EXPECT_EQ(single, switches("parallel"));
 }
 
+// The structured rules (Kronecker factors, Lanczos on J Jᵀ) over MPI, with the factors of kfac
+// refreshed every 10 of the 12 steps and on the normal-path shape of hig-toy.
+TEST_F(MpiRun, StructuredRulesMatchOneProcess) {
+  const auto worst = expect_same_losses(
+      "run oscillators --train-size 512 --test-size 256 --batch 128 --iters 12 --eval-every 3 "
+      "--optimizers kfac,kfac-hig,lanczos-gn,lanczos-hig --products 8 --pretrain 0",
+      2);
+  EXPECT_EQ(worst.size(), 4U);
+  fs::remove_all(dir_ / "single");
+  fs::remove_all(dir_ / "parallel");
+  EXPECT_EQ(expect_same_losses("run hig-toy --lambda 0.01 --seeds 1 --iters 30 --eval-every 10 "
+                               "--optimizers kfac-hig,lanczos-hig --refresh 4",
+                               3)
+                .size(),
+            2U);
+}
+
 // The ranks' distributed eigensolver (ScaLAPACK pdsyevd over a 1 × K grid) against one
 // process's dsyevd on matrices of known spectrum (distributed_eigen_check.cpp), on 2 ranks and on
 // 3 (uneven block-cyclic shares, a rank without columns).

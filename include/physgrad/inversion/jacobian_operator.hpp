@@ -1,5 +1,5 @@
 // JacobianOperator — a Jacobian J (rows × cols) seen through the forms an inversion uses:
-// J Jᵀ, Jᵀc, J itself, and the normal equations JᵀJ, Jᵀg; DenseJacobian is a formed matrix.
+// J Jᵀ, Jᵀc, Jw, J itself, and the normal equations JᵀJ, Jᵀg; DenseJacobian is a formed matrix.
 #pragma once
 
 #include <optional>
@@ -25,6 +25,9 @@ class JacobianOperator {
   virtual Matrix gram() const = 0;
   // Jᵀ c for c in row space.
   virtual Vector apply_transpose(const Vector& c) const = 0;
+  // J w for w of cols() entries (the matrix-free rules, learn/lanczos_hig.hpp). The default forms
+  // J (materialize()); an operator that can apply J without forming it overrides this.
+  virtual Vector apply(const Vector& w) const { return materialize() * w; }
   // J itself (rows × cols).
   virtual Matrix materialize() const = 0;
   // Jᵀ J (cols × cols; its lower triangle is what counts) and Jᵀ g.
@@ -55,6 +58,7 @@ class DenseJacobian final : public JacobianOperator {
   Index cols() const override { return j_->cols(); }
   Matrix gram() const override;
   Vector apply_transpose(const Vector& c) const override;
+  Vector apply(const Vector& w) const override { return *j_ * w; }
   Matrix materialize() const override { return *j_; }
   Normal normal(const Vector& g) const override;
 

@@ -23,6 +23,7 @@ class MappedJacobian final : public StackedJacobian {
 
   Matrix gram() const override;
   Vector apply_transpose(const Vector& c) const override;
+  Vector apply(const Vector& w) const override;
   Matrix materialize() const override;
   Normal normal(const Vector& g) const override;
 

@@ -11,9 +11,10 @@
 namespace physgrad {
 
 // What each form exchanges (B the batch, m physics outputs, n network outputs, |θ| parameters):
-//   gram(), materialize(): every rank's output cotangents (∂P/∂x)ᵀe_k, B·m·n doubles, once per
-//     batch; then every rank forms the one-process J Jᵀ (or J) from the network on the whole
-//     batch, so the results are the one-process bits.
+//   gram(), materialize(), apply(w), dense_layer_factors(): every rank's output cotangents
+//     (∂P/∂x)ᵀe_k, B·m·n doubles, once per batch; then every rank forms the one-process J Jᵀ
+//     (or J, J w, the layer factors) from the network on the whole batch, so the results are
+//     the one-process bits.
 //   apply_transpose(c): each rank's physics VJP with its share of c, B·n doubles, then one
 //     backward pass through the network on the whole batch.
 //   shared_gram_apply(g): from distributed_gram_rows() rows on, when the communicator has a
@@ -39,7 +40,11 @@ class ShardedJacobian final : public StackedJacobian {
   Index cols() const override { return network_->num_parameters(); }
   Matrix gram() const override { return whole().gram(); }
   Vector apply_transpose(const Vector& c) const override;
+  Vector apply(const Vector& w) const override { return whole().apply(w); }
   Matrix materialize() const override { return whole().materialize(); }
+  std::vector<DenseLayerFactors> dense_layer_factors() const override {
+    return whole().dense_layer_factors();
+  }
   Normal normal(const Vector& g) const override;
   std::optional<Vector> shared_gram_apply(const Vector& g, const PowerPinvOptions& options,
                                           PowerPinvInfo* info,

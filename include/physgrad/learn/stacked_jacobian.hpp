@@ -1,5 +1,6 @@
 // StackedJacobian — J = ∂y_ik/∂θ of network + physics over a mini-batch (row k·B + i for sample i,
-// output k) as a JacobianOperator (inversion/jacobian_operator.hpp): J Jᵀ, Jᵀc, J, JᵀJ with Jᵀg.
+// output k) as a JacobianOperator (inversion/jacobian_operator.hpp): J Jᵀ, Jᵀc, Jw, J, JᵀJ with
+// Jᵀg, and the Kronecker factors Σ āāᵀ, Σ_rows δδᵀ of the network's dense layers.
 #pragma once
 
 #include <vector>
@@ -18,6 +19,10 @@ class StackedJacobian : public JacobianOperator {
   virtual Index batch() const = 0;    // B
   virtual Index outputs() const = 0;  // m, the physics outputs per sample
   Index rows() const final { return batch() * outputs(); }
+  // The factors of each dense layer of the network (nn/network.hpp, DenseLayerFactors) over the
+  // B·m rows of J: Σ over the batch of ā āᵀ, Σ over every row of δ δᵀ. The default throws Error
+  // (a formed J knows no layers).
+  virtual std::vector<DenseLayerFactors> dense_layer_factors() const;
 };
 
 // J of one process's batch. For a dense network J Jᵀ comes from the layer factors (the
@@ -45,8 +50,12 @@ class LocalJacobian final : public StackedJacobian {
   // The given columns of J Jᵀ (rows × columns.size()) from the layer factors.
   Matrix gram_columns(const std::vector<Index>& columns) const;
   Vector apply_transpose(const Vector& c) const override;
+  // J w = (C_k[:, i] · ẋ_i) for row k·B + i, ẋ = the network's jvp along w: one forward-mode
+  // pass, no physics call.
+  Vector apply(const Vector& w) const override;
   Matrix materialize() const override;
   Normal normal(const Vector& g) const override;
+  std::vector<DenseLayerFactors> dense_layer_factors() const override;
 
  private:
   const Network* network_;

@@ -12,7 +12,8 @@ namespace physgrad {
 
 // Reads input_dim() and output_dim() (≥ 1) and num_parameters() (≥ 1, and parameters() of that
 // size) once, at construction, and checks every result: forward() output_dim×B, backward()
-// num_parameters() entries, per_sample_gram() (K·B)×(K·B), new_cache() not null — or throws
+// num_parameters() entries, per_sample_gram() (K·B)×(K·B), jvp() output_dim×B, the layers of
+// dense_layer_factors() inside θ, new_cache() not null — or throws
 // Error "network 'NAME': backward returned 3 entries, expected 12" (NAME: the network's name()).
 // per_sample_gradients() writes into the block it is given, so there is no size to check.
 // Exceptions of the wrapped network pass through unchanged. Read-only: the non-const
@@ -45,6 +46,11 @@ class CheckedNetwork final : public Network {
                          const std::vector<Matrix>& cotangents) const override;
   Matrix per_sample_gram_columns(const NetworkCache& cache, const std::vector<Matrix>& cotangents,
                                  const std::vector<Index>& selected) const override;
+  // output_dim × batch.
+  Matrix jvp(const NetworkCache& cache, Index batch, const Vector& v) const override;
+  // Each layer's parameters inside θ and its factors square of the layer's sizes.
+  std::vector<DenseLayerFactors> dense_layer_factors(
+      const NetworkCache& cache, const std::vector<Matrix>& cotangents) const override;
 
  private:
   // Throw Error unless `result` is rows×cols, or has `size` entries.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -11,8 +12,6 @@
 #include "physgrad/types.hpp"
 
 namespace physgrad {
-
-class DenseLayerGram;
 
 // Weight initialisation: Glorot uniform U(±√(6/(fan_in + fan_out))), He uniform U(±√(6/fan_in)).
 enum class Init { kGlorotUniform, kHeUniform };
@@ -79,11 +78,23 @@ class Mlp final : public Network {
   Matrix per_sample_gram_columns(const NetworkCache& cache, const std::vector<Matrix>& cotangents,
                                  const std::vector<Index>& selected) const override;
 
+  // The tangent ȧ_l = σ_l'(z_l) ⊙ (Ẇ_l a_{l−1} + ḃ_l + W_l ȧ_{l−1}), ȧ_0 = 0, through every layer
+  // (about two forward passes).
+  Matrix jvp(const NetworkCache& cache, Index batch, const Vector& v) const override;
+  // Every layer's Σ ā āᵀ from the cached inputs and Σ δ δᵀ from one backward sweep of the K·B
+  // cotangents (as per_sample_gram makes it).
+  std::vector<DenseLayerFactors> dense_layer_factors(
+      const NetworkCache& cache, const std::vector<Matrix>& cotangents) const override;
+
  private:
   Activation activation(Index layer) const;
-  // Adds every layer's factors of the K·B cotangents to `gram` (one backward sweep).
-  void add_layer_factors(const NetworkCache& cache, const std::vector<Matrix>& cotangents,
-                         DenseLayerGram& gram) const;
+  // One backward sweep of all K·B cotangents at once (column k·B + i for block k, sample i):
+  // visit(l, δ_l, a_{l−1}) for l = L−1 … 0, δ_l of every column, a_{l−1} the layer's cached
+  // inputs (one column per sample).
+  void sweep_cotangents(
+      const NetworkCache& cache, const std::vector<Matrix>& cotangents,
+      const std::function<void(Index layer, const Matrix& deltas, const Matrix& inputs)>& visit)
+      const;
 
   std::vector<Index> widths_;
   std::vector<Index> offsets_;  // offsets_[l] = start of layer l in θ; back() = |θ|

@@ -1,5 +1,6 @@
 // Network — a model x = f(in; θ) with one flat parameter vector θ, as training uses it: batched
-// forward with a cache, ∇θ of Σ_b gy_bᵀ f(in_b), per-sample gradient rows and their Gram matrix.
+// forward with a cache, ∇θ of Σ_b gy_bᵀ f(in_b), per-sample gradient rows and their Gram matrix,
+// the directional derivative ∂f/∂θ·v, and the Kronecker factors Σ āāᵀ, Σ δδᵀ of dense layers.
 #pragma once
 
 #include <memory>
@@ -14,6 +15,19 @@ namespace physgrad {
 class NetworkCache {
  public:
   virtual ~NetworkCache() = default;
+};
+
+// One dense layer z = W a + b of a network as Kronecker-factored curvature sees it: where its
+// parameters lie in θ — [vec(W), b] from `offset`, which is the out × (in + 1) matrix [W b] stored
+// column by column — and the two factors of its block Σ_c (ā āᵀ) ⊗ (δ_c δ_cᵀ) of JᵀJ, with
+// ā = [a; 1] the layer's input (and the bias's 1) of the sample of cotangent column c and δ_c its
+// output cotangent ∂/∂z.
+struct DenseLayerFactors {
+  Index offset = 0;   // first entry of [vec(W), b] in θ
+  Index outputs = 0;  // rows of W, entries of b
+  Index inputs = 0;   // columns of W
+  Matrix input_gram;      // Σ_b ā_b ā_bᵀ over the batch's samples, (inputs + 1)²
+  Matrix cotangent_gram;  // Σ_c δ_c δ_cᵀ over every given cotangent column, outputs²
 };
 
 // A writable matrix view with any strides, e.g. every m-th row of a bigger matrix.
@@ -66,6 +80,20 @@ class Network {
   virtual Matrix per_sample_gram_columns(const NetworkCache& cache,
                                          const std::vector<Matrix>& cotangents,
                                          const std::vector<Index>& selected) const;
+
+  // ∂f(x_b)/∂θ · v for every sample b of the batch of `batch` samples cached by forward()
+  // (output_dim × batch), v of num_parameters() entries: the network's derivative along v
+  // (forward mode). The default forms the gradient rows of each output (output_dim() calls of
+  // per_sample_gradients); Mlp propagates the tangent through its layers instead. Throws Error
+  // when v has the wrong size.
+  virtual Matrix jvp(const NetworkCache& cache, Index batch, const Vector& v) const;
+
+  // The factors of every dense layer (DenseLayerFactors) for the batch cached by forward() and K
+  // cotangents per sample (cotangents[k]: output_dim × B, as for per_sample_gram), in the order
+  // of θ. The default throws Error: only a network that knows its dense layers can give them
+  // (Mlp does); the Kronecker-factored rules need them.
+  virtual std::vector<DenseLayerFactors> dense_layer_factors(
+      const NetworkCache& cache, const std::vector<Matrix>& cotangents) const;
 };
 
 }  // namespace physgrad

@@ -35,7 +35,8 @@ struct LearningResult {
 
 // An experiment's choices for one rule where they differ from the catalogue's defaults, and its
 // mini-batch size (unset: TrainerOptions' default); --lr, --rcond and --batch override them for
-// every rule (the Adam part of a pretrained run included).
+// every rule (the Adam part of a pretrained run included). A rule the experiment gives none takes
+// those of its settings_source() (catalogue.hpp): kfac-hig and lanczos-hig those of hig.
 struct RuleDefaults {
   RuleSettings settings;
   std::optional<Index> batch;
@@ -60,8 +61,9 @@ class LearningSweep {
   void plan_runs(const std::vector<std::string>& rules);
 
   // The runs of `rules`, in order: each rule, and after each rule that needs the stacked
-  // Jacobian (gn, hig, …), when --pretrain is auto or N (N > 0 and below the --iters limit), its
-  // run pretrained with Adam ("adam-hig"). An experiment trains each of these ids.
+  // Jacobian (gn, hig, kfac, lanczos-hig, …), when --pretrain is auto or N (N > 0 and below the
+  // --iters limit), its run pretrained with Adam ("adam-hig"). An experiment trains each of
+  // these ids.
   std::vector<std::string> run_ids(const std::vector<std::string>& rules) const;
 
   // Trains `network` with rule `id` and records it; `params` (e.g. {"lambda", "seed"}) are

@@ -1,0 +1,70 @@
+// KroneckerHigUpdate — the κ-family with Kronecker-factored curvature: per dense layer JᵀJ ≈ A ⊗ S,
+// Δ[W b] = −η S^{−p} ∇[W b] A^{−p}, p = (1+κ)/2 (κ = 1: K-FAC; κ = ½: HIG's (JᵀJ)^{−3/4}).
+#pragma once
+
+#include <vector>
+
+#include "physgrad/learn/learning_update.hpp"
+#include "physgrad/rule_option.hpp"
+
+namespace physgrad {
+
+// The block of JᵀJ of a dense layer z = W a + b is Σ_{i,k} (ā_i ā_iᵀ) ⊗ (δ_ik δ_ikᵀ) (ā = [a; 1],
+// δ_ik the layer's output cotangent of row k·B + i of J); K-FAC's approximation is A ⊗ S with
+// A = (1/B) Σ_i ā_i ā_iᵀ and S = Σ_{i,k} δ_ik δ_ikᵀ — exact when δ_ik does not depend on the
+// sample (a single dense layer with identity physics: S = B·I). Then (A ⊗ S)^{−p} vec(G) =
+// vec(S^{−p} G A^{−p}), each factor taking the whole exponent p = (1+κ)/2 of the exact step
+// Δθ = −η (JᵀJ)^{−p} ∇θL, and every layer is updated on its own (blocks between layers dropped).
+// Each factor's eigenvalues λ ≤ τ²λ_max are dropped (τ as HIG's cut on σ) and the others damped,
+// f(λ) = (λ + damping·λ_max)^{−p}. The factors are refreshed every `refresh` steps,
+// F ← factor_decay·F + (1 − decay)·F_batch (the first refresh takes F_batch), and their powers reused
+// in between, where the rule needs only ∇θL (need() is then kGradient: no Jacobian is formed).
+// Cost of a refresh: one backward sweep of the B·m output cotangents (as for J Jᵀ), the factor
+// products Σ w_l²·B·m, and one eigendecomposition per factor (O(w_l³)); of every step: ∇θL and
+// two products per layer, O(Σ w_out·w_in·(w_out + w_in)).
+struct KroneckerHigOptions {
+  double lr = 1.0;         // η > 0
+  double kappa = 0.5;      // ½: id "kfac-hig"; 1: K-FAC, id "kfac"
+  double rcond = 1e-6;     // relative cut τ: factor eigenvalues λ ≤ τ²λ_max dropped, in [0, 1)
+  double damping = 1e-2;   // added to every kept factor eigenvalue, times λ_max, ≥ 0
+  int refresh = 10;        // steps from one factor refresh to the next, ≥ 1
+  double factor_decay = 0.9;      // weight of the old factors in the running average, in [0, 1)
+
+  static const OptionList<KroneckerHigOptions>& descriptors();
+};
+
+class KroneckerHigUpdate final : public LearningUpdate {
+ public:
+  using Options = KroneckerHigOptions;
+  explicit KroneckerHigUpdate(Options options = {});
+  std::string id() const override { return options_.kappa == 1.0 ? "kfac" : "kfac-hig"; }
+  nlohmann::json params() const override;
+  // The stacked Jacobian on the steps that refresh the factors, else the gradient.
+  UpdateNeed need() const override;
+  Step step(const BatchState& batch) override;
+  double learning_rate() const override { return options_.lr; }
+  void set_learning_rate(double lr) override;
+  bool steps_can_be_halved() const override { return true; }
+  void reset() override;
+  // The step count and the running-average factors of every layer; their powers are recomputed
+  // from them, so a resumed run continues with the same bits.
+  nlohmann::json state() const override;
+  void restore(const nlohmann::json& state, Index parameter_count) override;
+
+  // One layer's running factors A, S and where its weights lie in θ.
+  struct Layer {
+    Index offset = 0, outputs = 0, inputs = 0;
+    Matrix input_factor, cotangent_factor;  // A, S
+  };
+
+ private:
+  void refresh_powers();
+
+  Options options_;
+  long long steps_ = 0;  // steps made since the last reset
+  std::vector<Layer> layers_;
+  // S^{−p} and A^{−p} of each layer (empty: to be computed from layers_).
+  std::vector<Matrix> input_powers_, cotangent_powers_;
+};
+
+}  // namespace physgrad

@@ -1,0 +1,46 @@
+// LanczosHigUpdate — the κ-family of Jacobian updates made matrix-free: Δθ = −η Jᵀ f(J Jᵀ) ∂L/∂y
+// with f(λ) = λ^{−(1+κ)/2} approximated by q Lanczos steps on J Jᵀ (κ = ½ HIG, κ = 1 Gauss-Newton).
+#pragma once
+
+#include "physgrad/learn/learning_update.hpp"
+#include "physgrad/rule_option.hpp"
+
+namespace physgrad {
+
+// Exact HIG is Δθ = −η Jᵀ (J Jᵀ)^{−(1+κ)/2} g over the eigenvalues λ > τ²λ_max of J Jᵀ
+// (learn/hig.hpp). This rule never forms J Jᵀ: q Lanczos steps from g (inversion/lanczos.hpp),
+// each one product J (Jᵀ v) — a backward pass for Jᵀv and a forward-mode pass of the network
+// for J w (StackedJacobian::apply) — give f(J Jᵀ) g ≈ Q c, and Δθ = −η (JᵀQ) c from the Jᵀ
+// products already made. f drops the Ritz values θ ≤ τ²θ_max (τ raised to kMinGramRcond, as on
+// the Gram path). Cost: q products J Jᵀ v (q backward, q forward-mode passes, no physics call)
+// and O(q²·B·m) for the orthogonalization; memory q·(|θ| + B·m) doubles. With q = B·m steps it is
+// the exact step up to rounding.
+struct LanczosHigOptions {
+  double lr = 1.0;      // η > 0
+  double kappa = 0.5;   // ½: HIG-like (id "lanczos-hig"); 1: Gauss-Newton (id "lanczos-gn")
+  double rcond = 1e-6;  // relative truncation τ, in [0, 1)
+  int products = 20;    // q, the J Jᵀ products (Lanczos steps) per update, ≥ 1
+
+  static const OptionList<LanczosHigOptions>& descriptors();
+};
+
+class LanczosHigUpdate final : public LearningUpdate {
+ public:
+  using Options = LanczosHigOptions;
+  explicit LanczosHigUpdate(Options options = {});
+  std::string id() const override { return options_.kappa == 1.0 ? "lanczos-gn" : "lanczos-hig"; }
+  nlohmann::json params() const override;
+  UpdateNeed need() const override { return UpdateNeed::kStackedJacobian; }
+  Step step(const BatchState& batch) override;
+  double learning_rate() const override { return options_.lr; }
+  void set_learning_rate(double lr) override;
+  bool steps_can_be_halved() const override { return true; }
+  // The last step's Lanczos steps and kept Ritz values (empty before the first step).
+  nlohmann::json step_info() const override;
+
+ private:
+  Options options_;
+  Index last_steps_ = 0, last_kept_ = 0;
+};
+
+}  // namespace physgrad

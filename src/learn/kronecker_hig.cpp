@@ -1,0 +1,230 @@
+#include "physgrad/learn/kronecker_hig.hpp"
+
+#include <lapacke.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "physgrad/error.hpp"
+#include "physgrad/io/serialize.hpp"
+#include "physgrad/timing.hpp"
+
+namespace physgrad {
+
+namespace {
+
+// V f(Λ) Vᵀ for the symmetric positive semi-definite `m` = V Λ Vᵀ, f(λ) = (λ + damping·λ_max)^{−p}
+// for λ > rcond²·λ_max and 0 otherwise (a zero matrix gives zero).
+Matrix kronecker_factor_power(const Matrix& m, double p, double rcond, double damping) {
+  const Index n = m.rows();
+  Matrix vectors = m;
+  Vector lambda(n);
+  if (n == 0) return vectors;
+  const lapack_int info = LAPACKE_dsyevd(LAPACK_COL_MAJOR, 'V', 'L', static_cast<lapack_int>(n),
+                                         vectors.data(), static_cast<lapack_int>(n), lambda.data());
+  if (info != 0) {
+    throw NumericalError("kronecker factor: LAPACK dsyevd failed (info = " +
+                         std::to_string(info) + ")");
+  }
+  const double largest = lambda.maxCoeff();
+  Vector weights = Vector::Zero(n);
+  if (largest > 0) {
+    for (Index i = 0; i < n; ++i) {
+      if (lambda(i) > rcond * rcond * largest) {
+        weights(i) = std::pow(lambda(i) + damping * largest, -p);
+      }
+    }
+  }
+  return vectors * weights.asDiagonal() * vectors.transpose();
+}
+
+std::string layer_key(std::size_t l, const char* what) {
+  return "layer " + std::to_string(l) + " " + what;
+}
+
+}  // namespace
+
+const OptionList<KroneckerHigOptions>& KroneckerHigOptions::descriptors() {
+  static const OptionList<KroneckerHigOptions> options = {
+      rule_option("lr", &KroneckerHigOptions::lr, positive(), "step size η"),
+      rule_option("kappa", &KroneckerHigOptions::kappa, any_finite(),
+                  "exponent κ: each factor inverted to the power (1+κ)/2, ½ HIG, 1 K-FAC"),
+      rule_option("rcond", &KroneckerHigOptions::rcond, fraction(),
+                  "relative truncation τ: factor eigenvalues λ ≤ τ²λ_max are dropped"),
+      rule_option("damping", &KroneckerHigOptions::damping, non_negative(),
+                  "added to each kept factor eigenvalue, relative to the factor's largest"),
+      rule_option("refresh", &KroneckerHigOptions::refresh, integer_at_least(1),
+                  "steps from one refresh of the Kronecker factors to the next"),
+      rule_option("factor_decay", &KroneckerHigOptions::factor_decay, fraction(),
+                  "weight of the old Kronecker factors in their running average"),
+  };
+  return options;
+}
+
+KroneckerHigUpdate::KroneckerHigUpdate(Options options) : options_(options) {
+  check_options(id(), options_);
+}
+
+nlohmann::json KroneckerHigUpdate::params() const { return option_values(options_); }
+
+void KroneckerHigUpdate::set_learning_rate(double lr) {
+  Options changed = options_;
+  changed.lr = lr;
+  options_ = checked(id(), changed);
+}
+
+UpdateNeed KroneckerHigUpdate::need() const {
+  return steps_ % options_.refresh == 0 ? UpdateNeed::kStackedJacobian : UpdateNeed::kGradient;
+}
+
+void KroneckerHigUpdate::reset() {
+  steps_ = 0;
+  layers_.clear();
+  input_powers_.clear();
+  cotangent_powers_.clear();
+}
+
+void KroneckerHigUpdate::refresh_powers() {
+  const double p = 0.5 * (1.0 + options_.kappa);
+  std::vector<Matrix> inputs, cotangents;
+  for (const Layer& layer : layers_) {
+    inputs.push_back(
+        kronecker_factor_power(layer.input_factor, p, options_.rcond, options_.damping));
+    cotangents.push_back(
+        kronecker_factor_power(layer.cotangent_factor, p, options_.rcond, options_.damping));
+  }
+  input_powers_ = std::move(inputs);
+  cotangent_powers_ = std::move(cotangents);
+}
+
+Step KroneckerHigUpdate::step(const BatchState& batch) {
+  using Clock = std::chrono::steady_clock;
+  const bool refreshing = need() == UpdateNeed::kStackedJacobian;
+  if (refreshing && batch.jacobian == nullptr) {
+    throw Error(id() + ": this step refreshes the Kronecker factors and needs the stacked Jacobian");
+  }
+  Vector gradient = batch.gradient;
+  if (gradient.size() == 0) {
+    if (batch.jacobian == nullptr) throw Error(id() + ": the batch has neither ∇θ nor a Jacobian");
+    gradient = batch.jacobian->apply_transpose(batch.loss_gradient_y);
+  }
+  Step step;
+  // The refreshed factors in locals first: nothing changes when something below throws.
+  std::vector<Layer> layers;
+  if (refreshing) {
+    layers = layers_;
+    const auto start = Clock::now();
+    const std::vector<DenseLayerFactors> factors = batch.jacobian->dense_layer_factors();
+    const double weight = layers.empty() ? 0.0 : options_.factor_decay;
+    if (!layers.empty() && layers.size() != factors.size()) {
+      throw Error(id() + ": the network has " + std::to_string(factors.size()) +
+                  " dense layers, the saved factors " + std::to_string(layers.size()));
+    }
+    layers.resize(factors.size());
+    const auto batch_size = static_cast<double>(batch.jacobian->batch());
+    for (std::size_t l = 0; l < factors.size(); ++l) {
+      const DenseLayerFactors& f = factors[l];
+      Layer& layer = layers[l];
+      if (weight > 0 && (layer.offset != f.offset || layer.outputs != f.outputs ||
+                         layer.inputs != f.inputs)) {
+        throw Error(id() + ": dense layer " + std::to_string(l) +
+                    " does not have the shape of its saved factors");
+      }
+      layer.offset = f.offset;
+      layer.outputs = f.outputs;
+      layer.inputs = f.inputs;
+      const Matrix a = f.input_gram / batch_size;
+      if (weight > 0) {
+        layer.input_factor = weight * layer.input_factor + (1 - weight) * a;
+        layer.cotangent_factor = weight * layer.cotangent_factor + (1 - weight) * f.cotangent_gram;
+      } else {
+        layer.input_factor = a;
+        layer.cotangent_factor = f.cotangent_gram;
+      }
+      if (!all_finite(layer.input_factor) || !all_finite(layer.cotangent_factor)) {
+        throw NumericalError(id() + ": non-finite Kronecker factor of dense layer " +
+                             std::to_string(l));
+      }
+    }
+    step.jacobian_seconds = seconds_since(start);
+  }
+  Index covered = 0;
+  for (const Layer& layer : refreshing ? layers : layers_) {
+    covered += layer.outputs * (layer.inputs + 1);
+  }
+  if (covered != gradient.size()) {
+    throw Error(id() + ": the dense layers hold " + std::to_string(covered) + " of the " +
+                std::to_string(gradient.size()) + " parameters");
+  }
+  const auto start = Clock::now();
+  if (refreshing) std::swap(layers, layers_);
+  if (refreshing || input_powers_.size() != layers_.size()) {
+    try {
+      refresh_powers();
+    } catch (...) {
+      if (refreshing) std::swap(layers, layers_);
+      throw;
+    }
+  }
+  step.delta = Vector::Zero(gradient.size());
+  for (std::size_t l = 0; l < layers_.size(); ++l) {
+    const Layer& layer = layers_[l];
+    const Eigen::Map<const Matrix> g(gradient.data() + layer.offset, layer.outputs,
+                                     layer.inputs + 1);
+    Eigen::Map<Matrix>(step.delta.data() + layer.offset, layer.outputs, layer.inputs + 1) =
+        -options_.lr * (cotangent_powers_[l] * g * input_powers_[l]);
+  }
+  ++steps_;
+  step.inversion_seconds = seconds_since(start);
+  return step;
+}
+
+nlohmann::json KroneckerHigUpdate::state() const {
+  if (steps_ == 0) return nullptr;
+  nlohmann::json layers = nlohmann::json::array();
+  for (const Layer& layer : layers_) {
+    layers.push_back({{"offset", layer.offset},
+                      {"outputs", layer.outputs},
+                      {"inputs", layer.inputs},
+                      {"input_factor", vector_to_json(layer.input_factor.reshaped())},
+                      {"cotangent_factor", vector_to_json(layer.cotangent_factor.reshaped())}});
+  }
+  return {{"steps", steps_}, {"layers", layers}};
+}
+
+void KroneckerHigUpdate::restore(const nlohmann::json& state, Index parameter_count) {
+  reset();
+  if (state.is_null()) return;
+  const long long steps = integer_from_json(state, "steps", 1);
+  if (!state.contains("layers") || !state.at("layers").is_array()) {
+    throw Error("checkpoint field 'layers': expected an array");
+  }
+  std::vector<Layer> layers;
+  Index covered = 0;
+  for (const nlohmann::json& entry : state.at("layers")) {
+    const std::size_t l = layers.size();
+    Layer layer;
+    layer.offset = static_cast<Index>(integer_from_json(entry, "offset"));
+    layer.outputs = static_cast<Index>(integer_from_json(entry, "outputs", 1));
+    layer.inputs = static_cast<Index>(integer_from_json(entry, "inputs", 1));
+    covered += layer.outputs * (layer.inputs + 1);
+    if (layer.offset + layer.outputs * (layer.inputs + 1) > parameter_count) {
+      throw Error("checkpoint field '" + layer_key(l, "offset") + "': the layer ends beyond the " +
+                  std::to_string(parameter_count) + " parameters");
+    }
+    const Index a = layer.inputs + 1, s = layer.outputs;
+    layer.input_factor = vector_from_json(entry, "input_factor", a * a).reshaped(a, a);
+    layer.cotangent_factor = vector_from_json(entry, "cotangent_factor", s * s).reshaped(s, s);
+    layers.push_back(std::move(layer));
+  }
+  if (covered != parameter_count) {
+    throw Error("checkpoint field 'layers': they hold " + std::to_string(covered) + " of the " +
+                std::to_string(parameter_count) + " parameters");
+  }
+  steps_ = steps;
+  layers_ = std::move(layers);
+}
+
+}  // namespace physgrad

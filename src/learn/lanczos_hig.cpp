@@ -1,0 +1,95 @@
+#include "physgrad/learn/lanczos_hig.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "physgrad/error.hpp"
+#include "physgrad/inversion/lanczos.hpp"
+#include "physgrad/inversion/power_pinv.hpp"
+#include "physgrad/memory.hpp"
+#include "physgrad/timing.hpp"
+
+namespace physgrad {
+
+const OptionList<LanczosHigOptions>& LanczosHigOptions::descriptors() {
+  static const OptionList<LanczosHigOptions> options = {
+      rule_option("lr", &LanczosHigOptions::lr, positive(), "step size η"),
+      rule_option("kappa", &LanczosHigOptions::kappa, any_finite(),
+                  "exponent κ: f(J Jᵀ) = (J Jᵀ)^{−(1+κ)/2}, ½ HIG, 1 Gauss-Newton"),
+      rule_option("rcond", &LanczosHigOptions::rcond, fraction(),
+                  "relative truncation τ: singular values σ ≤ τσ_max of J are dropped"),
+      rule_option("products", &LanczosHigOptions::products, integer_at_least(1),
+                  "J Jᵀ products (Lanczos steps) per update of the Krylov rules"),
+  };
+  return options;
+}
+
+LanczosHigUpdate::LanczosHigUpdate(Options options) : options_(options) {
+  check_options(id(), options_);
+}
+
+nlohmann::json LanczosHigUpdate::params() const { return option_values(options_); }
+
+void LanczosHigUpdate::set_learning_rate(double lr) {
+  Options changed = options_;
+  changed.lr = lr;
+  options_ = checked(id(), changed);
+}
+
+nlohmann::json LanczosHigUpdate::step_info() const {
+  if (last_steps_ == 0) return nlohmann::json::object();
+  return {{"lanczos_steps", last_steps_}, {"kept_directions", last_kept_}};
+}
+
+Step LanczosHigUpdate::step(const BatchState& batch) {
+  if (batch.jacobian == nullptr) throw Error(id() + ": the batch has no stacked Jacobian");
+  const StackedJacobian& j = *batch.jacobian;
+  const Vector& g = batch.loss_gradient_y;
+  if (g.size() != j.rows()) {
+    throw Error(id() + ": ∂L/∂y has " + std::to_string(g.size()) + " entries, J " +
+                std::to_string(j.rows()) + " rows");
+  }
+  const Index q = std::min<Index>(options_.products, j.rows());
+  require_memory(8.0 * static_cast<double>(q) * static_cast<double>(j.cols() + j.rows()),
+                 id() + ": " + std::to_string(q) + " Krylov vectors");
+  using Clock = std::chrono::steady_clock;
+  double product_seconds = 0;
+  const auto start = Clock::now();
+  // Jᵀ q_j of every Lanczos vector, kept for the final Jᵀ Q c.
+  Matrix transposed(j.cols(), q);
+  Index made = 0;
+  const auto multiply = [&](const Vector& v) {
+    const auto begin = Clock::now();
+    transposed.col(made) = j.apply_transpose(v);
+    Vector out = j.apply(transposed.col(made));
+    ++made;
+    product_seconds += seconds_since(begin);
+    return out;
+  };
+  const double cut = std::max(options_.rcond, kMinGramRcond);
+  const double power = -0.5 * (1.0 + options_.kappa);
+  Index kept = 0;
+  const auto f = [&](const Vector& ritz) {
+    const double largest = ritz.size() > 0 ? ritz.maxCoeff() : 0.0;
+    Vector values = Vector::Zero(ritz.size());
+    for (Index i = 0; i < ritz.size(); ++i) {
+      if (largest > 0 && ritz(i) > cut * cut * largest) {
+        values(i) = std::pow(ritz(i), power);
+        ++kept;
+      }
+    }
+    return values;
+  };
+  const LanczosApproximation approximation = lanczos_function(multiply, g, q, f);
+  Step step;
+  step.delta = -options_.lr * (transposed.leftCols(approximation.steps) * approximation.coefficients);
+  // Commit the diagnostics only after everything that may throw.
+  last_steps_ = approximation.steps;
+  last_kept_ = kept;
+  step.jacobian_seconds = product_seconds;
+  step.inversion_seconds = seconds_since(start) - product_seconds;
+  return step;
+}
+
+}  // namespace physgrad
