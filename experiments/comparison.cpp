@@ -5,6 +5,7 @@
 #include <functional>
 
 #include "physgrad/run/direct_runs.hpp"
+#include "physgrad/run/learning_verdict.hpp"  // ratio_text, value_text
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
@@ -110,7 +111,7 @@ class Comparison final : public Experiment {
 
  private:
   // Which rule ends closest to the minimum x = 0, and how many times closer than each rule that
-  // ends farther.
+  // ends more than 5 % farther (ratios with two significant digits, distances with three).
   static std::string closest_sentence(const std::vector<DirectResult>& results, int iterations) {
     const auto distance = [](const DirectResult& r) { return r.summary.x.norm(); };
     if (results.empty()) return "No rule ran.";
@@ -121,13 +122,13 @@ class Comparison final : public Experiment {
       return distance(r) <= smallest * (1 + 1e-4);
     });
     std::string out = "After " + std::to_string(iterations) + " steps " + best->rule.label +
-                      " ends " + format_value(distance(*best)) + " from the minimum";
+                      " ends " + value_text(distance(*best)) + " from the minimum";
     std::string closer;
     for (const DirectResult& r : results) {
       const double ratio = distance(r) / distance(*best);
-      if (!(ratio > 1 + 1e-3)) continue;  // itself, and rules that tie with it
-      closer += (closer.empty() ? ": " : ", ") + format_value(ratio) + "× closer than " +
-                r.rule.label + " (" + format_value(distance(r)) + ")";
+      if (!(ratio > 1.05)) continue;  // itself, and rules level with it
+      closer += (closer.empty() ? ": " : ", ") + ratio_text(ratio) + " closer than " +
+                r.rule.label + " (" + value_text(distance(r)) + ")";
     }
     return out + closer + ".";
   }

@@ -45,10 +45,13 @@ double median_reached(std::vector<double> values) {
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
+// An update count: whole from 100 on ("10000"), else three significant digits (interpolated
+// between evaluations: "6.78").
 std::string count_text(double count) {
+  if (count >= 100 && count < 1e15) return std::to_string(std::llround(count));
   std::ostringstream out;
   out.precision(3);
-  out << (count >= 100 ? std::round(count) : count);
+  out << count;
   return out.str();
 }
 
@@ -81,9 +84,11 @@ std::string against_adam(const RuleStanding& rule, const std::vector<const Learn
   out += "; its update costs " + ratio_text(m) + " " + base.label + "'s";
   if (std::isfinite(t_rule) && std::isfinite(t_base) && t_rule > 0 && t_base > 0) {
     const bool rule_wins = t_rule < t_base;
-    out += ", so in wall time " + (rule_wins ? rule.label : base.label) + " gets there " +
-           ratio_text(rule_wins ? t_base / t_rule : t_rule / t_base) + " sooner (" +
-           value_text(t_rule) + " vs " + value_text(t_base) + " s)";
+    const double sooner = rule_wins ? t_base / t_rule : t_rule / t_base;
+    out += sooner < 1.1 ? ", so in wall time both get there about together ("
+                        : ", so in wall time " + (rule_wins ? rule.label : base.label) +
+                              " gets there " + ratio_text(sooner) + " sooner (";
+    out += value_text(t_rule) + " vs " + value_text(t_base) + " s)";
   }
   return out;
 }
