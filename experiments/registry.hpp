@@ -1,12 +1,20 @@
-// The reference experiments: each experiment's file defines its factory; registry.cpp lists
-// them in display order as registry() (physgrad/run/registry.hpp).
+// The reference experiments: each experiment's file defines its factory; registry.cpp lists them
+// in display order (builtin_experiments()), and builtin_registry() is the Registry of them
+// (physgrad/run/registry.hpp) that the CLI, the Python module and the tests hand to run/.
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "physgrad/run/registry.hpp"
 
 namespace physgrad::experiments {
+
+// The reference experiments, new, in display order: a program adds its own to these and builds
+// its Registry of them all.
+std::vector<std::unique_ptr<Experiment>> builtin_experiments();
+// A Registry of builtin_experiments(), built once.
+const Registry& builtin_registry();
 
 std::unique_ptr<Experiment> make_scaled_toy();
 std::unique_ptr<Experiment> make_sensitivity();

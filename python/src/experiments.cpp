@@ -11,7 +11,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/io/csv.hpp"
 #include "physgrad/io/json_file.hpp"
-#include "physgrad/run/registry.hpp"
+#include "registry.hpp"
 #include "physgrad/run/run.hpp"
 #include "physgrad/stop.hpp"
 #include "python_simulator.hpp"
@@ -191,7 +191,7 @@ py::dict finished_outcome(const experiments::RunOutcome& outcome, const PythonHo
 // run lifecycle (run/run.hpp).
 py::dict run_experiment(const std::string& name, const py::dict& options, const std::string& out,
                         const py::object& progress) {
-  const experiments::Experiment& experiment = experiments::registry().find(name);
+  const experiments::Experiment& experiment = experiments::builtin_registry().find(name);
   std::vector<std::pair<std::string, std::string>> given;
   for (const auto& [key, value] : options) {
     const std::string key_text = py::str(key).cast<std::string>();
@@ -212,7 +212,7 @@ py::dict resume_experiment(const std::string& folder, const py::object& progress
   experiments::RunOutcome outcome;
   {
     py::gil_scoped_release released;
-    outcome = experiments::Run::resume(folder, hooks.hooks());
+    outcome = experiments::Run::resume(experiments::builtin_registry(), folder, hooks.hooks());
   }
   return finished_outcome(outcome, hooks);
 }
@@ -223,7 +223,7 @@ void bind_experiments(py::module_& m) {
   m.def("experiments",
         [] {
           py::list out;
-          for (const auto& e : experiments::registry()) {
+          for (const auto& e : experiments::builtin_registry()) {
             py::dict d;
             d["name"] = e->name();
             d["description"] = e->description();
