@@ -4,6 +4,7 @@
 #include "physgrad/io/serialize.hpp"
 #include "physgrad/io/checkpoint_file.hpp"
 #include "physgrad/run/run_folder.hpp"
+#include "fault_point.hpp"
 
 namespace physgrad::experiments {
 
