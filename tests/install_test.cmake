@@ -20,7 +20,8 @@ run_step("install" "${CMAKE_COMMAND}" --install "${BUILD_DIR}" --prefix "${prefi
 if(NOT EXISTS "${prefix}/include/physgrad/physics/simulator.hpp")
   message(FATAL_ERROR "install: the headers are missing from ${prefix}/include")
 endif()
-foreach(file libphysgrad.a libphysgrad_report.a libphysgrad_run.a physgradConfig.cmake physgradConfigVersion.cmake physgradTargets.cmake)
+foreach(file libphysgrad.a libphysgrad_report.a libphysgrad_run.a
+             physgradConfig.cmake physgradConfigVersion.cmake physgradTargets.cmake)
   file(GLOB_RECURSE found "${prefix}/*/${file}")
   if(NOT found)
     message(FATAL_ERROR "install: ${file} is missing from ${prefix}")

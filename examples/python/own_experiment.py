@@ -3,10 +3,11 @@ network learns the inverse of the simulator P(y) = y³ (elementwise), trained th
 L = ½‖P(f(x)) − x‖², by Adam and by HIG; run folders, checkpoints, resume and the index as for
 the reference experiments.
 
-    PYTHONPATH=build/python /usr/bin/python3 examples/python/own_experiment.py run DIR [--NAME VALUE …]
-    … resume DIR     continues an unfinished run (killed, or stopped with Ctrl-C)
-    … report DIR     DIR/index.html over the run folders in DIR
-    … --quick        a short run into a temporary folder
+    PYTHONPATH=build/python /usr/bin/python3 examples/python/own_experiment.py ARGUMENTS
+    … run DIR [--NAME VALUE …]   a new run (options as `physgrad run`)
+    … resume DIR                 continues an unfinished run (killed, or stopped with Ctrl-C)
+    … report DIR                 DIR/index.html over the run folders in DIR
+    … --quick                    a short run into a temporary folder
 """
 import sys
 import tempfile
