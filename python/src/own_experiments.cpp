@@ -61,6 +61,10 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
       raise_kept(errors, "LearningExperiment " + name_);
     }
     for (const auto& [key, value] : rules) {
+      if (!py::isinstance<py::dict>(value)) {
+        throw Error("LearningExperiment " + name_ + ": rules[" + std::string(py::str(key)) +
+                    "] is not a dict of options");
+      }
       py::dict options = py::reinterpret_borrow<py::dict>(value).attr("copy")();
       ex::RuleDefaults defaults;
       if (options.contains("batch")) {

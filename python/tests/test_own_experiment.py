@@ -59,6 +59,11 @@ def test_mistakes_are_errors_naming_them(tmp_path):
         physgrad.LearningExperiment("w", "", Square(), [2], points)
     with pytest.raises(physgrad.Error, match="data is not callable"):
         physgrad.LearningExperiment("d", "", Square(), [2, 2], 3)
+    with pytest.raises(physgrad.Error, match=r"rules\[hig\] is not a dict"):
+        physgrad.LearningExperiment("r", "", Square(), [2, 2], points, rules={"hig": 1.0})
+    with pytest.raises(physgrad.Error, match="lr"):
+        physgrad.run_experiment("own", {"optimizers": "adam"}, str(tmp_path / "l"), progress=None,
+                                experiments=[experiment(rules={"adam": {"lr": "x"}})])
     wrong = experiment(data=lambda count, seed: (np.zeros((count, 3)), np.zeros((count, 2))))
     with pytest.raises(physgrad.Error, match=r"inputs \(32, 3\).*expected \(32, 2\)"):
         physgrad.run_experiment("own", {}, str(tmp_path / "c"), progress=None,
