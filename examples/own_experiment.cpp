@@ -25,18 +25,18 @@
 
 namespace {
 
-namespace ex = physgrad::experiments;
+namespace run = physgrad::run;
 using physgrad::Index;
 
 // Points x uniform in [−1, 1]²: the network's inputs and the targets P(f(x)) should reach.
 physgrad::Dataset inverse_scale_points(Index count, std::uint64_t seed) {
-  ex::Sampler sampler(seed);
+  run::Sampler sampler(seed);
   physgrad::Matrix x(2, count);
   for (Index i = 0; i < count; ++i) x.col(i) << sampler.uniform(-1, 1), sampler.uniform(-1, 1);
   return {x, x, physgrad::Matrix()};
 }
 
-class InverseScale final : public ex::LearningExperiment {
+class InverseScale final : public run::LearningExperiment {
  public:
   InverseScale() : LearningExperiment({.eval_every = "20"}) {}
   std::string name() const override { return "inverse-scale"; }
@@ -46,7 +46,7 @@ class InverseScale final : public ex::LearningExperiment {
   std::vector<std::string> default_optimizers() const override { return {"adam", "hig"}; }
   long long default_iterations() const override { return 200; }
 
-  void run(const ex::Settings& settings, ex::RunContext& context) const override {
+  void run(const run::Settings& settings, run::RunContext& context) const override {
     const physgrad::DiagonalScale physics(physgrad::Vector{{1.0, settings.real("lambda")}});
     const physgrad::L2Loss loss;
     const physgrad::LearningProblem problem{&physics, &loss};
@@ -54,9 +54,9 @@ class InverseScale final : public ex::LearningExperiment {
     const physgrad::Dataset train_set = inverse_scale_points(settings.integer("train-size"), seed);
     const physgrad::Dataset test_set = inverse_scale_points(64, seed + 1);
     // Each rule's step size and batch where the catalogue's defaults do not fit this problem.
-    ex::LearningSweep sweep(settings, context,
+    run::LearningSweep sweep(settings, context,
                             {{"adam", {{{"lr", 0.01}}, 64}}, {"hig", {{{"lr", 1.0}}, 64}}});
-    const std::string tag = "λ=" + ex::format_value(settings.real("lambda"));
+    const std::string tag = "λ=" + run::format_value(settings.real("lambda"));
     for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
       physgrad::Mlp network({2, 16, 2}, physgrad::Activation::kTanh);
       network.initialize(seed);
@@ -68,15 +68,15 @@ class InverseScale final : public ex::LearningExperiment {
   }
 
  protected:
-  std::vector<ex::OptionSpec> own_options() const override {
-    return {ex::real_option("lambda", "0.01", "scale of the second output").above(0),
-            ex::integer_option("train-size", "256", "training points").at_least(1).at_most(1e6)};
+  std::vector<run::OptionSpec> own_options() const override {
+    return {run::real_option("lambda", "0.01", "scale of the second output").above(0),
+            run::integer_option("train-size", "256", "training points").at_least(1).at_most(1e6)};
   }
-  Shape shape(const ex::Settings& /*settings*/) const override { return {2, {2, 16, 2}}; }
+  Shape shape(const run::Settings& /*settings*/) const override { return {2, {2, 16, 2}}; }
 };
 
 // The final mean test loss of every run of the outcome, one line each.
-void print_finals(const ex::RunOutcome& outcome) {
+void print_finals(const run::RunOutcome& outcome) {
   if (!outcome.finished) {
     std::cout << outcome.stopped << '\n';
     return;
@@ -98,26 +98,26 @@ int main(int argc, char** argv) {
   }
   // The program's experiments: its own only. A program built with physgrad's reference
   // experiments would start from their list and add its own to it.
-  std::vector<std::unique_ptr<ex::Experiment>> list;
+  std::vector<std::unique_ptr<run::Experiment>> list;
   list.push_back(std::make_unique<InverseScale>());
-  const ex::Registry experiments(std::move(list));
+  const run::Registry experiments(std::move(list));
 
-  ex::RunHooks hooks;
+  run::RunHooks hooks;
   hooks.log = [](const std::string& line) { std::cerr << line << '\n'; };
   try {
     if (args[0] == "run") {
-      const ex::Experiment& experiment = experiments.find("inverse-scale");
+      const run::Experiment& experiment = experiments.find("inverse-scale");
       std::vector<std::pair<std::string, std::string>> given;
       for (std::size_t i = 2; i + 1 < args.size(); i += 2) {
         if (args[i].rfind("--", 0) != 0) throw physgrad::Error("not an option: " + args[i]);
         given.emplace_back(args[i].substr(2), args[i + 1]);
       }
-      print_finals(ex::Run::start(experiment, ex::resolve_settings(experiment, given), args[1],
+      print_finals(run::Run::start(experiment, run::resolve_settings(experiment, given), args[1],
                                   hooks));
     } else if (args[0] == "resume") {
-      print_finals(ex::Run::resume(experiments, args[1], hooks));
+      print_finals(run::Run::resume(experiments, args[1], hooks));
     } else if (args[0] == "report") {
-      const ex::RunIndex index = ex::write_run_index(experiments, args[1]);
+      const run::RunIndex index = run::write_run_index(experiments, args[1]);
       std::cout << index.folders << " run folders: " << index.page.string() << '\n';
     } else {
       throw physgrad::Error("unknown command '" + args[0] + "' (known: run, resume, report)");

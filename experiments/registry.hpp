@@ -10,6 +10,12 @@
 
 namespace physgrad::experiments {
 
+// The reference experiments are written in the terms of the framework (namespace physgrad::run):
+// its names are theirs. Transitional, for the front ends and tests that still name the
+// framework's types through physgrad::experiments (experiments::Run, ex::Settings): new code
+// names them physgrad::run::….
+using namespace physgrad::run;
+
 // The reference experiments, new, in display order: a program adds its own to these and builds
 // its Registry of them all.
 std::vector<std::unique_ptr<Experiment>> builtin_experiments();

@@ -88,7 +88,7 @@ TEST_F(InterruptDeathTest, AProcessBlockedAfterAStopRequestEndsAfterTheGracePeri
   GTEST_FLAG_SET(death_test_style, "threadsafe");
   EXPECT_EXIT(
       {
-        physgrad::experiments::install_interrupt_handlers(0.2);
+        physgrad::run::install_interrupt_handlers(0.2);
         ::raise(SIGINT);
         for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
       },
@@ -99,12 +99,12 @@ TEST_F(InterruptDeathTest, ARunThatReachesAStopPointEndsInItsOwnTime) {
   GTEST_FLAG_SET(death_test_style, "threadsafe");
   EXPECT_EXIT(
       {
-        physgrad::experiments::install_interrupt_handlers(0.2);
+        physgrad::run::install_interrupt_handlers(0.2);
         ::raise(SIGTERM);
-        if (!physgrad::experiments::stop_flag().load()) std::_Exit(1);
-        physgrad::experiments::stop_point_reached();
+        if (!physgrad::run::stop_flag().load()) std::_Exit(1);
+        physgrad::run::stop_point_reached();
         std::this_thread::sleep_for(std::chrono::milliseconds(600));  // saving, past the grace
-        std::_Exit(physgrad::experiments::received_signal() == SIGTERM ? 7 : 1);
+        std::_Exit(physgrad::run::received_signal() == SIGTERM ? 7 : 1);
       },
       ::testing::ExitedWithCode(7), "");
 }

@@ -22,7 +22,7 @@ void bind_own_experiments(pybind11::module_& m);  // LearningExperiment (own_exp
 // The Registry of the reference experiments and of `own` (None, or a list of the script's
 // physgrad.LearningExperiment): what a run, a resume or an index of them is given.
 // (own_experiments.cpp)
-experiments::Registry registry_with(const pybind11::object& own);
+run::Registry registry_with(const pybind11::object& own);
 // Raises in Python the exception a callback of one of `own`'s experiments raised in the run that
 // just ended (its message gains " (in CONTEXT, METHOD)"); returns when none did.
 void raise_own_callback_error(const pybind11::object& own, const std::string& context);

@@ -23,7 +23,7 @@ namespace physgrad::python {
 
 namespace {
 
-namespace ex = experiments;
+namespace ex = physgrad::run;
 
 class PythonLearningExperiment final : public ex::LearningExperiment {
  public:
@@ -204,12 +204,12 @@ std::vector<std::shared_ptr<PythonLearningExperiment>> own_list(const py::object
 
 }  // namespace
 
-experiments::Registry registry_with(const py::object& own) {
-  std::vector<std::unique_ptr<ex::Experiment>> list = ex::builtin_experiments();
+run::Registry registry_with(const py::object& own) {
+  std::vector<std::unique_ptr<ex::Experiment>> list = experiments::builtin_experiments();
   for (auto& experiment : own_list(own)) {
     list.push_back(std::make_unique<LentExperiment>(std::move(experiment)));
   }
-  return experiments::Registry(std::move(list));
+  return run::Registry(std::move(list));
 }
 
 void raise_own_callback_error(const py::object& own, const std::string& context) {

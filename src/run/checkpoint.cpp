@@ -6,7 +6,7 @@
 #include "physgrad/run/run_folder.hpp"
 #include "fault_point.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 nlohmann::json RunKey::json() const {
   return {{"index", index}, {"optimizer", optimizer}, {"tag", tag}, {"seed", seed}};
@@ -131,4 +131,4 @@ void ExperimentCheckpoint::write(const nlohmann::json& current) {
   fault_point("checkpoint");
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -9,7 +9,7 @@
 
 #include "physgrad/error.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 void fault_point(const char* name) {
   // "ACTION@NAME:K", read once.
@@ -31,4 +31,4 @@ void fault_point(const char* name) {
   }
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -2,7 +2,7 @@
 // run at a named step to check what the folder holds after a kill, a failure or a stop there.
 #pragma once
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 // Fault injection for tests: with PHYSGRAD_FAULT=ACTION@NAME:K the K-th pass through the point
 // NAME ("claimed": the folder is claimed, and a new run's config.json written; "checkpoint": a
@@ -13,4 +13,4 @@ namespace physgrad::experiments {
 // variable.
 void fault_point(const char* name);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

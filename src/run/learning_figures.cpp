@@ -10,7 +10,7 @@
 #include "physgrad/report/seed_band.hpp"
 #include "physgrad/report/svg_document.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 void mark_if_diverging(Series& series) {
   if (series.y.size() > 1 && series.y.back() > series.y.front()) {
@@ -224,4 +224,4 @@ std::vector<std::string> LearningSweep::labels(const std::string& tag) const {
   return out;
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -7,7 +7,7 @@
 #include "physgrad/run/learning_verdict.hpp"
 #include "physgrad/report/significant.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace {
 
@@ -182,4 +182,4 @@ void LearningSweep::add_switch_note() const {
       "; the switch is marked on the curves. " + note);
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

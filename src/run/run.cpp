@@ -21,7 +21,7 @@
 #include "fault_point.hpp"
 #include "physgrad/threads.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace {
 
@@ -170,4 +170,4 @@ RunOutcome Run::resume(const Registry& experiments, const std::filesystem::path&
   return run_in(*experiment, *settings, command, folder, hooks, resumed);
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -18,7 +18,7 @@
 #include "physgrad/run/run_folder.hpp"
 #include "fault_point.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace fs = std::filesystem;
 
@@ -366,4 +366,4 @@ std::string RunFolder::abandon() noexcept {
   return ended_text_;
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -23,7 +23,7 @@
 #include "physgrad/run/run_index_folder.hpp"
 #include "physgrad/text.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -231,4 +231,4 @@ RunIndex write_run_index(const Registry& experiments, const fs::path& dir,
   return {page.shown, dir / name};
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

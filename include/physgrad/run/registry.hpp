@@ -12,7 +12,7 @@
 #include "physgrad/run/experiment.hpp"
 #include "physgrad/run/learning_experiment.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 class Registry {
  public:
@@ -37,4 +37,4 @@ class Registry {
   std::vector<std::unique_ptr<Experiment>> experiments_;
 };
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

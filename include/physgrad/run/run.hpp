@@ -13,7 +13,7 @@
 #include "physgrad/parallel/communicator.hpp"
 #include "physgrad/run/experiment.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 class Registry;
 
@@ -67,4 +67,4 @@ class Run {
                            const RunHooks& hooks = {});
 };
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

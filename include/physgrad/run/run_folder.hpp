@@ -23,7 +23,7 @@
 #include "physgrad/run/experiment.hpp"
 #include "physgrad/io/folder_handle.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 inline constexpr const char* kConfigFile = "config.json";
 inline constexpr const char* kSummaryFile = "summary.json";
@@ -107,4 +107,4 @@ bool is_result_file(const std::string& name);
 // one, "message": {"figure", "sentence", "metric", "metric_text", "labels"} (RunContext).
 nlohmann::json summary_document(const Experiment& experiment, const RunContext& context);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -12,7 +12,7 @@
 #include <filesystem>
 #include <iostream>
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 class Registry;
 
@@ -39,4 +39,4 @@ struct RunIndex {
 RunIndex write_run_index(const Registry& experiments, const std::filesystem::path& dir,
                          std::ostream& warnings = std::cerr);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run
