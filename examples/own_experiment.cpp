@@ -55,7 +55,7 @@ class InverseScale final : public run::LearningExperiment {
     const physgrad::Dataset test_set = inverse_scale_points(64, seed + 1);
     // Each rule's step size and batch where the catalogue's defaults do not fit this problem.
     run::LearningSweep sweep(settings, context,
-                            {{"adam", {{{"lr", 0.01}}, 64}}, {"hig", {{{"lr", 1.0}}, 64}}});
+                             {{"adam", {{{"lr", 0.01}}, 64}}, {"hig", {{{"lr", 1.0}}, 64}}});
     const std::string tag = "λ=" + run::format_value(settings.real("lambda"));
     for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
       physgrad::Mlp network({2, 16, 2}, physgrad::Activation::kTanh);
@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
         given.emplace_back(args[i].substr(2), args[i + 1]);
       }
       print_finals(run::Run::start(experiment, run::resolve_settings(experiment, given), args[1],
-                                  hooks));
+                                   hooks));
     } else if (args[0] == "resume") {
       print_finals(run::Run::resume(experiments, args[1], hooks));
     } else if (args[0] == "report") {
