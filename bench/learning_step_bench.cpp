@@ -19,7 +19,7 @@
 #include "physgrad/learn/hig.hpp"
 #include "physgrad/threads.hpp"
 #include "physgrad/train/trainer.hpp"
-#include "physgrad/run/registry.hpp"
+#include "registry.hpp"
 
 namespace {
 
@@ -45,7 +45,7 @@ const CaseSpec& case_spec(std::int64_t which) { return kCases[static_cast<std::s
 
 ReferenceCase make_case(std::int64_t which, Index batch = 0) {
   const CaseSpec& spec = case_spec(which);
-  return experiments::registry().reference(spec.experiment, batch > 0 ? batch : spec.batch);
+  return experiments::builtin_registry().reference(spec.experiment, batch > 0 ? batch : spec.batch);
 }
 
 const char* rule_id(std::int64_t rule) {
@@ -395,7 +395,8 @@ void learning_step_threads(benchmark::State& state) {
 // 64-h-2h-h-64 tanh network with h = range(1) (|θ| = 4h² + 132h + 64): how the step grows
 // with B·m and |θ|, and where the backend switches (normal path when B·m > |θ|).
 void size_sweep(benchmark::State& state) {
-  ReferenceCase c = experiments::registry().reference("poisson", static_cast<Index>(state.range(0)));
+  ReferenceCase c =
+      experiments::builtin_registry().reference("poisson", static_cast<Index>(state.range(0)));
   const auto h = static_cast<Index>(state.range(1));
   c.network = Mlp({64, h, 2 * h, h, 64}, Activation::kTanh);
   c.network.initialize(0);

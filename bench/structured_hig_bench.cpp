@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "low_rank_tail.hpp"
-#include "physgrad/run/registry.hpp"
+#include "registry.hpp"
 #include "physgrad/threads.hpp"
 #include "physgrad/train/trainer.hpp"
 
@@ -95,7 +95,7 @@ double hig_seconds(std::int64_t which, const ReferenceCase& c) {
 void structured_step(benchmark::State& state) {
   const CaseSpec& spec = case_spec(state.range(0));
   const RuleSpec& rule = rule_spec(state.range(1));
-  const ReferenceCase c = experiments::registry().reference(spec.experiment, spec.batch);
+  const ReferenceCase c = experiments::builtin_registry().reference(spec.experiment, spec.batch);
   const double hig = hig_seconds(state.range(0), c);
   const auto adam_rule = make_rule(c, rule_spec(0));
   const double adam = seconds_per_step(c, *adam_rule, 200);
@@ -135,7 +135,7 @@ const ReferenceCase& pool_case(std::int64_t which) {
   const auto found = cases.find(which);
   if (found != cases.end()) return found->second;
   const CaseSpec& spec = case_spec(which);
-  return cases.emplace(which, experiments::registry().reference(spec.experiment,
+  return cases.emplace(which, experiments::builtin_registry().reference(spec.experiment,
                                                                 kPoolBatches * spec.batch))
       .first->second;
 }

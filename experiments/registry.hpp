@@ -1,12 +1,26 @@
-// The reference experiments: each experiment's file defines its factory; registry.cpp lists
-// them in display order as registry() (physgrad/run/registry.hpp).
+// The reference experiments: each experiment's file defines its factory; registry.cpp lists them
+// in display order (builtin_experiments()), and builtin_registry() is the Registry of them
+// (physgrad/run/registry.hpp) that the CLI, the Python module and the tests hand to run/.
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "physgrad/run/registry.hpp"
 
 namespace physgrad::experiments {
+
+// The reference experiments are written in the terms of the framework (namespace physgrad::run):
+// its names are theirs. Transitional, for the front ends and tests that still name the
+// framework's types through physgrad::experiments (experiments::Run, ex::Settings): new code
+// names them physgrad::run::….
+using namespace physgrad::run;
+
+// The reference experiments, new, in display order: a program adds its own to these and builds
+// its Registry of them all.
+std::vector<std::unique_ptr<Experiment>> builtin_experiments();
+// A Registry of builtin_experiments(), built once.
+const Registry& builtin_registry();
 
 std::unique_ptr<Experiment> make_scaled_toy();
 std::unique_ptr<Experiment> make_sensitivity();

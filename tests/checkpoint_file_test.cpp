@@ -213,7 +213,7 @@ TEST_F(CheckpointFile, DamagedExperimentCheckpointsAreErrorsOnly) {
   SmallRun run;
   const nlohmann::json config = {
       {"experiment", "hig-toy"}, {"command", "physgrad run hig-toy"}, {"settings", {{"lr", nullptr}}}};
-  const experiments::RunKey key{0, "adam", "λ=1", 0};
+  const run::RunKey key{0, "adam", "λ=1", 0};
   const nlohmann::json good = {
       {"experiment", "hig-toy"},
       {"settings", {{"lr", nullptr}}},
@@ -221,10 +221,10 @@ TEST_F(CheckpointFile, DamagedExperimentCheckpointsAreErrorsOnly) {
       {"current", {{"key", key.json()}, {"state", trainer_state_to_json(run.state)}}}};
   const Index count = run.network.num_parameters();
   {
-    const experiments::ExperimentCheckpoint checkpoint(nullptr, config, good);
+    const run::ExperimentCheckpoint checkpoint(nullptr, config, good);
     ASSERT_TRUE(checkpoint.in_progress(key, count).has_value());
     EXPECT_FALSE(checkpoint.finished(key, count).has_value());
-    const experiments::RunKey other{0, "hig", "λ=1", 0};
+    const run::RunKey other{0, "hig", "λ=1", 0};
     EXPECT_THROW(checkpoint.in_progress(other, count), Error);
   }
   std::mt19937_64 rng(3);
@@ -233,7 +233,7 @@ TEST_F(CheckpointFile, DamagedExperimentCheckpointsAreErrorsOnly) {
     nlohmann::json damaged = good;
     mutate(damaged, rng);
     try {
-      const experiments::ExperimentCheckpoint checkpoint(nullptr, config, damaged);
+      const run::ExperimentCheckpoint checkpoint(nullptr, config, damaged);
       checkpoint.finished(key, count);
       checkpoint.in_progress(key, count);
     } catch (const Error&) {

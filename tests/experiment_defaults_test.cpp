@@ -10,7 +10,7 @@
 #include <string>
 
 #include "cli_fixture.hpp"
-#include "physgrad/run/registry.hpp"
+#include "registry.hpp"
 #include "physgrad/run/experiment.hpp"
 
 namespace {
@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 class Defaults : public Cli, public ::testing::WithParamInterface<std::string> {};
 
 TEST_P(Defaults, RunToTheEndWithACompleteResult) {
-  const ex::Experiment& experiment = ex::registry().find(GetParam());
+  const ex::Experiment& experiment = ex::builtin_registry().find(GetParam());
   std::string args = "run " + experiment.name() + " --out result";
   for (const ex::OptionSpec& spec : ex::all_options(experiment)) {
     if (!spec.quick_text.empty()) args += " --" + spec.name + " " + spec.quick_text;
@@ -67,7 +67,7 @@ TEST_P(Defaults, RunToTheEndWithACompleteResult) {
 
 std::vector<std::string> registered() {
   std::vector<std::string> names;
-  for (const auto& experiment : ex::registry()) names.push_back(experiment->name());
+  for (const auto& experiment : ex::builtin_registry()) names.push_back(experiment->name());
   return names;
 }
 

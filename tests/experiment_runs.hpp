@@ -6,14 +6,14 @@
 #include <utility>
 #include <vector>
 
-#include "physgrad/run/registry.hpp"
+#include "registry.hpp"
 #include "physgrad/run/experiment.hpp"
 
 namespace physgrad::experiments::testing {
 
 inline RunContext run_experiment(const std::string& name,
                                  const std::vector<std::pair<std::string, std::string>>& given) {
-  const Experiment& experiment = registry().find(name);
+  const Experiment& experiment = builtin_registry().find(name);
   RunContext context;
   experiment.run(resolve_settings(experiment, given), context);
   return context;

@@ -83,8 +83,8 @@ TEST(FreshSamples, StreamsDifferAcrossSeedsAndIterationsAndBadBatchesAreRefused)
 // Poisson's fields (phiflow's Noise): drawn batches of the run never repeat a field, nor one of
 // the fixed test set.
 TEST(FreshSamples, PoissonNoiseBatchesNeverRepeatAField) {
-  using experiments::periodic_noise;
-  using experiments::Sampler;
+  using run::periodic_noise;
+  using run::Sampler;
   Sampler test_sampler(2 * 0 + 1);
   const Matrix test = periodic_noise(256, 8, test_sampler);
   std::set<std::tuple<double, double, double>> seen;

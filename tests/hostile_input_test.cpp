@@ -2,111 +2,21 @@
 // any text value, files that are not plain files or are too large, crafted checkpoints (deep
 // nesting, missing or null values), sizes beyond memory, list values that collide as labels,
 // starts without a finite loss, unknown subcommands. Each is one line on stderr naming the value,
-// exit code 2, nothing written and nothing blocked. A stop signal ends even a process that is
-// busy where it never looks for stop requests, after a grace period.
+// exit code 2, nothing written and nothing blocked. (Stop signals: hostile_stop_test.cpp.)
 #include <gtest/gtest.h>
-#include <signal.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 
-#include <chrono>
-#include <cstdlib>
 #include <nlohmann/json.hpp>
-#include <thread>
 
-#include "cli_fixture.hpp"
-#include "physgrad/run/interrupt.hpp"
+#include "hostile_fixture.hpp"
 #include "physgrad/io/checkpoint_file.hpp"
 
 namespace {
 
-using physgrad::testing::Cli;
-using physgrad::testing::interrupt_when;
-using physgrad::testing::metrics_without_time;
+using physgrad::testing::Hostile;
 using physgrad::testing::Outcome;
 using physgrad::testing::read_file;
 namespace fs = std::filesystem;
-
-// hig-toy small enough to interrupt within a second: run 0 (Adam) finishes, run 1 (Gauss-Newton)
-// is in progress when the checkpoint holds "index":1.
-const std::string kHigToy =
-    "run hig-toy --lambda 1 --seeds 1 --train-size 64 --test-size 16 --iters 1000 "
-    "--eval-every 50 --checkpoint-every 100 --out ";
-
-class Hostile : public Cli {
- protected:
-  // Exit 2 and one stderr line containing `needle`; nothing new in the working folder.
-  void expect_refused(const std::string& args, const std::string& needle) const {
-    const std::size_t before = entries();
-    const Outcome outcome = run(args);
-    EXPECT_EQ(outcome.exit_code, 2) << args;
-    EXPECT_EQ(std::count(outcome.err.begin(), outcome.err.end(), '\n'), 1)
-        << args << ": " << outcome.err;
-    EXPECT_NE(outcome.err.find(needle), std::string::npos) << args << ": " << outcome.err;
-    EXPECT_EQ(entries(), before) << args << " left files behind";
-  }
-
-  // As expect_refused, for a command that must also not block: it is killed after 30 s. `shell`
-  // runs before it in the same shell (a ulimit, say).
-  void expect_refused_promptly(const std::string& args, const std::string& needle,
-                               const std::string& shell = "") const {
-    const pid_t pid = spawn_after(shell, args);
-    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
-    int status = 0;
-    while (::waitpid(pid, &status, WNOHANG) == 0) {
-      if (std::chrono::steady_clock::now() > give_up) {
-        ::kill(pid, SIGKILL);
-        ::waitpid(pid, &status, 0);
-        FAIL() << args << " blocked";
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    ASSERT_TRUE(WIFEXITED(status)) << args;
-    EXPECT_EQ(WEXITSTATUS(status), 2) << args;
-    const std::string err = read_file(configs_ / "spawned.err");
-    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << args << ": " << err;
-    EXPECT_NE(err.find(needle), std::string::npos) << args << ": " << err;
-  }
-
-  // spawn() with `shell` run first in the same shell.
-  pid_t spawn_after(const std::string& shell, const std::string& args) const {
-    if (shell.empty()) return spawn(args);
-    const std::string command = shell + " && cd '" + dir_.string() + "' && exec '" +
-                                PHYSGRAD_CLI + "' " + args + " > '" +
-                                (configs_ / "spawned.out").string() + "' 2> '" +
-                                (configs_ / "spawned.err").string() + "'";
-    const pid_t pid = ::fork();
-    if (pid == 0) {
-      ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
-      ::_exit(127);
-    }
-    return pid;
-  }
-
-  // Sends SIGTERM to `pid` half a second after it started and waits for it: its exit status
-  // and the seconds from the signal to its end.
-  static std::pair<int, double> terminate_after_half_a_second(pid_t pid) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
-    const auto signalled = std::chrono::steady_clock::now();
-    ::kill(pid, SIGTERM);
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    return {status,
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count()};
-  }
-
-  std::size_t entries() const {
-    return static_cast<std::size_t>(
-        std::distance(fs::directory_iterator(dir_), fs::directory_iterator()));
-  }
-
-  // An interrupted hig-toy run in dir_/folder: run 0 finished, run 1 in progress.
-  void interrupted(const std::string& folder) const {
-    const int status = interrupt_when(spawn(kHigToy + folder), dir_ / folder / "checkpoint.pgc",
-                                      "\"index\":1", SIGTERM);
-    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGTERM) << status;
-  }
-};
 
 // A shell word that printf turns into the bytes of `escaped` (octal escapes like \001).
 std::string bytes(const std::string& escaped) { return "\"$(printf '" + escaped + "')\""; }
@@ -304,43 +214,6 @@ TEST_F(Hostile, LearningStepsAndEvaluationsBeyondTimeOrMemoryAreRefused) {
   EXPECT_EQ(adam.exit_code, 0) << adam.err;
 }
 
-// A stop request during one long simulation ends it at the simulator's next time step: the
-// first forward pass of a chain of 10⁷ steps takes seconds, the process ends within a second of
-// SIGTERM, at a stop point (not killed after the grace period), and keeps nothing.
-TEST_F(Hostile, AStopSignalEndsALongSimulationAtItsNextTimeStep) {
-  const pid_t pid = spawn(
-      "run time-reversal --problems fpu --fpu-steps 10000000 --optimizers pg --pg-inverse "
-      "time_reversal --out long");
-  const auto [status, seconds] = terminate_after_half_a_second(pid);
-  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
-  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM);
-  EXPECT_LT(seconds, 1.0);
-  const std::string err = read_file(configs_ / "spawned.err");
-  EXPECT_NE(err.find("physgrad: fpu_chain: stopped on request; nothing was kept"),
-            std::string::npos)
-      << err;
-  EXPECT_FALSE(fs::exists(dir_ / "long"));
-}
-
-// In a learning run the stop inside a step drops that step and saves the state before it.
-TEST_F(Hostile, AStopSignalInsideALongTrainingStepSavesTheStateBeforeIt) {
-  const std::string args =
-      "run quantum-dipole --optimizers adam --train-size 16 --test-size 8 --batch 16 --steps "
-      "20000 --iters 5 --eval-every 100 --checkpoint-every 1 --out part";
-  const pid_t pid = spawn(args);
-  // The checkpoint after step 1 is written just before step 2 (about 0.7 s) begins.
-  const int status =
-      interrupt_when(pid, dir_ / "part" / "checkpoint.pgc", "\"iterations\":1", SIGTERM);
-  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << WTERMSIG(status);
-  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM);
-  const std::string err = read_file(configs_ / "spawned.err");
-  EXPECT_NE(err.find("stopped on request during iteration 2 (not applied); checkpoint kept"),
-            std::string::npos)
-      << err;
-  EXPECT_NE(read_file(dir_ / "part" / "checkpoint.pgc").find("\"iterations\":1"),
-            std::string::npos);
-}
-
 // Numbers at the ends of their range: a subnormal is read as itself, a real that would read 0 or
 // overflow and a whole number beyond 64 bits are named, and settings whose untrained loss
 // overflows name the run.
@@ -377,71 +250,6 @@ TEST_F(Hostile, StartsAtAMinimumOrWithoutAFiniteLossAreRefused) {
   expect_refused("run comparison --start 1e200,1", "--start: the loss at (1e+200, 1) is inf");
   expect_refused("run scaled-toy --start 1e300,1", "is inf with α = 1");
   expect_refused("run sensitivity --start 1e-200", "the loss at 1e-200 is 0 with α = 0.01");
-}
-
-// A stop signal while the process is busy where it never looks for stop requests (here: making
-// a large training set) ends it after the grace period, killed by that signal.
-TEST_F(Hostile, AStopSignalEndsAProcessThatNeverReachesAStopPoint) {
-  ::setenv("PHYSGRAD_STOP_GRACE", "1", 1);
-  const pid_t pid = spawn("run poisson --train-size 200000 --iters 1 --out busy");
-  ::unsetenv("PHYSGRAD_STOP_GRACE");
-  const auto [status, seconds] = terminate_after_half_a_second(pid);
-  ASSERT_TRUE(WIFSIGNALED(status)) << status;
-  EXPECT_EQ(WTERMSIG(status), SIGTERM);
-  EXPECT_GE(seconds, 0.9);
-  EXPECT_LT(seconds, 10.0);
-  const std::string err = read_file(configs_ / "spawned.err");
-  EXPECT_NE(err.find("physgrad: SIGTERM: no stop point reached within 1 s"), std::string::npos)
-      << err;
-  // Ended like a SIGKILL at its claim: the folder holds its settings and no result, which
-  // `physgrad resume busy` runs from the start (RunFolderCli.KilledAtAnyStep… resumes such a
-  // folder).
-  EXPECT_TRUE(fs::exists(dir_ / "busy" / "config.json"));
-  EXPECT_FALSE(fs::exists(dir_ / "busy" / "summary.json"));
-  EXPECT_NE(err.find("physgrad resume goes on from there"), std::string::npos) << err;
-}
-
-using InterruptDeathTest = ::testing::Test;
-
-TEST_F(InterruptDeathTest, AProcessBlockedAfterAStopRequestEndsAfterTheGracePeriod) {
-  GTEST_FLAG_SET(death_test_style, "threadsafe");
-  EXPECT_EXIT(
-      {
-        physgrad::experiments::install_interrupt_handlers(0.2);
-        ::raise(SIGINT);
-        for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
-      },
-      ::testing::KilledBySignal(SIGINT), "SIGINT: no stop point reached within 0.2 s");
-}
-
-TEST_F(InterruptDeathTest, ARunThatReachesAStopPointEndsInItsOwnTime) {
-  GTEST_FLAG_SET(death_test_style, "threadsafe");
-  EXPECT_EXIT(
-      {
-        physgrad::experiments::install_interrupt_handlers(0.2);
-        ::raise(SIGTERM);
-        if (!physgrad::experiments::stop_flag().load()) std::_Exit(1);
-        physgrad::experiments::stop_point_reached();
-        std::this_thread::sleep_for(std::chrono::milliseconds(600));  // saving, past the grace
-        std::_Exit(physgrad::experiments::received_signal() == SIGTERM ? 7 : 1);
-      },
-      ::testing::ExitedWithCode(7), "");
-}
-
-// sin-rotation makes one sweep per ξ; its runs are numbered through the whole experiment, so a
-// run interrupted at the second ξ resumes to the results of an uninterrupted one.
-TEST_F(Hostile, SinRotationInterruptedAtTheSecondXiResumesToTheSameResults) {
-  const std::string sin =
-      "run sin-rotation --optimizers adam,sip --train-size 64 --test-size 16 --iters 400 "
-      "--eval-every 100 --checkpoint-every 200 --out ";
-  ASSERT_EQ(run(sin + "whole").exit_code, 0);
-  const int status = interrupt_when(spawn(sin + "part"), dir_ / "part" / "checkpoint.pgc",
-                                    "\"tag\":\"ξ=32\"", SIGTERM);
-  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 128 + SIGTERM) << status;
-  const Outcome resumed = run("resume part");
-  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
-  EXPECT_EQ(metrics_without_time(dir_ / "part"), metrics_without_time(dir_ / "whole"));
-  EXPECT_EQ(read_file(dir_ / "part" / "networks.json"), read_file(dir_ / "whole" / "networks.json"));
 }
 
 }  // namespace

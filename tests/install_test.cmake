@@ -1,6 +1,7 @@
 # The installed package from an outside project: installs BUILD_DIR into a fresh prefix under
 # WORK_DIR, runs the installed physgrad command, then configures, builds and runs PROJECT_DIR
-# against the library. Any failing step fails.
+# against the library (and its own-experiment program, a run and an index, against
+# physgrad::run). Any failing step fails.
 # Set by the test: BUILD_DIR, PROJECT_DIR, WORK_DIR, CXX_COMPILER, CXX_FLAGS (may be empty).
 cmake_minimum_required(VERSION 3.25)
 file(REMOVE_RECURSE "${WORK_DIR}")
@@ -20,10 +21,19 @@ run_step("install" "${CMAKE_COMMAND}" --install "${BUILD_DIR}" --prefix "${prefi
 if(NOT EXISTS "${prefix}/include/physgrad/physics/simulator.hpp")
   message(FATAL_ERROR "install: the headers are missing from ${prefix}/include")
 endif()
-foreach(file libphysgrad.a libphysgrad_report.a physgradConfig.cmake physgradConfigVersion.cmake physgradTargets.cmake)
+foreach(file libphysgrad.a libphysgrad_report.a libphysgrad_run.a
+             physgradConfig.cmake physgradConfigVersion.cmake physgradTargets.cmake)
   file(GLOB_RECURSE found "${prefix}/*/${file}")
   if(NOT found)
     message(FATAL_ERROR "install: ${file} is missing from ${prefix}")
+  endif()
+endforeach()
+# The installed headers hold no test hook (the run layer's fault points stay in src/run).
+file(GLOB_RECURSE installed_headers "${prefix}/include/physgrad/*.hpp")
+foreach(header ${installed_headers})
+  file(STRINGS "${header}" hooks REGEX "fault_point|PHYSGRAD_FAULT")
+  if(hooks)
+    message(FATAL_ERROR "install: ${header} declares a test hook: ${hooks}")
   endif()
 endforeach()
 # The command-line tool is installed and runs from there.
@@ -43,4 +53,15 @@ run_step("run" "${WORK_DIR}/build/physgrad_outside")
 message("${step_output}")
 if(NOT step_output MATCHES "pg converged in 26 iterations")
   message(FATAL_ERROR "run: unexpected output")
+endif()
+# The experiment framework from the installed physgrad::run: a run folder and its index.
+run_step("own experiment" "${WORK_DIR}/build/physgrad_outside_run" run "${WORK_DIR}/runs/a"
+         --iters 20)
+if(NOT step_output MATCHES "HIG \\(λ=0.01\\) final test loss")
+  message(FATAL_ERROR "own experiment: unexpected output:\n${step_output}")
+endif()
+run_step("own experiment's index" "${WORK_DIR}/build/physgrad_outside_run" report
+         "${WORK_DIR}/runs")
+if(NOT EXISTS "${WORK_DIR}/runs/index.html")
+  message(FATAL_ERROR "own experiment's index: no ${WORK_DIR}/runs/index.html")
 endif()

@@ -8,7 +8,7 @@
 #include "physgrad/run/learning_runs.hpp"
 #include "physgrad/run/learning_verdict.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 namespace {
 
 const auto kTestLoss = [](const TrainingRecord& r) { return r.test_loss; };
@@ -106,4 +106,4 @@ TEST(LearningVerdict, RatiosCarryTwoSignificantDigits) {
 }
 
 }  // namespace
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

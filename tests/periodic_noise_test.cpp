@@ -7,7 +7,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/run/sampling.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 namespace {
 
 // fftfreq(n)[p] = p/n for p < ⌈n/2⌉, (p − n)/n after.
@@ -90,4 +90,4 @@ TEST(PeriodicNoise, PowerFallsWithTheWavenumber) {
 }
 
 }  // namespace
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -3,7 +3,7 @@
 // each experiment exists for.
 #include <gtest/gtest.h>
 
-#include "physgrad/run/registry.hpp"
+#include "registry.hpp"
 #include "physgrad/run/experiment.hpp"
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
@@ -66,7 +66,7 @@ TEST(HeatExperiment, SipReconstructsTheInitialStateBetterThanAdam) {
 }
 
 TEST(HeatExperiment, RejectsTwoDimensionalGridsTooLargeForTheNetwork) {
-  const Experiment& experiment = registry().find("heat-inverse");
+  const Experiment& experiment = builtin_registry().find("heat-inverse");
   try {
     resolve_settings(experiment, {{"dims", "2"}, {"n", "40"}});
     FAIL() << "no error";

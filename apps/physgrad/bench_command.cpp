@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "physgrad/run/experiment.hpp"
-#include "physgrad/run/registry.hpp"
+#include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/text.hpp"
@@ -67,7 +67,8 @@ BenchCommand::BenchCommand(CLI::App& app)
           "bench", "time steps of an update on a reference experiment, one JSON line: physgrad bench "
                    "NAME [--optimizer U] [--batch B] [--steps N] [--warmup W] [--threads T]")) {
   command_->add_option("NAME", name_,
-                       "reference experiment: " + comma_list(ex::registry().reference_names()))
+                       "reference experiment: " +
+                           comma_list(ex::builtin_registry().reference_names()))
       ->required();
   command_->add_option("--optimizer", optimizer_,
                        "update rule: " + comma_list(rule_ids(RuleKind::kLearning)))
@@ -91,7 +92,7 @@ void BenchCommand::run(std::ostream& out) const {
   const long long warmup = read_integer("warmup", warmup_, 0, kMaxSteps);
   const long long threads = read_integer("threads", threads_, 1, 1024);
   // The case at one sample: throws for an unknown NAME, naming the known ones.
-  const ex::ReferenceCase single = ex::registry().reference(name_, 1);
+  const ex::ReferenceCase single = ex::builtin_registry().reference(name_, 1);
   find_rule(RuleKind::kLearning, optimizer_);  // throws for an unknown rule, naming the known ones
   if (std::getenv("OPENBLAS_NUM_THREADS") == nullptr && std::getenv("OMP_NUM_THREADS") == nullptr) {
     set_blas_threads(1);
@@ -110,7 +111,7 @@ void BenchCommand::run(std::ostream& out) const {
   require_memory(5 * order * order * sizeof(double),
                  "--batch: " + std::to_string(batch) +
                      " (the reference eigendecomposition of a " + size + " matrix)");
-  ex::ReferenceCase reference = ex::registry().reference(name_, batch);
+  ex::ReferenceCase reference = ex::builtin_registry().reference(name_, batch);
   const auto update = reference.update(optimizer_);
   const LearningProblem problem = reference.problem();
   Mlp& network = reference.network;

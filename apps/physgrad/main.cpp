@@ -25,7 +25,7 @@
 #include "physgrad/run/config_file.hpp"
 #include "physgrad/run/experiment.hpp"
 #include "physgrad/run/interrupt.hpp"
-#include "physgrad/run/registry.hpp"
+#include "registry.hpp"
 #include "physgrad/run/run.hpp"
 #include "physgrad/run/run_index.hpp"
 #include "physgrad/text.hpp"
@@ -262,7 +262,7 @@ int run_command(int argc, char** argv) {
   std::map<std::string, std::vector<CLI::Option*>> cli_options;
   std::map<std::string, std::string> config_files;
   std::map<std::string, CLI::Option*> config_file_options;
-  for (const auto& experiment : ex::registry()) {
+  for (const auto& experiment : ex::builtin_registry()) {
     CLI::App* sub = run->add_subcommand(experiment->name(), experiment->description());
     config_file_options[experiment->name()] =
         sub->add_option("--config", config_files[experiment->name()],
@@ -282,7 +282,7 @@ int run_command(int argc, char** argv) {
     // subcommand is required" or "not expected".
     if (argc == 1 || argv[1][0] != '-') check_subcommand(app, argc > 1 ? argv[1] : "");
     if (argc > 2 && std::string(argv[1]) == "run" && argv[2][0] != '-') {
-      ex::registry().find(argv[2]);
+      ex::builtin_registry().find(argv[2]);
     }
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {  // --help: the ranks compare it too, then print it
@@ -298,7 +298,7 @@ int run_command(int argc, char** argv) {
     const ex::Experiment* chosen = nullptr;
     ex::OptionTexts given;
     std::optional<ex::Settings> settings;
-    for (const auto& candidate : ex::registry()) {
+    for (const auto& candidate : ex::builtin_registry()) {
       if (!run->get_subcommand(candidate->name())->parsed()) continue;
       chosen = candidate.get();
       // File values first, so that flags given on the command line override them.
@@ -319,8 +319,10 @@ int run_command(int argc, char** argv) {
     }
     if (list->parsed()) {
       std::size_t width = 0;
-      for (const auto& experiment : ex::registry()) width = std::max(width, experiment->name().size());
-      for (const auto& experiment : ex::registry()) {
+      for (const auto& experiment : ex::builtin_registry()) {
+        width = std::max(width, experiment->name().size());
+      }
+      for (const auto& experiment : ex::builtin_registry()) {
         std::cout << std::left << std::setw(static_cast<int>(width + 2)) << experiment->name()
                   << experiment->description() << '\n';
       }
@@ -336,20 +338,21 @@ int run_command(int argc, char** argv) {
       return 0;
     }
     if (report->parsed()) {
-      const ex::RunIndex index = ex::write_run_index(report_folder);
+      const ex::RunIndex index = ex::write_run_index(ex::builtin_registry(), report_folder);
       std::cout << "index of " << index.folders << " run folders: " << index.page.string()
                 << '\n';
       return 0;
     }
     if (describe->parsed()) {
-      print_table(ex::options_table(ex::registry().find(describe_name)));
+      print_table(ex::options_table(ex::builtin_registry().find(describe_name)));
       return 0;
     }
     reserve_blas_buffer();
     ex::install_interrupt_handlers();
     if (resume->parsed()) {
       StderrProgress progress;
-      return report_outcome(ex::Run::resume(resume_folder, cli_hooks(progress, command_line)));
+      return report_outcome(ex::Run::resume(ex::builtin_registry(), resume_folder,
+                                            cli_hooks(progress, command_line)));
     }
     if (chosen != nullptr) return start_run(*chosen, *settings, given, command_line);
   } catch (const std::bad_alloc&) {

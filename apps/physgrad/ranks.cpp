@@ -97,8 +97,8 @@ std::string rank_timeout_text() {
   return text.str();
 }
 
-RankCommand rank_command(int argc, char** argv, const experiments::Experiment* experiment,
-                         const experiments::Settings* settings) {
+RankCommand rank_command(int argc, char** argv, const run::Experiment* experiment,
+                         const run::Settings* settings) {
   RankCommand command;
   if (experiment != nullptr && settings != nullptr) {
     command.emplace_back("the command", "run " + experiment->name());

@@ -36,8 +36,8 @@ std::string rank_timeout_text();
 // What this process was started to do, for the ranks to compare: for a run of `experiment`
 // its name and every resolved setting in `settings`, else the whole command line after the
 // program; then the rank time limit.
-RankCommand rank_command(int argc, char** argv, const experiments::Experiment* experiment,
-                         const experiments::Settings* settings);
+RankCommand rank_command(int argc, char** argv, const run::Experiment* experiment,
+                         const run::Settings* settings);
 // Before anything is done: checks that every rank was started with the same `command`. Returns
 // 0, or, after printing the error line, 2 — every rank sees the same difference and ends by
 // itself — or end_run(2) when a rank did not take part within the time limit.

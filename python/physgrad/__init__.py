@@ -5,9 +5,9 @@ solves P(x) = y near a guess; physgrad.torch holds the learning rules as torch o
 """
 
 from . import _physgrad
-from ._physgrad import (Error, MinimizeResult, NumericalError, blas_core, blas_core_note,
-                        direct_rules, jacobian_step, learning_rules, open_metrics, open_summary,
-                        reference_step)
+from ._physgrad import (Error, LearningExperiment, MinimizeResult, NumericalError, blas_core,
+                        blas_core_note, direct_rules, jacobian_step, learning_rules,
+                        open_metrics, open_summary, reference_step)
 from ._results import Experiment, LocalInverseResult, RunOutcome, _experiments
 
 __version__ = _physgrad.__version__
@@ -15,7 +15,8 @@ __version__ = _physgrad.__version__
 __all__ = ["Error", "NumericalError", "MinimizeResult", "LocalInverseResult", "RunOutcome",
            "Experiment", "minimize", "local_inverse", "direct_rules", "learning_rules",
            "jacobian_step", "reference_step", "experiments", "open_metrics", "open_summary",
-           "run_experiment", "resume_experiment", "blas_core", "blas_core_note", "__version__"]
+           "run_experiment", "resume_experiment", "write_index", "LearningExperiment",
+           "blas_core", "blas_core_note", "__version__"]
 
 
 def _bounds(bounds, n):
@@ -92,16 +93,25 @@ def experiments():
     return _experiments(_physgrad.experiments())
 
 
-def run_experiment(name, options=None, out="", progress=True):
+def run_experiment(name, options=None, out="", progress=True, experiments=None):
     """Runs experiment NAME with options {name: value} (as `physgrad run NAME --name value`; a
     list is joined by commas) into the run folder `out`: a RunOutcome (folder, finished, report,
     stopped, summary; also readable as a dict). progress: True writes the lines that stay to
     sys.stderr, None is silent, a callable gets every progress line. Ctrl-C stops the run in
-    order (a learning run keeps its checkpoint) and raises KeyboardInterrupt naming the folder."""
+    order (a learning run keeps its checkpoint) and raises KeyboardInterrupt naming the folder.
+    experiments: the script's own LearningExperiment objects; NAME is one of them or a
+    reference experiment."""
     return RunOutcome(**_physgrad.run_experiment(name, {} if options is None else options, out,
-                                                 progress))
+                                                 progress, experiments))
 
 
-def resume_experiment(folder, progress=True):
-    """Continues the unfinished run in `folder` (as `physgrad resume FOLDER`): a RunOutcome."""
-    return RunOutcome(**_physgrad.resume_experiment(folder, progress))
+def resume_experiment(folder, progress=True, experiments=None):
+    """Continues the unfinished run in `folder` (as `physgrad resume FOLDER`): a RunOutcome.
+    experiments: as in run_experiment (a run of the script's own experiment needs it again)."""
+    return RunOutcome(**_physgrad.resume_experiment(folder, progress, experiments))
+
+
+def write_index(folder, experiments=None):
+    """Writes FOLDER/index.html over the run folders in FOLDER (as `physgrad report FOLDER`);
+    returns {"folders": how many, "page": its path}. experiments: as in run_experiment."""
+    return _physgrad.write_index(folder, experiments)

@@ -5,9 +5,11 @@
 #include <pybind11/pybind11.h>
 
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/physics/checked_simulator.hpp"
+#include "physgrad/run/registry.hpp"
 
 namespace physgrad::python {
 
@@ -15,6 +17,15 @@ void bind_direct(pybind11::module_& m);       // minimize, local_inverse, rules 
 void bind_learning(pybind11::module_& m);     // HIG/GN steps, reference steps (learning.cpp)
 void bind_sip(pybind11::module_& m);          // SIP's options and targets (sip.cpp)
 void bind_experiments(pybind11::module_& m);  // experiments and run folders (experiments.cpp)
+void bind_own_experiments(pybind11::module_& m);  // LearningExperiment (own_experiments.cpp)
+
+// The Registry of the reference experiments and of `own` (None, or a list of the script's
+// physgrad.LearningExperiment): what a run, a resume or an index of them is given.
+// (own_experiments.cpp)
+run::Registry registry_with(const pybind11::object& own);
+// Raises in Python the exception a callback of one of `own`'s experiments raised in the run that
+// just ended (its message gains " (in CONTEXT, METHOD)"); returns when none did.
+void raise_own_callback_error(const pybind11::object& own, const std::string& context);
 
 // A JSON value as the Python value json.loads would give.
 pybind11::object to_python(const nlohmann::json& value);

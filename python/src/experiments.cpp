@@ -1,9 +1,11 @@
-// Experiments from Python: the registered experiments, and a run folder's metrics as arrays.
+// Experiments from Python: the registered experiments (and a script's own, own_experiments.cpp)
+// run, resumed and indexed, and a run folder's metrics as arrays.
 #include <pybind11/numpy.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <sstream>
 #include <utility>
 #include <vector>
 
@@ -11,8 +13,9 @@
 #include "physgrad/error.hpp"
 #include "physgrad/io/csv.hpp"
 #include "physgrad/io/json_file.hpp"
-#include "physgrad/run/registry.hpp"
+#include "registry.hpp"
 #include "physgrad/run/run.hpp"
+#include "physgrad/run/run_index.hpp"
 #include "physgrad/stop.hpp"
 #include "python_simulator.hpp"
 
@@ -186,12 +189,13 @@ py::dict finished_outcome(const experiments::RunOutcome& outcome, const PythonHo
   return outcome_dict(outcome);
 }
 
-// Runs experiment `name` with `options` (option name → value, as `physgrad run NAME --NAME VALUE`)
-// into the run folder `out` (empty: --out, or a new runs/NAME-<timestamp>) through the library's
-// run lifecycle (run/run.hpp).
+// Runs experiment `name` (a reference experiment or one of `own`) with `options` (option name →
+// value, as `physgrad run NAME --NAME VALUE`) into the run folder `out` (empty: --out, or a new
+// runs/NAME-<timestamp>) through the library's run lifecycle (run/run.hpp).
 py::dict run_experiment(const std::string& name, const py::dict& options, const std::string& out,
-                        const py::object& progress) {
-  const experiments::Experiment& experiment = experiments::registry().find(name);
+                        const py::object& progress, const py::object& own) {
+  const experiments::Registry registry = registry_with(own);
+  const experiments::Experiment& experiment = registry.find(name);
   std::vector<std::pair<std::string, std::string>> given;
   for (const auto& [key, value] : options) {
     const std::string key_text = py::str(key).cast<std::string>();
@@ -200,21 +204,48 @@ py::dict run_experiment(const std::string& name, const py::dict& options, const 
   const experiments::Settings settings = experiments::resolve_settings(experiment, given);
   PythonHooks hooks{progress};
   experiments::RunOutcome outcome;
-  {
+  try {
     py::gil_scoped_release released;
     outcome = experiments::Run::start(experiment, settings, out, hooks.hooks());
+  } catch (const Error& e) {
+    raise_own_callback_error(own, "experiment " + name + ": " + e.what());
+    throw;
   }
   return finished_outcome(outcome, hooks);
 }
 
-py::dict resume_experiment(const std::string& folder, const py::object& progress) {
+py::dict resume_experiment(const std::string& folder, const py::object& progress,
+                           const py::object& own) {
+  const experiments::Registry registry = registry_with(own);
   PythonHooks hooks{progress};
   experiments::RunOutcome outcome;
-  {
+  try {
     py::gil_scoped_release released;
-    outcome = experiments::Run::resume(folder, hooks.hooks());
+    outcome = experiments::Run::resume(registry, folder, hooks.hooks());
+  } catch (const Error& e) {
+    raise_own_callback_error(own, "resume " + folder + ": " + e.what());
+    throw;
   }
   return finished_outcome(outcome, hooks);
+}
+
+// `physgrad report FOLDER` with the reference experiments and `own`: {folders, page}; what is
+// left out, one line each, on sys.stderr.
+py::dict write_index(const std::string& folder, const py::object& own) {
+  const experiments::Registry registry = registry_with(own);
+  std::ostringstream warnings;
+  experiments::RunIndex index;
+  {
+    py::gil_scoped_release released;
+    index = experiments::write_run_index(registry, folder, warnings);
+  }
+  if (!warnings.str().empty()) {
+    py::module_::import("sys").attr("stderr").attr("write")(warnings.str());
+  }
+  py::dict out;
+  out["folders"] = index.folders;
+  out["page"] = index.page.string();
+  return out;
 }
 
 }  // namespace
@@ -223,7 +254,7 @@ void bind_experiments(py::module_& m) {
   m.def("experiments",
         [] {
           py::list out;
-          for (const auto& e : experiments::registry()) {
+          for (const auto& e : experiments::builtin_registry()) {
             py::dict d;
             d["name"] = e->name();
             d["description"] = e->description();
@@ -237,16 +268,22 @@ void bind_experiments(py::module_& m) {
   m.def("open_summary", &open_summary, py::arg("folder"),
         "A run folder's summary.json as a dict.");
   m.def("run_experiment", &run_experiment, py::arg("name"), py::arg("options") = py::dict(),
-        py::arg("out") = "", py::arg("progress") = true,
+        py::arg("out") = "", py::arg("progress") = true, py::arg("experiments") = py::none(),
         "Runs experiment NAME with options {name: value} (as `physgrad run NAME --name value`; a "
         "list is joined by commas) into the run folder `out`; returns {folder, finished, report, "
         "stopped, summary}. progress: True writes the lines that stay (a run started or "
         "finished, with the time left) to sys.stderr, None is silent, a callable gets every "
         "progress line. Ctrl-C stops the run in order (a learning run keeps its checkpoint) and "
-        "raises KeyboardInterrupt naming the folder to resume.");
+        "raises KeyboardInterrupt naming the folder to resume. experiments: the script's own "
+        "LearningExperiment objects, NAME among them or the reference experiments.");
   m.def("resume_experiment", &resume_experiment, py::arg("folder"), py::arg("progress") = true,
-        "Continues the unfinished run in `folder` (as `physgrad resume FOLDER`); progress and "
-        "Ctrl-C as in run_experiment.");
+        py::arg("experiments") = py::none(),
+        "Continues the unfinished run in `folder` (as `physgrad resume FOLDER`); progress, "
+        "Ctrl-C and experiments as in run_experiment.");
+  m.def("write_index", &write_index, py::arg("folder"), py::arg("experiments") = py::none(),
+        "Writes FOLDER/index.html over the run folders in FOLDER (as `physgrad report FOLDER`); "
+        "returns {folders, page}. experiments: as in run_experiment (their defaults are what "
+        "the tables compare options with).");
 }
 
 }  // namespace physgrad::python

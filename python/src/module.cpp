@@ -33,4 +33,5 @@ PYBIND11_MODULE(_physgrad, m) {
   physgrad::python::bind_learning(m);
   physgrad::python::bind_sip(m);
   physgrad::python::bind_experiments(m);
+  physgrad::python::bind_own_experiments(m);
 }

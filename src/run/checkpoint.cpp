@@ -4,8 +4,9 @@
 #include "physgrad/io/serialize.hpp"
 #include "physgrad/io/checkpoint_file.hpp"
 #include "physgrad/run/run_folder.hpp"
+#include "fault_point.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 nlohmann::json RunKey::json() const {
   return {{"index", index}, {"optimizer", optimizer}, {"tag", tag}, {"seed", seed}};
@@ -130,4 +131,4 @@ void ExperimentCheckpoint::write(const nlohmann::json& current) {
   fault_point("checkpoint");
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -9,7 +9,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/io/json_file.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace {
 
@@ -184,4 +184,4 @@ RunContext::Table options_table(const Experiment& experiment) {
   return table;
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

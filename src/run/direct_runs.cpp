@@ -10,7 +10,7 @@
 #include "physgrad/report/landscape.hpp"
 #include "physgrad/report/line_plot.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 std::vector<RuleSetup> selected_rules(const Settings& settings,
                                       const std::map<std::string, double>& default_lr) {
@@ -231,4 +231,4 @@ std::vector<Trajectory> trajectories(const std::vector<DirectResult>& results) {
 }
 
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

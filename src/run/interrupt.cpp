@@ -11,7 +11,7 @@
 #include <mutex>
 #include <thread>
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace {
 
@@ -86,4 +86,4 @@ int received_signal() { return signal_number.load(); }
 
 void stop_point_reached() { acknowledge_stop(); }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

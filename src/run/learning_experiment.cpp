@@ -8,7 +8,7 @@
 #include "physgrad/memory.hpp"
 #include "physgrad/text.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace {
 
@@ -221,4 +221,4 @@ double sample_bytes(const std::vector<Index>& widths, Index data_values) {
   return values * sizeof(double);
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -1,5 +1,5 @@
 // LearningSweep's presentation: runs grouped per rule, loss and metric figures (median and band
-// over seeds), and the tables of final test losses, saturation and step times.
+// over seeds); its tables are in learning_tables.cpp.
 #include <algorithm>
 #include <cmath>
 
@@ -8,20 +8,9 @@
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
-#include "physgrad/report/significant.hpp"
 #include "physgrad/report/svg_document.hpp"
 
-namespace physgrad::experiments {
-
-namespace {
-
-double final_test_loss(const LearningResult& r) { return r.summary.history.back().test_loss; }
-
-std::string milliseconds(double seconds, long long steps) {
-  return steps > 0 ? format_value(1e3 * seconds / static_cast<double>(steps)) : "–";
-}
-
-}  // namespace
+namespace physgrad::run {
 
 void mark_if_diverging(Series& series) {
   if (series.y.size() > 1 && series.y.back() > series.y.front()) {
@@ -235,167 +224,4 @@ std::vector<std::string> LearningSweep::labels(const std::string& tag) const {
   return out;
 }
 
-void LearningSweep::add_tables() const {
-  std::vector<std::string> tags, ids;
-  std::vector<long long> seeds;
-  for (const LearningResult& r : results_) {
-    if (std::find(tags.begin(), tags.end(), r.tag) == tags.end()) tags.push_back(r.tag);
-    if (std::find(ids.begin(), ids.end(), r.id) == ids.end()) ids.push_back(r.id);
-    if (std::find(seeds.begin(), seeds.end(), r.seed) == seeds.end()) seeds.push_back(r.seed);
-  }
-  const auto find = [&](const std::string& tag, const std::string& id, long long seed) {
-    const auto it = std::find_if(results_.begin(), results_.end(), [&](const LearningResult& r) {
-      return r.tag == tag && r.id == id && r.seed == seed;
-    });
-    return it == results_.end() ? nullptr : &*it;
-  };
-  const bool has_saturation =
-      !results_.empty() && results_.front().summary.history.back().extras.contains(
-                               "saturated_fraction");
-
-  for (const std::string& tag : tags) {
-    RunContext::Table losses{"Final test loss per seed (" + tag +
-                                 "): the mean loss over the test set after the last iteration, "
-                                 "with the median and the worst over the seeds",
-                             {"rule"}, {}};
-    RunContext::Table saturation{"Saturated hidden neurons at the end, per seed (" + tag +
-                                     "): the fraction (0 to 1) of hidden neurons with |tanh| > "
-                                     "0.99 on every test input",
-                                 {"rule"}, {}};
-    for (const long long seed : seeds) {
-      losses.header.push_back("seed " + std::to_string(seed));
-      saturation.header.push_back("seed " + std::to_string(seed));
-    }
-    losses.header.insert(losses.header.end(), {"median", "worst", "median / lowest"});
-    std::vector<double> medians;
-    std::vector<Spread> spreads;  // the digits of a row and of its ratio follow its spread
-    for (const std::string& id : ids) {
-      // A pretrained run none of whose seeds switched is Adam's, and reads so.
-      bool switched = pretrained_rule(id).empty();
-      for (const long long seed : seeds) {
-        const LearningResult* r = find(tag, id, seed);
-        switched = switched || (r != nullptr && r->params.value("switched", false));
-      }
-      const std::string label =
-          switched ? learning_run_label(id)
-                   : learning_run_label(kPretrainingRule) + " (never switched to " +
-                         learning_run_label(pretrained_rule(id)) + ")";
-      std::vector<std::string> row = {label}, saturated = {label};
-      // A run that failed, diverged or never switched is shown, never counted in a median.
-      std::vector<double> values;
-      for (const long long seed : seeds) {
-        const LearningResult* r = find(tag, id, seed);
-        if (r != nullptr && credited(*r)) values.push_back(final_test_loss(*r));
-      }
-      spreads.push_back(spread_of(values));
-      const auto shown = [&](double v) { return with_digits(v, digits_for(spreads.back())); };
-      for (const long long seed : seeds) {
-        const LearningResult* r = find(tag, id, seed);
-        if (r == nullptr) {
-          row.push_back("–");
-          saturated.push_back("–");
-          continue;
-        }
-        row.push_back(shown(final_test_loss(*r)) +
-                      (credited(*r)                                ? std::string()
-                       : r->params.value("switched", true) == false ? " (never switched)"
-                                                    : " (" + to_string(*r->summary.termination) + ")"));
-        if (has_saturation) {
-          saturated.push_back(format_value(r->summary.history.back().extras["saturated_fraction"]));
-        }
-      }
-      medians.push_back(median(values));
-      row.push_back(shown(medians.back()));
-      row.push_back(values.empty() ? "–" : shown(*std::max_element(values.begin(), values.end())));
-      losses.rows.push_back(std::move(row));
-      saturation.rows.push_back(std::move(saturated));
-    }
-    // The winner: the lowest finite median, and every other rule's median as a multiple of it.
-    double lowest = INFINITY;
-    for (const double m : medians) {
-      if (std::isfinite(m)) lowest = std::min(lowest, m);
-    }
-    // A finite median as a multiple of the lowest, with the digits their spreads support.
-    const auto multiple = [&](std::size_t k) {
-      const auto best = std::find(medians.begin(), medians.end(), lowest) - medians.begin();
-      return with_digits(medians[k] / lowest, ratio_digits(spreads[k], spreads[best]));
-    };
-    for (std::size_t k = 0; k < losses.rows.size(); ++k) {
-      losses.rows[k].push_back(!std::isfinite(medians[k]) ? "–"
-                               : medians[k] == lowest     ? "best"
-                                                          : "×" + multiple(k));
-    }
-    losses.title += "; the last column marks the lowest median (best) and gives the others as "
-                    "multiples of it. A run in brackets (failed, diverged, never switched) counts "
-                    "in no median";
-    context_.add_table(std::move(losses));
-    if (has_saturation) context_.add_table(std::move(saturation));
-  }
-
-  RunContext::Table timing{"Time per training step in milliseconds, mean over seeds: the "
-                           "forward pass of network, physics and loss; the gradient or stacked "
-                           "Jacobian; the inversion inside gn/hig; the rest of the update (a "
-                           "pretrained run: over its Adam and its rule's steps together)",
-                           {"rule", "setting", "forward (ms)", "gradient or Jacobian (ms)",
-                            "inversion (ms)", "update (ms)", "total (ms)"},
-                           {}};
-  for (const std::string& tag : tags) {
-    for (const std::string& id : ids) {
-      TrainingSummary total;
-      for (const LearningResult& r : results_) {
-        if (r.tag != tag || r.id != id) continue;
-        total.iterations += r.summary.iterations;
-        total.forward_seconds += r.summary.forward_seconds;
-        total.derivative_seconds += r.summary.derivative_seconds;
-        total.inversion_seconds += r.summary.inversion_seconds;
-        total.update_seconds += r.summary.update_seconds;
-        total.train_seconds += r.summary.train_seconds;
-      }
-      const long long steps = total.iterations;
-      timing.rows.push_back({learning_run_label(id), tag,
-                             milliseconds(total.forward_seconds, steps),
-                             milliseconds(total.derivative_seconds, steps),
-                             milliseconds(total.inversion_seconds, steps),
-                             milliseconds(total.update_seconds, steps),
-                             milliseconds(total.train_seconds, steps)});
-    }
-  }
-  context_.add_table(std::move(timing));
-  add_switch_note();
-}
-
-void LearningSweep::add_switch_note() const {
-  std::string note;
-  for (const LearningResult& r : results_) {
-    const std::string rule = pretrained_rule(r.id);
-    if (rule.empty()) continue;
-    const std::string who = learning_run_label(r.id) + " (" + r.tag + ", seed " +
-                            std::to_string(r.seed) + ")";
-    if (r.params.value("switched", false)) {
-      const long long at = r.params.at("pretrain_iterations").get<long long>();
-      double seconds = 0;
-      for (const TrainingRecord& record : r.summary.history) {
-        if (record.iteration <= at) seconds = record.train_seconds;
-      }
-      note += (note.empty() ? "" : " ") + who + ": Adam made " + std::to_string(at) +
-              " updates (" + format_value(seconds) + " s) before " + learning_run_label(rule) +
-              " took over.";
-    } else {
-      note += (note.empty() ? "" : " ") + who + " never switched within its budget: it is Adam's "
-              "run, shown as such and not ranked.";
-    }
-  }
-  if (note.empty()) return;
-  const std::string pretrain = settings_.text("pretrain");
-  context_.add_note(
-      "The Adam→ runs are the HIG paper's switch from Adam to the rule, " +
-      (pretrain == "auto"
-           ? "made once Adam's evaluated training loss had levelled off (--pretrain auto: the best "
-             "of the last " + std::to_string(settings_.integer("plateau-window")) +
-                 " evaluations less than " + format_value(100 * settings_.real("plateau-fraction")) +
-                 " % below the best before them)"
-           : "after --pretrain " + pretrain + " Adam updates") +
-      "; the switch is marked on the curves. " + note);
-}
-
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -13,7 +13,7 @@
 #include "physgrad/memory.hpp"
 #include "physgrad/io/serialize.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace {
 
@@ -370,4 +370,4 @@ TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Mlp& network,
   return summary;
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

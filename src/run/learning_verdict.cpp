@@ -8,7 +8,7 @@
 #include "physgrad/catalogue.hpp"
 #include "physgrad/run/learning_runs.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace {
 
@@ -214,4 +214,4 @@ std::string verdict_sentence(const VerdictInput& input) {
   return out;
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -3,7 +3,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/text.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 Registry::Registry(std::vector<std::unique_ptr<Experiment>> experiments)
     : experiments_(std::move(experiments)) {
@@ -44,4 +44,4 @@ ReferenceCase Registry::reference(const std::string& name, Index batch, std::uin
   throw unknown_name_error("reference configuration", name, reference_names());
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -7,7 +7,7 @@
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/run/run_folder.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace {
 
@@ -145,4 +145,4 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
   return html_report(experiment.name() + " — physgrad", experiment.description(), sections);
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

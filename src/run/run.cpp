@@ -18,9 +18,10 @@
 #include "physgrad/run/interrupt.hpp"
 #include "physgrad/run/registry.hpp"
 #include "physgrad/run/run_folder.hpp"
+#include "fault_point.hpp"
 #include "physgrad/threads.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace {
 
@@ -129,7 +130,8 @@ RunOutcome Run::start(const Experiment& experiment, const Settings& settings,
   return run_in(experiment, settings, hooks.command, folder, hooks);
 }
 
-RunOutcome Run::resume(const std::filesystem::path& dir, const RunHooks& hooks) {
+RunOutcome Run::resume(const Registry& experiments, const std::filesystem::path& dir,
+                       const RunHooks& hooks) {
   const FolderPath where = locate_folder(dir.string(), "resume");
   std::optional<RunFolder> folder;
   FolderHandle unclaimed;  // the other ranks read the folder without claiming it
@@ -148,7 +150,7 @@ RunOutcome Run::resume(const std::filesystem::path& dir, const RunHooks& hooks) 
     if (!config.is_object() || !config.contains("experiment") || !config["experiment"].is_string()) {
       throw Error("names no experiment");
     }
-    experiment = &registry().find(config["experiment"].get<std::string>());
+    experiment = &experiments.find(config["experiment"].get<std::string>());
     OptionTexts given = config_options(*experiment, config);
     given.emplace_back("out", where.shown);
     settings.emplace(resolve_settings(*experiment, given));
@@ -168,4 +170,4 @@ RunOutcome Run::resume(const std::filesystem::path& dir, const RunHooks& hooks) 
   return run_in(*experiment, *settings, command, folder, hooks, resumed);
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

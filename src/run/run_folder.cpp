@@ -7,7 +7,7 @@
 #include "physgrad/io/csv.hpp"
 #include "physgrad/run/report_page.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace {
 
@@ -100,4 +100,4 @@ void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
                     report_page_html(experiment, settings, context, command_line));
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

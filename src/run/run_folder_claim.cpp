@@ -1,6 +1,5 @@
 // The run folder's life: located, claimed under its lock, committed or abandoned (run_folder.hpp).
 #include <fcntl.h>
-#include <signal.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -10,7 +9,6 @@
 #include <climits>
 #include <cstdlib>
 #include <cstring>
-#include <map>
 
 #include "physgrad/run/checkpoint.hpp"
 #include "physgrad/run/config_file.hpp"
@@ -18,8 +16,9 @@
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/text.hpp"
 #include "physgrad/run/run_folder.hpp"
+#include "fault_point.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace fs = std::filesystem;
 
@@ -367,24 +366,4 @@ std::string RunFolder::abandon() noexcept {
   return ended_text_;
 }
 
-void fault_point(const char* name) {
-  // "ACTION@NAME:K", read once.
-  static const std::string wanted = [] {
-    const char* text = std::getenv("PHYSGRAD_FAULT");
-    return text == nullptr ? std::string() : std::string(text);
-  }();
-  if (wanted.empty()) return;
-  const std::size_t at = wanted.find('@');
-  const std::size_t colon = wanted.find(':');
-  if (at == std::string::npos || wanted.substr(at + 1, colon - at - 1) != name) return;
-  static std::map<std::string, long> passes;
-  const long k = colon == std::string::npos ? 1 : std::atol(wanted.c_str() + colon + 1);
-  if (++passes[name] != k) return;
-  if (wanted.compare(0, at, "kill") == 0) ::kill(::getpid(), SIGKILL);
-  if (wanted.compare(0, at, "stop") == 0) ::raise(SIGSTOP);
-  if (wanted.compare(0, at, "fail") == 0) {
-    throw Error(std::string("injected failure at ") + name + " " + std::to_string(k));
-  }
-}
-
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -23,17 +23,17 @@
 #include "physgrad/run/run_index_folder.hpp"
 #include "physgrad/text.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
 
-// The settings of experiment `name` when no option is given, or null for a name this program
-// does not know.
-json default_settings(const std::string& name) {
-  for (const auto& experiment : registry()) {
+// The settings of experiment `name` when no option is given, or null for a name `experiments`
+// does not hold.
+json default_settings(const Registry& experiments, const std::string& name) {
+  for (const auto& experiment : experiments) {
     if (experiment->name() == name) return resolve_settings(*experiment, {}).json();
   }
   return nullptr;
@@ -41,7 +41,7 @@ json default_settings(const std::string& name) {
 
 struct ExperimentSection {
   std::string name;
-  json defaults;                // null: an experiment this program does not know
+  json defaults;                // null: an experiment the registry does not hold
   PageSpool::Part sentences;    // each folder's message sentence, as paragraphs
   std::vector<IndexComparison> comparisons;
 };
@@ -100,8 +100,9 @@ std::string index_page_name(const fs::path& dir) {
 
 // Everything the page holds while the folders are read.
 struct IndexPage {
-  explicit IndexPage(const fs::path& dir) : spool(dir) {}
+  IndexPage(const Registry& known, const fs::path& dir) : registry(known), spool(dir) {}
 
+  const Registry& registry;  // whose experiments' defaults the tables compare with
   PageSpool spool;
   PageSpool::Part notes, warnings, every_run, commands;
   std::string first_note;  // named in the error when no folder can be shown
@@ -119,7 +120,8 @@ struct IndexPage {
     auto e = std::find_if(experiments.begin(), experiments.end(),
                           [&](const ExperimentSection& s) { return s.name == experiment; });
     if (e == experiments.end()) {
-      e = experiments.insert(experiments.end(), {experiment, default_settings(experiment), {}, {}});
+      e = experiments.insert(experiments.end(),
+                             {experiment, default_settings(registry, experiment), {}, {}});
     }
     return *e;
   }
@@ -200,12 +202,13 @@ struct IndexPage {
 
 }  // namespace
 
-RunIndex write_run_index(const fs::path& dir, std::ostream& warnings) {
+RunIndex write_run_index(const Registry& experiments, const fs::path& dir,
+                         std::ostream& warnings) {
   std::error_code error;
   if (!fs::is_directory(dir, error)) {
     throw Error("report: '" + dir.string() + "' is not a directory");
   }
-  IndexPage page(dir);
+  IndexPage page(experiments, dir);
   for (const fs::path& path : run_folder_paths(dir)) {
     std::vector<std::string> notes;
     std::optional<IndexedFolder> folder;
@@ -228,4 +231,4 @@ RunIndex write_run_index(const fs::path& dir, std::ostream& warnings) {
   return {page.shown, dir / name};
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -11,7 +11,7 @@
 #include "physgrad/report/plot_marks.hpp"
 #include "physgrad/report/significant.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 using nlohmann::json;
 
@@ -225,4 +225,4 @@ std::vector<HtmlFigure> index_overlays(const IndexComparison& c, const std::stri
   return figures;
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -14,7 +14,7 @@
 #include "physgrad/run/run_folder.hpp"
 #include "physgrad/text.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -191,4 +191,4 @@ IndexedFolder read_index_folder(const fs::path& path, std::vector<std::string>& 
   return folder;
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -10,7 +10,7 @@
 #include "physgrad/run/experiment.hpp"
 #include "physgrad/text.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -318,4 +318,4 @@ bool is_cost_metric(const std::string& metric) {
   return metric == "iterations" || metric == "simulator_passes";
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

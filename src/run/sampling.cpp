@@ -5,7 +5,7 @@
 
 #include "physgrad/error.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 Matrix periodic_noise(Index count, Index n, Sampler& sampler, double scale, double smoothness) {
   if (count < 0 || n < 1) {
@@ -70,4 +70,4 @@ Matrix periodic_noise(Index count, Index n, Sampler& sampler, double scale, doub
   return fields;
 }
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -12,7 +12,7 @@
 #include "physgrad/io/folder_handle.hpp"
 #include "physgrad/train/trainer.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 inline constexpr const char* kCheckpointFile = "checkpoint.pgc";
 
@@ -70,4 +70,4 @@ class ExperimentCheckpoint {
   bool written_ = false;
 };
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

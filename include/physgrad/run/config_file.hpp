@@ -11,7 +11,7 @@
 #include "physgrad/run/experiment.hpp"
 #include "physgrad/io/folder_handle.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 // Option name → text, the form resolve_settings() takes from the command line.
 using OptionTexts = std::vector<std::pair<std::string, std::string>>;
@@ -38,4 +38,4 @@ OptionTexts read_config_file(const Experiment& experiment, const std::filesystem
 // choices (or "any"), help.
 RunContext::Table options_table(const Experiment& experiment);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -15,7 +15,7 @@
 #include "physgrad/report/landscape.hpp"
 #include "physgrad/report/line_plot.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 // One configured rule of an experiment: id, display label and its settings.
 struct RuleSetup {
@@ -85,4 +85,4 @@ Grid2D sample_grid(const std::function<double(double, double)>& f, double x_min,
 // Each run's iterates as a trajectory (first two coordinates).
 std::vector<Trajectory> trajectories(const std::vector<DirectResult>& results);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

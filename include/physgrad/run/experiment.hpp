@@ -16,7 +16,7 @@
 #include "physgrad/parallel/communicator.hpp"
 #include "physgrad/types.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 class ExperimentCheckpoint;
 class Settings;
@@ -264,4 +264,4 @@ std::string format_value(double value);
 // NaN when there are none.
 double median(std::vector<double> values);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -10,7 +10,7 @@
 
 #include "physgrad/stop.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 // Thrown by an experiment that stopped on request, and by a simulator of the library that did.
 using Interrupted = StopRequested;
@@ -28,4 +28,4 @@ int received_signal();
 // the grace period no longer applies (acknowledge_stop(), as every StopRequested thrown does).
 void stop_point_reached();
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

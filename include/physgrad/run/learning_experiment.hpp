@@ -19,7 +19,7 @@
 #include "physgrad/run/learning_runs.hpp"
 #include "physgrad/train/trainer.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 // The learning problem of an experiment at one batch, built by the experiment's own set-up code:
 // its simulator, loss, initial network, the first B training samples and its choices per rule.
@@ -104,4 +104,4 @@ double sample_bytes(const std::vector<Index>& widths, Index data_values);
 // B·m·|θ|² — and decomposes it (k³): at most this many (a few minutes on one core).
 inline constexpr double kMaxStepMultiplyAdds = 1e12;
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

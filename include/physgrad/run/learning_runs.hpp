@@ -17,7 +17,7 @@
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/train/trainer.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 struct RunKey;
 
@@ -160,4 +160,4 @@ class LearningSweep {
   SampleSource fresh_samples_;
 };
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

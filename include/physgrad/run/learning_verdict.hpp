@@ -9,7 +9,7 @@
 
 #include "physgrad/train/trainer.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 struct LearningResult;
 
@@ -57,4 +57,4 @@ std::string value_text(double value);
 // counted and never ranked; values within 10 % of each other are called about equal.
 std::string verdict_sentence(const VerdictInput& input);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -1,6 +1,7 @@
 // Registry — the experiments a front end offers, in display order and found by name, and the
 // reference cases of the learning experiments among them (what `physgrad bench` and the
-// micro-benchmarks time). registry() is the program's one list, experiments/registry.cpp.
+// micro-benchmarks time). The front end builds it and hands it to Run::resume and the index: the
+// CLI the built-in experiments (experiments/registry.hpp), a program its own, with them or not.
 #pragma once
 
 #include <cstdint>
@@ -11,7 +12,7 @@
 #include "physgrad/run/experiment.hpp"
 #include "physgrad/run/learning_experiment.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 class Registry {
  public:
@@ -36,8 +37,4 @@ class Registry {
   std::vector<std::unique_ptr<Experiment>> experiments_;
 };
 
-// The experiments of this program, in display order (Run::resume finds a run's experiment here).
-// Defined by experiments/registry.cpp, the one list of the reference experiments.
-const Registry& registry();
-
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

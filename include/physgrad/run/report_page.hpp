@@ -6,7 +6,7 @@
 
 #include "physgrad/run/experiment.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 std::string report_page_html(const Experiment& experiment, const Settings& settings,
                              const RunContext& context, const std::string& command_line);
@@ -14,4 +14,4 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
 // A number of a summary or settings document with 4 significant digits ("–" for null).
 std::string format_number(const nlohmann::json& value);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

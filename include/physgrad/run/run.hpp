@@ -13,7 +13,9 @@
 #include "physgrad/parallel/communicator.hpp"
 #include "physgrad/run/experiment.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
+
+class Registry;
 
 // What a front end hands the run besides the settings; every member may stay empty.
 struct RunHooks {
@@ -57,9 +59,12 @@ class Run {
   static RunOutcome start(const Experiment& experiment, const Settings& settings,
                           const std::filesystem::path& out, const RunHooks& hooks = {});
   // Continues the unfinished run in `dir` with the settings of its config.json: from its
-  // checkpoint, or from the start when it has none. Throws Error as start() does, and naming
-  // config.json when it does not hold the settings of a known experiment.
-  static RunOutcome resume(const std::filesystem::path& dir, const RunHooks& hooks = {});
+  // checkpoint, or from the start when it has none; its experiment is found by name in
+  // `experiments` (the caller's: the CLI's built-in ones, or a program's own). Throws Error as
+  // start() does, and naming config.json when it does not hold the settings of an experiment of
+  // `experiments`.
+  static RunOutcome resume(const Registry& experiments, const std::filesystem::path& dir,
+                           const RunHooks& hooks = {});
 };
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -23,7 +23,7 @@
 #include "physgrad/run/experiment.hpp"
 #include "physgrad/io/folder_handle.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 inline constexpr const char* kConfigFile = "config.json";
 inline constexpr const char* kSummaryFile = "summary.json";
@@ -107,13 +107,4 @@ bool is_result_file(const std::string& name);
 // one, "message": {"figure", "sentence", "metric", "metric_text", "labels"} (RunContext).
 nlohmann::json summary_document(const Experiment& experiment, const RunContext& context);
 
-// Fault injection for tests: with PHYSGRAD_FAULT=ACTION@NAME:K the K-th pass through the point
-// NAME ("claimed": the folder is claimed, and a new run's config.json written; "checkpoint": a
-// checkpoint was written; "commit": a result was moved into place) kills the process (ACTION
-// "kill", SIGKILL), throws an Error ("fail"), or stops it ("stop", SIGSTOP: it waits, exactly
-// there, until it gets SIGCONT; a test that sees it stopped with waitpid(WUNTRACED) changes the
-// folders meanwhile, at a known step instead of after a guessed sleep). Does nothing without the
-// variable.
-void fault_point(const char* name);
-
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

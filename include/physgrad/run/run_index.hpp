@@ -12,7 +12,9 @@
 #include <filesystem>
 #include <iostream>
 
-namespace physgrad::experiments {
+namespace physgrad::run {
+
+class Registry;
 
 struct RunIndex {
   std::size_t folders = 0;      // the run folders shown
@@ -32,6 +34,9 @@ struct RunIndex {
 // are drawn. What is left out is listed in the page and, one line each ("physgrad: warning:
 // report: …"), on `warnings`. Throws Error when DIR is not a directory or holds no run folder
 // that can be shown.
-RunIndex write_run_index(const std::filesystem::path& dir, std::ostream& warnings = std::cerr);
+// The options that differ from an experiment's defaults are those of its namesake in
+// `experiments` (a folder of an experiment it does not hold shows every option).
+RunIndex write_run_index(const Registry& experiments, const std::filesystem::path& dir,
+                         std::ostream& warnings = std::cerr);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -17,7 +17,7 @@
 #include "physgrad/report/page_spool.hpp"
 #include "physgrad/run/run_index_folder.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 inline constexpr std::size_t kIndexDrawnFolders = 5;          // folders one overlay draws
 inline constexpr std::size_t kIndexOverlaySeries = 32;        // curves one overlay draws
@@ -57,4 +57,4 @@ void overlay_index_curves(IndexComparison& c, const IndexedFolder& folder);
 // The overlays of `experiment`'s comparison `c`, one a set of axes, each with its caption.
 std::vector<HtmlFigure> index_overlays(const IndexComparison& c, const std::string& experiment);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

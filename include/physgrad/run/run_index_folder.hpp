@@ -13,7 +13,7 @@
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/significant.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 // What a folder's experiment said its message is (summary.json "message"); a folder without one
 // is compared over every run by its final test loss, or its final loss when no run has a test
@@ -130,4 +130,4 @@ std::string index_text(const nlohmann::json& value);
 // `text` cut to at most `bytes` bytes at a character's start, "…" added where it was cut.
 std::string index_clipped(std::string text, std::size_t bytes);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

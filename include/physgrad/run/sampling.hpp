@@ -8,7 +8,7 @@
 
 #include "physgrad/types.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 
 class Sampler {
  public:
@@ -35,4 +35,4 @@ class Sampler {
 Matrix periodic_noise(Index count, Index n, Sampler& sampler, double scale = 10,
                       double smoothness = 1);
 
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -1,0 +1,242 @@
+// A Python script's own learning experiment through the experiment framework (run/): a network
+// of `widths` (tanh between layers) maps inputs x to the simulator's inputs, trained through the
+// simulator with L = ½‖P(f(x)) − ŷ‖² on samples (x, ŷ) = data(count, seed), by each rule of
+// --optimizers; run folders, checkpoints, resume and the index as for the reference experiments.
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "bindings.hpp"
+#include "physgrad/error.hpp"
+#include "physgrad/loss/loss.hpp"
+#include "physgrad/run/learning_experiment.hpp"
+#include "python_simulator.hpp"
+#include "registry.hpp"
+
+namespace physgrad::python {
+
+namespace {
+
+namespace ex = physgrad::run;
+
+class PythonLearningExperiment final : public ex::LearningExperiment {
+ public:
+  // Holds the GIL: asks the simulator for its output size (output_dim, else one forward pass).
+  PythonLearningExperiment(std::string name, std::string description, py::object simulator,
+                           std::vector<Index> widths, py::object data,
+                           std::vector<std::string> optimizers, long long iterations,
+                           const py::dict& rules, Index train_size, Index test_size)
+      : LearningExperiment({.eval_every = std::to_string(std::max(1LL, iterations / 10))}),
+        name_(std::move(name)), description_(std::move(description)),
+        simulator_(std::move(simulator)), widths_(std::move(widths)), data_(std::move(data)),
+        optimizers_(std::move(optimizers)), iterations_(iterations),
+        train_size_(train_size), test_size_(test_size) {
+    if (name_.empty()) throw Error("LearningExperiment: the name is empty");
+    if (widths_.size() < 2) {
+      throw Error("LearningExperiment " + name_ + ": widths needs at least two layers, got " +
+                  std::to_string(widths_.size()));
+    }
+    for (const Index w : widths_) {
+      if (w < 1) throw Error("LearningExperiment " + name_ + ": a width is " + std::to_string(w));
+    }
+    if (iterations_ < 1) {
+      throw Error("LearningExperiment " + name_ + ": iterations must be ≥ 1, got " +
+                  std::to_string(iterations_));
+    }
+    if (!PyCallable_Check(data_.ptr())) {
+      throw Error("LearningExperiment " + name_ + ": data is not callable");
+    }
+    CallbackErrors errors;
+    try {
+      outputs_ = PythonSimulator(simulator_, widths_.back(), -1,
+                                 Vector::Zero(widths_.back()), errors)
+                     .output_dim();
+    } catch (const CallbackFailed&) {
+      raise_kept(errors, "LearningExperiment " + name_);
+    }
+    for (const auto& [key, value] : rules) {
+      if (!py::isinstance<py::dict>(value)) {
+        throw Error("LearningExperiment " + name_ + ": rules[" + std::string(py::str(key)) +
+                    "] is not a dict of options");
+      }
+      py::dict options = py::reinterpret_borrow<py::dict>(value).attr("copy")();
+      ex::RuleDefaults defaults;
+      if (options.contains("batch")) {
+        defaults.batch = to_integer(options["batch"], "rule " + std::string(py::str(key)) +
+                                    ": batch", 1, std::numeric_limits<int>::max());
+        options.attr("pop")("batch");
+      }
+      defaults.settings = rule_settings(options);
+      rules_[py::str(key).cast<std::string>()] = std::move(defaults);
+    }
+  }
+
+  std::string name() const override { return name_; }
+  std::string description() const override { return description_; }
+  std::vector<std::string> default_optimizers() const override { return optimizers_; }
+  long long default_iterations() const override { return iterations_; }
+
+  // The exception a Python callback raised in the last run, if any (taken: the next run starts
+  // without one).
+  CallbackErrors& errors() const { return errors_; }
+
+  void run(const ex::Settings& settings, ex::RunContext& context) const override {
+    // The simulator holds a reference to a Python object: made and released holding the GIL.
+    std::optional<PythonSimulator> physics;
+    struct Release {
+      std::optional<PythonSimulator>& simulator;
+      ~Release() {
+        py::gil_scoped_acquire held;
+        simulator.reset();
+      }
+    } release{physics};
+    {
+      py::gil_scoped_acquire held;
+      errors_.error.reset();
+      errors_.method.clear();
+      physics.emplace(simulator_, widths_.back(), outputs_, Vector::Zero(widths_.back()),
+                      errors_);
+    }
+    const L2Loss loss;
+    const LearningProblem problem{&*physics, &loss};
+    const auto seed = static_cast<std::uint64_t>(settings.integer("seed"));
+    const Dataset train_set = samples(settings.integer("train-size"), 2 * seed);
+    const Dataset test_set = samples(settings.integer("test-size"), 2 * seed + 1);
+    ex::LearningSweep sweep(settings, context, rules_);
+    for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
+      Mlp network(widths_, Activation::kTanh);
+      network.initialize(seed);
+      sweep.run(id, name_, {{"seed", seed}}, network, problem, train_set, &test_set);
+    }
+    sweep.add_loss_figures(context, name_, "run");
+    sweep.set_time_message(name_, "run");
+    sweep.add_tables();
+  }
+
+ protected:
+  std::vector<ex::OptionSpec> own_options() const override {
+    const auto bytes_each = [this](const ex::Settings&) {
+      return ex::sample_bytes(widths_, widths_.front() + outputs_);
+    };
+    return {ex::sample_count_option("train-size", std::to_string(train_size_),
+                                    "training samples", "16", bytes_each),
+            ex::sample_count_option("test-size", std::to_string(test_size_), "test samples",
+                                    "8", bytes_each)};
+  }
+  Shape shape(const ex::Settings& /*settings*/) const override { return {outputs_, widths_}; }
+
+ private:
+  // data(count, seed) as a Dataset: its inputs (count, widths[0]) and targets (count, outputs).
+  Dataset samples(Index count, std::uint64_t seed) const {
+    return call_python(errors_, "data", [&] {
+      const py::object pair = data_(count, seed);
+      if (!py::isinstance<py::tuple>(pair) || py::len(pair) != 2) {
+        throw Error("LearningExperiment " + name_ + ": data(count, seed) returned " +
+                    std::string(py::str(py::repr(pair))).substr(0, 80) +
+                    ", expected (inputs, targets)");
+      }
+      const std::string who = "LearningExperiment " + name_ + ": data";
+      Dataset d{to_columns(pair[py::int_(0)], who, "inputs"),
+                to_columns(pair[py::int_(1)], who, "targets"), Matrix()};
+      if (d.inputs.rows() != widths_.front() || d.inputs.cols() != count ||
+          d.targets.rows() != outputs_ || d.targets.cols() != count) {
+        throw Error(who + " gave inputs (" + std::to_string(d.inputs.cols()) + ", " +
+                    std::to_string(d.inputs.rows()) + ") and targets (" +
+                    std::to_string(d.targets.cols()) + ", " + std::to_string(d.targets.rows()) +
+                    "), expected (" + std::to_string(count) + ", " +
+                    std::to_string(widths_.front()) + ") and (" + std::to_string(count) + ", " +
+                    std::to_string(outputs_) + ")");
+      }
+      return d;
+    });
+  }
+
+  std::string name_, description_;
+  py::object simulator_;
+  std::vector<Index> widths_;
+  py::object data_;
+  std::vector<std::string> optimizers_;
+  long long iterations_;
+  Index train_size_, test_size_;
+  Index outputs_ = 0;
+  std::map<std::string, ex::RuleDefaults> rules_;
+  mutable CallbackErrors errors_;
+};
+
+// An experiment the Python object owns, lent to a Registry for one call.
+class LentExperiment final : public ex::Experiment {
+ public:
+  explicit LentExperiment(std::shared_ptr<const ex::Experiment> lent) : lent_(std::move(lent)) {}
+  std::string name() const override { return lent_->name(); }
+  std::string description() const override { return lent_->description(); }
+  std::vector<ex::OptionSpec> options() const override { return lent_->options(); }
+  std::vector<std::string> optimizer_choices() const override {
+    return lent_->optimizer_choices();
+  }
+  std::vector<std::string> default_optimizers() const override {
+    return lent_->default_optimizers();
+  }
+  long long default_iterations() const override { return lent_->default_iterations(); }
+  void validate(const ex::Settings& settings) const override { lent_->validate(settings); }
+  void run(const ex::Settings& settings, ex::RunContext& context) const override {
+    lent_->run(settings, context);
+  }
+
+ private:
+  std::shared_ptr<const ex::Experiment> lent_;
+};
+
+std::vector<std::shared_ptr<PythonLearningExperiment>> own_list(const py::object& own) {
+  if (own.is_none()) return {};
+  try {
+    return own.cast<std::vector<std::shared_ptr<PythonLearningExperiment>>>();
+  } catch (const py::cast_error&) {
+    throw Error("experiments: " + std::string(py::str(py::repr(own))).substr(0, 80) +
+                " is not a list of physgrad.LearningExperiment");
+  }
+}
+
+}  // namespace
+
+run::Registry registry_with(const py::object& own) {
+  std::vector<std::unique_ptr<ex::Experiment>> list = experiments::builtin_experiments();
+  for (auto& experiment : own_list(own)) {
+    list.push_back(std::make_unique<LentExperiment>(std::move(experiment)));
+  }
+  return run::Registry(std::move(list));
+}
+
+void raise_own_callback_error(const py::object& own, const std::string& context) {
+  for (const auto& experiment : own_list(own)) {
+    CallbackErrors& errors = experiment->errors();
+    if (errors.error) raise_kept(errors, context);
+  }
+}
+
+void bind_own_experiments(py::module_& m) {
+  py::class_<PythonLearningExperiment, std::shared_ptr<PythonLearningExperiment>>(
+      m, "LearningExperiment",
+      "A learning experiment of one's own: a network of `widths` (tanh between layers) trained "
+      "through `simulator` (an object with forward(x), as minimize() takes it) on samples "
+      "data(count, seed) -> (inputs (count, widths[0]), targets (count, m)), by each rule of "
+      "`optimizers`; run, resume and index it with run_experiment, resume_experiment and "
+      "write_index, giving it in `experiments`.")
+      .def(py::init<std::string, std::string, py::object, std::vector<Index>, py::object,
+                    std::vector<std::string>, long long, const py::dict&, Index, Index>(),
+           py::arg("name"), py::arg("description"), py::arg("simulator"), py::arg("widths"),
+           py::arg("data"), py::arg("optimizers") = std::vector<std::string>{"adam", "hig"},
+           py::arg("iterations") = 200, py::arg("rules") = py::dict(),
+           py::arg("train_size") = 256, py::arg("test_size") = 64)
+      .def_property_readonly("name", &PythonLearningExperiment::name)
+      .def("__repr__", [](const PythonLearningExperiment& e) {
+        return "LearningExperiment(" + e.name() + ")";
+      });
+}
+
+}  // namespace physgrad::python
