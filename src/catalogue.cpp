@@ -30,7 +30,7 @@ void apply(const std::string& rule, Options& o, const RuleSettings& settings) {
 }
 
 // Thrown when a factory gets the options of a rule of the other kind.
-Error wrong_kind(const RuleOptions& options, Kind wanted) {
+Error wrong_kind(const AnyRuleOptions& options, Kind wanted) {
   std::vector<std::string> ids;
   for (const RuleInfo& rule : rule_catalogue()) {
     if (rule.defaults.index() == options.index()) ids.push_back(rule.id);
@@ -43,7 +43,7 @@ Error wrong_kind(const RuleOptions& options, Kind wanted) {
 // The rule of `Rules` (classes deriving from Base) whose Options `options` holds; Error when none
 // does.
 template <class Base, class... Rules>
-std::unique_ptr<Base> build(const RuleOptions& options, Kind kind) {
+std::unique_ptr<Base> build(const AnyRuleOptions& options, Kind kind) {
   std::unique_ptr<Base> rule;
   std::visit(
       [&rule](const auto& o) {
@@ -184,14 +184,14 @@ SharedRuleOption shared_rule_option(const std::string& name, std::optional<Kind>
   return shared;
 }
 
-RuleOptions with_settings(const RuleInfo& rule, const RuleSettings& settings) {
+AnyRuleOptions with_settings(const RuleInfo& rule, const RuleSettings& settings) {
   const std::vector<std::string> known = rule_option_names(rule.kind);
   for (const auto& [name, value] : settings) {
     if (!std::binary_search(known.begin(), known.end(), name)) {
       throw unknown_name_error("rule option", name, known);
     }
   }
-  RuleOptions options = rule.defaults;
+  AnyRuleOptions options = rule.defaults;
   std::visit([&](auto& o) { apply(rule.id, o, settings); }, options);
   return options;
 }
@@ -218,7 +218,7 @@ std::string rule_table_markdown(Kind kind) {
   return table;
 }
 
-std::unique_ptr<Optimizer> make_optimizer(const RuleOptions& options) {
+std::unique_ptr<Optimizer> make_optimizer(const AnyRuleOptions& options) {
   return build<Optimizer, GradientDescent, Momentum, Adam, Newton, Bfgs, Lbfgs, GaussNewton,
                LevenbergMarquardt, InverseGradient, PhysicalGradient>(options, Kind::kDirect);
 }
@@ -227,7 +227,7 @@ std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSetti
   return make_optimizer(with_settings(find_rule(Kind::kDirect, id), settings));
 }
 
-std::unique_ptr<LearningUpdate> make_learning_update(const RuleOptions& options) {
+std::unique_ptr<LearningUpdate> make_learning_update(const AnyRuleOptions& options) {
   return build<LearningUpdate, SgdUpdate, AdamUpdate, HigUpdate, SipUpdate, KroneckerHigUpdate,
                LanczosHigUpdate>(options, Kind::kLearning);
 }

@@ -35,9 +35,9 @@ namespace physgrad {
 // (LearningUpdate, train()). "adam" and "gn" exist in both kinds.
 enum class RuleKind { kDirect, kLearning };
 
-// Every rule's full options; each struct's member initialisers are the one default of each
-// option.
-using RuleOptions =
+// The full options of any one rule: the options struct of one of the rule classes. Each struct's
+// member initialisers are the one default of each option.
+using AnyRuleOptions =
     std::variant<GradientDescentOptions, MomentumOptions, AdamOptions, NewtonOptions, BfgsOptions,
                  LbfgsOptions, GaussNewtonOptions, LevenbergMarquardtOptions,
                  InverseGradientOptions, PhysicalGradientOptions, SgdOptions,
@@ -50,7 +50,7 @@ struct RuleInfo {
   std::string label;    // display name in tables and legends
   std::string formula;  // the update in one line
   std::string colour;   // "#rrggbb", the same in every figure
-  RuleOptions defaults;
+  AnyRuleOptions defaults;
 };
 
 // Every rule: the direct ones, then the learning ones, each in display order.
@@ -100,7 +100,7 @@ SharedRuleOption shared_rule_option(const std::string& name,
 // The rule's defaults with the settings that apply to it. Throws Error naming a name no rule of
 // the rule's kind has (unknown_name_error) or a value outside the option's range (rule, option,
 // value and range).
-RuleOptions with_settings(const RuleInfo& rule, const RuleSettings& settings);
+AnyRuleOptions with_settings(const RuleInfo& rule, const RuleSettings& settings);
 
 // Every option of the rule with its default, "beta = 0.9, lr = 0.01" (params() of the rule built
 // from its defaults).
@@ -113,11 +113,11 @@ std::string rule_table_markdown(RuleKind kind);
 // A direct rule from its full options (Error for a learning-only type: SgdOptions,
 // HigOptions, SipOptions), or from its id with the catalogue's defaults and `settings`
 // (with_settings). Throws Error naming an unknown id, an unknown option or an out-of-range value.
-std::unique_ptr<Optimizer> make_optimizer(const RuleOptions& options);
+std::unique_ptr<Optimizer> make_optimizer(const AnyRuleOptions& options);
 std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSettings& settings = {});
 
 // The same for learning rules (the direct-only types are an Error).
-std::unique_ptr<LearningUpdate> make_learning_update(const RuleOptions& options);
+std::unique_ptr<LearningUpdate> make_learning_update(const AnyRuleOptions& options);
 std::unique_ptr<LearningUpdate> make_learning_update(const std::string& id,
                                                      const RuleSettings& settings = {});
 
