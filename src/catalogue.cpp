@@ -19,18 +19,12 @@ std::vector<OptionDescription> descriptions(const Options& /*options*/) {
   return {Options::descriptors().begin(), Options::descriptors().end()};
 }
 
-// Sets each option of `o` that `settings` names, by its name or else its alias.
-template <typename Options>
-void apply(const std::string& rule, Options& o, const RuleSettings& settings) {
-  for (const RuleOption<Options>& option : Options::descriptors()) {
-    auto found = settings.find(option.name);
-    if (found == settings.end() && !option.alias.empty()) found = settings.find(option.alias);
-    if (found != settings.end()) set_option(rule, option, o, found->second);
-  }
+std::vector<OptionDescription> descriptions(const AddedRuleOptions& options) {
+  return options.descriptions();
 }
 
 // Thrown when a factory gets the options of a rule of the other kind.
-Error wrong_kind(const RuleOptions& options, Kind wanted) {
+Error wrong_kind(const AnyRuleOptions& options, Kind wanted) {
   std::vector<std::string> ids;
   for (const RuleInfo& rule : rule_catalogue()) {
     if (rule.defaults.index() == options.index()) ids.push_back(rule.id);
@@ -40,28 +34,33 @@ Error wrong_kind(const RuleOptions& options, Kind wanted) {
                (wanted == Kind::kDirect ? "direct" : "learning") + " rule");
 }
 
-// The rule of `Rules` (classes deriving from Base) whose Options `options` holds; Error when none
-// does.
+// The rule of `Rules` (classes deriving from Base) whose Options `options` holds, or the added
+// direct rule; Error when none does.
 template <class Base, class... Rules>
-std::unique_ptr<Base> build(const RuleOptions& options, Kind kind) {
+std::unique_ptr<Base> build(const AnyRuleOptions& options, Kind kind, RuleTypes<Rules...>) {
   std::unique_ptr<Base> rule;
   std::visit(
       [&rule](const auto& o) {
         using T = std::decay_t<decltype(o)>;
-        const auto make = [&]<class Rule>() {
-          if constexpr (std::is_same_v<typename Rule::Options, T>) rule = std::make_unique<Rule>(o);
-        };
-        (make.template operator()<Rules>(), ...);
+        if constexpr (std::is_same_v<T, AddedRuleOptions>) {
+          if constexpr (std::is_same_v<Base, Optimizer>) rule = o.make_optimizer();
+        } else {
+          const auto make = [&]<class Rule>() {
+            if constexpr (std::is_same_v<typename Rule::Options, T>) {
+              rule = std::make_unique<Rule>(o);
+            }
+          };
+          (make.template operator()<Rules>(), ...);
+        }
       },
       options);
   if (!rule) throw wrong_kind(options, kind);
   return rule;
 }
 
-}  // namespace
-
-const std::vector<RuleInfo>& rule_catalogue() {
-  static const std::vector<RuleInfo> rules = {
+// The catalogue: the table below, then the rules added by add_direct_rule.
+std::vector<RuleInfo>& catalogue_entries() {
+  static std::vector<RuleInfo> rules = {
       {Kind::kDirect, "gd", "GD", "Δx = −η ∂L/∂x", "#1f77b4", GradientDescentOptions{}},
       {Kind::kDirect, "momentum", "Momentum", "v ← βv + ∂L/∂x, Δx = −η v", "#17becf",
        MomentumOptions{}},
@@ -107,6 +106,10 @@ const std::vector<RuleInfo>& rule_catalogue() {
   };
   return rules;
 }
+
+}  // namespace
+
+const std::vector<RuleInfo>& rule_catalogue() { return catalogue_entries(); }
 
 std::vector<std::string> rule_ids(Kind kind) {
   std::vector<std::string> ids;
@@ -184,15 +187,23 @@ SharedRuleOption shared_rule_option(const std::string& name, std::optional<Kind>
   return shared;
 }
 
-RuleOptions with_settings(const RuleInfo& rule, const RuleSettings& settings) {
+AnyRuleOptions with_settings(const RuleInfo& rule, const RuleSettings& settings) {
   const std::vector<std::string> known = rule_option_names(rule.kind);
   for (const auto& [name, value] : settings) {
     if (!std::binary_search(known.begin(), known.end(), name)) {
       throw unknown_name_error("rule option", name, known);
     }
   }
-  RuleOptions options = rule.defaults;
-  std::visit([&](auto& o) { apply(rule.id, o, settings); }, options);
+  AnyRuleOptions options = rule.defaults;
+  std::visit(
+      [&](auto& o) {
+        if constexpr (std::is_same_v<std::decay_t<decltype(o)>, AddedRuleOptions>) {
+          o = o.with(rule.id, settings);
+        } else {
+          apply_settings(rule.id, o, settings);
+        }
+      },
+      options);
   return options;
 }
 
@@ -218,23 +229,46 @@ std::string rule_table_markdown(Kind kind) {
   return table;
 }
 
-std::unique_ptr<Optimizer> make_optimizer(const RuleOptions& options) {
-  return build<Optimizer, GradientDescent, Momentum, Adam, Newton, Bfgs, Lbfgs, GaussNewton,
-               LevenbergMarquardt, InverseGradient, PhysicalGradient>(options, Kind::kDirect);
+std::unique_ptr<Optimizer> make_optimizer(const AnyRuleOptions& options) {
+  return build<Optimizer>(options, Kind::kDirect, DirectRuleTypes{});
 }
 
 std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSettings& settings) {
   return make_optimizer(with_settings(find_rule(Kind::kDirect, id), settings));
 }
 
-std::unique_ptr<LearningUpdate> make_learning_update(const RuleOptions& options) {
-  return build<LearningUpdate, SgdUpdate, AdamUpdate, HigUpdate, SipUpdate, KroneckerHigUpdate,
-               LanczosHigUpdate>(options, Kind::kLearning);
+std::unique_ptr<LearningUpdate> make_learning_update(const AnyRuleOptions& options) {
+  return build<LearningUpdate>(options, Kind::kLearning, LearningRuleTypes{});
 }
 
 std::unique_ptr<LearningUpdate> make_learning_update(const std::string& id,
                                                      const RuleSettings& settings) {
   return make_learning_update(with_settings(find_rule(Kind::kLearning, id), settings));
+}
+
+AddedRule::AddedRule(RuleInfo rule) : id_(rule.id) {
+  std::vector<RuleInfo>& rules = catalogue_entries();
+  for (const RuleInfo& known : rules) {
+    if (known.kind == Kind::kDirect && known.id == id_) {
+      throw Error("add_direct_rule: the direct rules have the id " + in_quotes(id_) + " already");
+    }
+  }
+  const std::string built = make_optimizer(rule.defaults)->id();
+  if (built != id_) {
+    throw Error("add_direct_rule: the rule added as " + in_quotes(id_) + " reports the id " +
+                in_quotes(built));
+  }
+  // After the last direct rule, so each kind stays in display order.
+  auto after = rules.begin();
+  for (auto it = rules.begin(); it != rules.end(); ++it) {
+    if (it->kind == Kind::kDirect) after = it + 1;
+  }
+  rules.insert(after, std::move(rule));
+}
+
+AddedRule::~AddedRule() {
+  std::erase_if(catalogue_entries(),
+                [this](const RuleInfo& r) { return r.kind == Kind::kDirect && r.id == id_; });
 }
 
 }  // namespace physgrad

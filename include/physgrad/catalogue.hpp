@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -35,14 +36,92 @@ namespace physgrad {
 // (LearningUpdate, train()). "adam" and "gn" exist in both kinds.
 enum class RuleKind { kDirect, kLearning };
 
-// Every rule's full options; each struct's member initialisers are the one default of each
-// option.
-using RuleOptions =
-    std::variant<GradientDescentOptions, MomentumOptions, AdamOptions, NewtonOptions, BfgsOptions,
-                 LbfgsOptions, GaussNewtonOptions, LevenbergMarquardtOptions,
-                 InverseGradientOptions, PhysicalGradientOptions, SgdOptions,
-                 LearningAdamOptions, HigOptions, SipOptions, KroneckerHigOptions,
-                 LanczosHigOptions>;
+// The rule classes of each kind, one list each: the options variant below and the factories
+// (make_optimizer, make_learning_update) are built from them. Each class has an Options struct
+// with descriptors() and a constructor from it; the catalogue's table (catalogue.cpp) gives each
+// rule its id, label, formula, colour and defaults.
+template <class... Rules>
+struct RuleTypes {};
+using DirectRuleTypes =
+    RuleTypes<GradientDescent, Momentum, Adam, Newton, Bfgs, Lbfgs, GaussNewton,
+              LevenbergMarquardt, InverseGradient, PhysicalGradient>;
+using LearningRuleTypes = RuleTypes<SgdUpdate, AdamUpdate, HigUpdate, SipUpdate,
+                                    KroneckerHigUpdate, LanczosHigUpdate>;
+
+// Overrides of rules' options by name, e.g. {{"lr", 0.5}, {"inverse", "lbfgs"}} or from the
+// command line; values as params() reports them (numbers; names for the choices). A name replaces
+// the default of every rule that has that option and a rule without it ignores it (so one
+// RuleSettings can configure several rules); a name no rule of the kind has is an Error.
+using RuleSettings = std::map<std::string, nlohmann::json>;
+
+// Sets each option of `options` that `settings` names, by its name or else its alias; a value
+// outside the option's range is an Error naming `rule` (set_option). Other names are passed over.
+template <class Options>
+void apply_settings(const std::string& rule, Options& options, const RuleSettings& settings) {
+  for (const RuleOption<Options>& option : Options::descriptors()) {
+    auto found = settings.find(option.name);
+    if (found == settings.end() && !option.alias.empty()) found = settings.find(option.alias);
+    if (found != settings.end()) set_option(rule, option, options, found->second);
+  }
+}
+
+// The options of a direct rule added to the catalogue while the program runs (add_direct_rule):
+// the rule's own options struct behind an interface that lists its options, sets them by name
+// and builds the rule. A value: copies share the options, which are never changed in place.
+class AddedRuleOptions {
+ public:
+  template <class Rule>
+  static AddedRuleOptions of(const typename Rule::Options& options) {
+    return AddedRuleOptions(std::make_shared<const Model<Rule>>(options));
+  }
+  std::vector<OptionDescription> descriptions() const { return model_->descriptions(); }
+  // These options with `settings` applied (apply_settings, naming `rule`).
+  AddedRuleOptions with(const std::string& rule, const RuleSettings& settings) const {
+    return AddedRuleOptions(model_->with(rule, settings));
+  }
+  std::unique_ptr<Optimizer> make_optimizer() const { return model_->make(); }
+
+ private:
+  struct Concept {
+    virtual ~Concept() = default;
+    virtual std::vector<OptionDescription> descriptions() const = 0;
+    virtual std::shared_ptr<const Concept> with(const std::string& rule,
+                                                const RuleSettings& settings) const = 0;
+    virtual std::unique_ptr<Optimizer> make() const = 0;
+  };
+  template <class Rule>
+  struct Model final : Concept {
+    explicit Model(typename Rule::Options o) : options(std::move(o)) {}
+    std::vector<OptionDescription> descriptions() const override {
+      const auto& list = Rule::Options::descriptors();
+      return {list.begin(), list.end()};
+    }
+    std::shared_ptr<const Concept> with(const std::string& rule,
+                                        const RuleSettings& settings) const override {
+      typename Rule::Options changed = options;
+      apply_settings(rule, changed, settings);
+      return std::make_shared<const Model>(std::move(changed));
+    }
+    std::unique_ptr<Optimizer> make() const override { return std::make_unique<Rule>(options); }
+    typename Rule::Options options;
+  };
+  explicit AddedRuleOptions(std::shared_ptr<const Concept> model) : model_(std::move(model)) {}
+  std::shared_ptr<const Concept> model_;
+};
+
+namespace catalogue_detail {
+template <class Direct, class Learning>
+struct OptionsOf;
+template <class... Direct, class... Learning>
+struct OptionsOf<RuleTypes<Direct...>, RuleTypes<Learning...>> {
+  using type = std::variant<typename Direct::Options..., typename Learning::Options...,
+                            AddedRuleOptions>;
+};
+}  // namespace catalogue_detail
+
+// Any rule's full options: the Options of each class of both lists, in their order, or those of
+// an added rule. Each struct's member initialisers are the one default of each option.
+using AnyRuleOptions = catalogue_detail::OptionsOf<DirectRuleTypes, LearningRuleTypes>::type;
 
 struct RuleInfo {
   RuleKind kind;
@@ -50,7 +129,7 @@ struct RuleInfo {
   std::string label;    // display name in tables and legends
   std::string formula;  // the update in one line
   std::string colour;   // "#rrggbb", the same in every figure
-  RuleOptions defaults;
+  AnyRuleOptions defaults;
 };
 
 // Every rule: the direct ones, then the learning ones, each in display order.
@@ -76,12 +155,6 @@ std::string learning_run_label(const std::string& id);
 // lanczos-gn → gn; kfac-hig, lanczos-hig → hig), else `id` itself.
 std::string settings_source(const std::string& id);
 
-// Overrides of rules' options by name, e.g. {{"lr", 0.5}, {"inverse", "lbfgs"}} or from the
-// command line; values as params() reports them (numbers; names for the choices). A name replaces
-// the default of every rule that has that option and a rule without it ignores it (so one
-// RuleSettings can configure several rules); a name no rule of the kind has is an Error.
-using RuleSettings = std::map<std::string, nlohmann::json>;
-
 // Every option of the rule, as its options struct describes it (descriptors()).
 std::vector<OptionDescription> rule_options(const RuleInfo& rule);
 
@@ -100,7 +173,7 @@ SharedRuleOption shared_rule_option(const std::string& name,
 // The rule's defaults with the settings that apply to it. Throws Error naming a name no rule of
 // the rule's kind has (unknown_name_error) or a value outside the option's range (rule, option,
 // value and range).
-RuleOptions with_settings(const RuleInfo& rule, const RuleSettings& settings);
+AnyRuleOptions with_settings(const RuleInfo& rule, const RuleSettings& settings);
 
 // Every option of the rule with its default, "beta = 0.9, lr = 0.01" (params() of the rule built
 // from its defaults).
@@ -113,12 +186,42 @@ std::string rule_table_markdown(RuleKind kind);
 // A direct rule from its full options (Error for a learning-only type: SgdOptions,
 // HigOptions, SipOptions), or from its id with the catalogue's defaults and `settings`
 // (with_settings). Throws Error naming an unknown id, an unknown option or an out-of-range value.
-std::unique_ptr<Optimizer> make_optimizer(const RuleOptions& options);
+std::unique_ptr<Optimizer> make_optimizer(const AnyRuleOptions& options);
 std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSettings& settings = {});
 
 // The same for learning rules (the direct-only types are an Error).
-std::unique_ptr<LearningUpdate> make_learning_update(const RuleOptions& options);
+std::unique_ptr<LearningUpdate> make_learning_update(const AnyRuleOptions& options);
 std::unique_ptr<LearningUpdate> make_learning_update(const std::string& id,
                                                      const RuleSettings& settings = {});
+
+// A direct rule added to the catalogue (add_direct_rule) for as long as this handle lives; its
+// destructor takes the rule out again.
+class AddedRule {
+ public:
+  // Throws Error when the direct rules have the id already or the rule built from the defaults
+  // reports another id().
+  explicit AddedRule(RuleInfo rule);
+  ~AddedRule();
+  AddedRule(const AddedRule&) = delete;
+  AddedRule& operator=(const AddedRule&) = delete;
+  const std::string& id() const { return id_; }
+
+ private:
+  std::string id_;
+};
+
+// Adds the direct rule class `Rule` after the other direct rules, with the defaults
+// Rule::Options{}: `Rule` derives from Optimizer, is built from its Options, and the Options
+// struct lists its options (descriptors()). While the handle lives, make_optimizer by id,
+// find_rule, rule_ids, the option names and the tables know it, as they know the built-in rules.
+// Not thread-safe: add rules before other threads read the catalogue; adding or removing one
+// moves the entries (references into rule_catalogue() taken before are invalid).
+template <class Rule>
+[[nodiscard]] AddedRule add_direct_rule(std::string id, std::string label, std::string formula,
+                                        std::string colour) {
+  return AddedRule(RuleInfo{RuleKind::kDirect, std::move(id), std::move(label),
+                            std::move(formula), std::move(colour),
+                            AddedRuleOptions::of<Rule>(typename Rule::Options{})});
+}
 
 }  // namespace physgrad

@@ -11,11 +11,8 @@ const OptionList<BfgsOptions>& BfgsOptions::descriptors() {
 }
 
 Bfgs::Bfgs(Options options)
-    : QuasiNewton(checked("bfgs", options).initial_step, options.line_search) {}
-
-nlohmann::json Bfgs::params() const {
-  return option_values(BfgsOptions{initial_step(), line_search_options()});
-}
+    : QuasiNewton(checked("bfgs", options).initial_step, options.line_search),
+      options_(options) {}
 
 Vector Bfgs::direction(const Vector& gradient) const {
   return updated_ ? Vector(-h_ * gradient) : Vector(-gradient);

@@ -18,11 +18,7 @@ const OptionList<LbfgsOptions>& LbfgsOptions::descriptors() {
 
 Lbfgs::Lbfgs(Options options)
     : QuasiNewton(checked("lbfgs", options).initial_step, options.line_search),
-      memory_(options.memory) {}
-
-nlohmann::json Lbfgs::params() const {
-  return option_values(LbfgsOptions{memory_, initial_step(), line_search_options()});
-}
+      options_(options) {}
 
 Vector Lbfgs::direction(const Vector& gradient) const {
   // First loop, newest pair first: q ← q − aᵢ yᵢ with aᵢ = ρᵢ sᵢᵀq. Then r = H₀ q, and the
@@ -44,7 +40,7 @@ Vector Lbfgs::direction(const Vector& gradient) const {
 
 void Lbfgs::add_pair(const Vector& s, const Vector& y) {
   pairs_.push_back({s, y, 1 / y.dot(s)});
-  if (pairs_.size() > static_cast<std::size_t>(memory_)) pairs_.pop_front();
+  if (pairs_.size() > static_cast<std::size_t>(options_.memory)) pairs_.pop_front();
 }
 
 }  // namespace physgrad

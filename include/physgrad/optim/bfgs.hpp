@@ -24,7 +24,7 @@ class Bfgs final : public QuasiNewton {
   explicit Bfgs(Options options = {});
 
   std::string id() const override { return "bfgs"; }
-  nlohmann::json params() const override;
+  nlohmann::json params() const override { return option_values(options_); }
 
  private:
   Vector direction(const Vector& gradient) const override;
@@ -32,6 +32,7 @@ class Bfgs final : public QuasiNewton {
   void clear_curvature() override;
   void add_pair(const Vector& s, const Vector& y) override;
 
+  Options options_;
   Matrix h_;              // inverse-Hessian approximation H (empty: the identity)
   bool updated_ = false;  // false while H is the unscaled identity
 };

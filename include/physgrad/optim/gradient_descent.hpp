@@ -20,7 +20,7 @@ class GradientDescent final : public Optimizer {
   using Options = GradientDescentOptions;
   explicit GradientDescent(Options options = {});
   std::string id() const override { return "gd"; }
-  nlohmann::json params() const override { return {{"lr", options_.lr}}; }
+  nlohmann::json params() const override { return option_values(options_); }
 
  private:
   Step propose(const Objective& objective, const Vector& x, const Domain& domain) override;

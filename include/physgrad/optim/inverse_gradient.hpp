@@ -20,7 +20,7 @@ class InverseGradient final : public Optimizer {
   using Options = InverseGradientOptions;
   explicit InverseGradient(Options options = {});
   std::string id() const override { return "ig"; }
-  nlohmann::json params() const override { return {{"lr", options_.lr}, {"rcond", options_.rcond}}; }
+  nlohmann::json params() const override { return option_values(options_); }
 
  private:
   Step propose(const Objective& objective, const Vector& x, const Domain& domain) override;

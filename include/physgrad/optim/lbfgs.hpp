@@ -26,7 +26,7 @@ class Lbfgs final : public QuasiNewton {
   explicit Lbfgs(Options options = {});
 
   std::string id() const override { return "lbfgs"; }
-  nlohmann::json params() const override;
+  nlohmann::json params() const override { return option_values(options_); }
 
  private:
   struct Pair {
@@ -38,7 +38,7 @@ class Lbfgs final : public QuasiNewton {
   void clear_curvature() override { pairs_.clear(); }
   void add_pair(const Vector& s, const Vector& y) override;
 
-  int memory_;
+  Options options_;
   std::deque<Pair> pairs_;  // oldest first
 };
 

@@ -24,9 +24,7 @@ class LevenbergMarquardt final : public Optimizer {
   using Options = LevenbergMarquardtOptions;
   explicit LevenbergMarquardt(Options options = {});
   std::string id() const override { return "lm"; }
-  nlohmann::json params() const override {
-    return {{"initial_damping", options_.initial_damping}, {"min_damping", options_.min_damping}};
-  }
+  nlohmann::json params() const override { return option_values(options_); }
   void reset() override;
   double damping() const { return mu_; }
 

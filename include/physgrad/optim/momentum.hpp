@@ -20,9 +20,7 @@ class Momentum final : public Optimizer {
   using Options = MomentumOptions;
   explicit Momentum(Options options = {});
   std::string id() const override { return "momentum"; }
-  nlohmann::json params() const override {
-    return {{"lr", options_.lr}, {"beta", options_.beta}};
-  }
+  nlohmann::json params() const override { return option_values(options_); }
   void reset() override { velocity_.resize(0); }
 
  private:

@@ -50,9 +50,6 @@ class QuasiNewton : public Optimizer {
   // Called with pairs that pass the curvature test only (yᵀs > 0).
   virtual void add_pair(const Vector& s, const Vector& y) = 0;
 
-  double initial_step() const { return initial_step_; }
-  const LineSearchOptions& line_search_options() const { return line_search_; }
-
  private:
   Step propose(const Objective& objective, const Vector& x, const Domain& domain) final;
   LineSearchResult search(const Objective& objective, const Vector& x, const Vector& pz,
