@@ -1,3 +1,5 @@
+// What a committed run folder holds: metrics.csv, summary.json, figures and report.html, written
+// into the staging folder before commit (write_run_folder, run_folder.hpp).
 #include "physgrad/run/run_folder.hpp"
 
 #include <set>
