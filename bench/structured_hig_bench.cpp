@@ -14,6 +14,7 @@
 #include "registry.hpp"
 #include "physgrad/threads.hpp"
 #include "physgrad/train/trainer.hpp"
+#include "single_thread_main.hpp"
 
 namespace {
 
@@ -276,15 +277,4 @@ BENCHMARK(structured_cosine)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 
-int main(int argc, char** argv) {
-  physgrad::set_blas_threads(1);
-  benchmark::AddCustomContext("blas_core", physgrad::blas_core());
-  if (const std::string note = physgrad::blas_core_note(); !note.empty()) {
-    std::fprintf(stderr, "%s\n", note.c_str());
-  }
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
-}
+int main(int argc, char** argv) { return physgrad::bench::run_single_thread_benchmarks(argc, argv); }
