@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -60,14 +61,17 @@ class BlockingWatch {
   BlockingWatch(const BlockingWatch&) = delete;
   BlockingWatch& operator=(const BlockingWatch&) = delete;
 
-  // Runs `call` (returning an MPI status) under the watch.
+  // Runs `call` under the watch and returns what it returns (also when it throws, the watch
+  // stops watching).
   template <class Call>
-  int run(const Call& call, std::size_t count) {
+  auto run(const Call& call, std::size_t count) {
     count_.store(count);
     since_.store(Clock::now().time_since_epoch().count());
-    const int status = call();
-    since_.store(0);
-    return status;
+    struct Unwatch {
+      std::atomic<Clock::rep>& since;
+      ~Unwatch() { since.store(0); }
+    } unwatch{since_};
+    return call();
   }
 
  private:
@@ -108,6 +112,34 @@ class BlockingWatch {
 // doubles, as a step makes: 0.3 to 2 µs).
 constexpr std::size_t kBlockingFrom = 1024;
 
+// The distributed eigensolve under the bounds of a large collective: the ranks first all join a
+// polled exchange (`join`, which throws RanksNotAnswering after the limit), then the solve, whose
+// own exchanges ScaLAPACK makes, runs under the watch: a rank that stops inside it ends the job
+// within the limit instead of holding the others for ever.
+class WatchedEigensolver final : public DistributedEigensolver {
+ public:
+  WatchedEigensolver(std::unique_ptr<DistributedEigensolver> inner,
+                     std::function<void(std::size_t)> join, BlockingWatch& watch)
+      : inner_(std::move(inner)), join_(std::move(join)), watch_(watch) {}
+  std::string name() const override { return inner_->name(); }
+  Index block() const override { return inner_->block(); }
+  int rank() const override { return inner_->rank(); }
+  int size() const override { return inner_->size(); }
+  Vector truncated_power(Matrix local, Index n, const Vector& g, double kappa, double rcond,
+                         DistributedPowerInfo* info) override {
+    const auto count = static_cast<std::size_t>(local.size());
+    join_(count);
+    return watch_.run(
+        [&] { return inner_->truncated_power(std::move(local), n, g, kappa, rcond, info); },
+        count);
+  }
+
+ private:
+  std::unique_ptr<DistributedEigensolver> inner_;
+  std::function<void(std::size_t)> join_;
+  BlockingWatch& watch_;
+};
+
 // Every collective waits for the other ranks at most `timeout` seconds: a small one is started
 // non-blocking and polled against the limit; a large one opens with such a polled exchange that
 // every rank must join, and then runs blocking under the watch. A rank that never comes
@@ -125,13 +157,21 @@ class MpiCommunicator final : public Communicator {
     MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
     MPI_Comm_size(MPI_COMM_WORLD, &size_);
     if (size_ > 1) {
-      eigensolver_ = scalapack_eigensolver();
       watch_ = std::make_unique<BlockingWatch>(timeout_, rank_, size_);
+      if (auto scalapack = scalapack_eigensolver()) {
+        eigensolver_ = std::make_unique<WatchedEigensolver>(
+            std::move(scalapack),
+            [this](std::size_t count) {
+              usable();
+              join_all("the distributed eigensolve", count);
+            },
+            *watch_);
+      }
     }
   }
   ~MpiCommunicator() override {
+    eigensolver_.reset();  // its BLACS grid ends before MPI does; it watches with watch_
     watch_.reset();
-    eigensolver_.reset();  // its BLACS grid ends before MPI does
     int finalized = 0;
     MPI_Finalized(&finalized);
     if (finalized != 0) return;

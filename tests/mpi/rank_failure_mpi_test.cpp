@@ -204,6 +204,23 @@ TEST_F(MpiRanks, ARankStoppedInsideALargeSumEndsTheJobWithinTheLimit) {
       << err;
 }
 
+// A rank stopped inside the distributed eigensolve, after the exchange that opens it: ScaLAPACK's
+// own exchanges run under the same watch, so the job ends within the limit.
+TEST_F(MpiRanks, ARankStoppedInsideTheDistributedEigensolveEndsTheJobWithinTheLimit) {
+  std::string err;
+  const auto start = Clock::now();
+  const int code = run(2, "2 eigensolve", &err, PHYSGRAD_BLOCKING_WATCH_CHECK);
+  if (code == 3) GTEST_SKIP() << "this build has no distributed eigensolver (ScaLAPACK)";
+  EXPECT_EQ(code, 2) << err;
+  const double took = seconds_since(start);
+  std::cout << "a rank stopped inside the distributed eigensolve: the job ended after " << took
+            << " s\n";
+  EXPECT_LT(took, 2 + 10) << err;
+  EXPECT_NE(err.find("physgrad: error: rank 0 of 2: a blocking exchange of"), std::string::npos)
+      << err;
+  EXPECT_NE(err.find("did not end within 2 s"), std::string::npos) << err;
+}
+
 // SIGTERM to mpiexec while rank 1 is stopped (before any periodic checkpoint is due): the ranks
 // get SIGCONT and SIGTERM, stop at the same iteration, and rank 0 saves its checkpoint.
 TEST_F(MpiRanks, SigtermToMpiexecWhileARankIsStoppedKeepsACheckpoint) {
