@@ -184,8 +184,8 @@ class HigToy final : public LearningExperiment {
     const std::string file = "loss_by_lambda.svg";
     context.add_figure({file,
                         "Test loss per update (left) and per second of training (right), one "
-                        "row per λ (the hardest first), one y axis. Line: median over the seeds; band: their "
-                        "minimum to maximum. Dots: evaluations.",
+                        "row per λ (the hardest first), one y axis. Line: median over the seeds; "
+                        "band: their minimum to maximum. Dots: evaluations.",
                         svg::grid(rows)});
     // The index compares run folders at the hardest λ (the smallest: the most ill-conditioned).
     const double hardest = *std::min_element(lambdas.begin(), lambdas.end());

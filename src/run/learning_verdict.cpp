@@ -172,7 +172,9 @@ std::string verdict_sentence(const VerdictInput& input) {
   }
   std::sort(ranked.begin(), ranked.end(),
             [&](std::size_t a, std::size_t b) { return all[a].final_value < all[b].final_value; });
-  if (ranked.empty()) return "No rule ended a run within its limits with a finite " + input.what + ".";
+  if (ranked.empty()) {
+    return "No rule ended a run within its limits with a finite " + input.what + ".";
+  }
   const RuleStanding& best = all[ranked.front()];
   std::string out = best.label + "'s " + input.what + " is ";
   if (ranked.size() == 1) {
