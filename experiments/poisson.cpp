@@ -78,7 +78,8 @@ void add_field_figure(RunContext& context, Index n, const Vector& truth, const V
 class PoissonExperiment final : public LearningExperiment {
  public:
   PoissonExperiment()
-      : LearningExperiment({.time = "30", .pretrain = "auto", .data = "fresh"}) {}
+      : LearningExperiment(
+            {.time = "30", .eval_every = "1000", .pretrain = "auto", .data = "fresh"}) {}
   std::string name() const override { return "poisson"; }
   std::string description() const override {
     return "network predicts x from y* = laplace(x*) on an 8x8 grid, fresh noise every step as "
