@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "physgrad/run/direct_runs.hpp"
+#include "physgrad/run/learning_verdict.hpp"  // ratio_text
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
@@ -122,9 +123,9 @@ class ScaledToy final : public Experiment {
            format_value(alphas.front());
     if (!invariant.empty() && converged(moved) && first[invariant.front()].summary.iterations > 0) {
       out += " (" +
-             format_value(static_cast<double>(moved.summary.iterations) /
-                          static_cast<double>(first[invariant.front()].summary.iterations)) +
-             "× " + first[invariant.front()].rule.label + "'s)";
+             ratio_text(static_cast<double>(moved.summary.iterations) /
+                        static_cast<double>(first[invariant.front()].summary.iterations)) +
+             " " + first[invariant.front()].rule.label + "'s)";
     }
     return out + " and " + iterations_cell(by_alpha.back()[varying.front()]) + " at α = " +
            format_value(alphas.back()) + ".";
