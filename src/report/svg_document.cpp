@@ -198,17 +198,7 @@ std::string arranged(const std::vector<std::string>& documents, int gap, bool st
 }  // namespace
 
 std::string side_by_side(const std::vector<std::string>& documents, int gap) {
-  std::vector<std::string> wide, narrow;
-  bool any_responsive = false;
-  for (const std::string& document : documents) {
-    any_responsive = any_responsive || is_responsive(document);
-    Layouts both = layouts(document);
-    wide.push_back(std::move(both.wide));
-    narrow.push_back(std::move(both.narrow));
-  }
-  const std::string row = arranged(wide, gap, false);
-  if (!any_responsive && size_of(row).first <= kNarrowWidth) return row;
-  return responsive(row, arranged(narrow, gap, true));
+  return grid({documents}, gap);
 }
 
 std::string grid(const std::vector<std::vector<std::string>>& rows, int gap) {
@@ -224,7 +214,8 @@ std::string grid(const std::vector<std::vector<std::string>>& rows, int gap) {
     }
     wide_rows.push_back(arranged(wide, gap, false));
   }
-  const std::string wide = arranged(wide_rows, gap, true);
+  // One row is that row itself, not a stack of one.
+  const std::string wide = wide_rows.size() == 1 ? wide_rows[0] : arranged(wide_rows, gap, true);
   if (!any_responsive && size_of(wide).first <= kNarrowWidth) return wide;
   return responsive(wide, arranged(narrow, gap, true));
 }
