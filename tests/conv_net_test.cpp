@@ -1,6 +1,8 @@
 // ConvNetwork: backward, per-sample gradients and jvp against central finite differences of
 // forward() for conv stacks and small U-nets, phiml's parameter count, errors, and periodic
 // translation equivariance.
+#include "physgrad/nn/conv_net.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,7 +14,6 @@
 #include <vector>
 
 #include "physgrad/error.hpp"
-#include "physgrad/nn/conv_net.hpp"
 
 namespace physgrad {
 namespace {
@@ -62,7 +63,8 @@ void check_derivatives(ConvNetwork& net, Index batch, bool per_sample) {
   ASSERT_GT(scale, 0.0);
   const auto probes = conv_probe_indices(net.num_parameters(), 60);
   for (const Index k : probes) {
-    expect_close(grad[k], conv_fd_entry(net, x, gy, k), scale, "backward, θ[" + std::to_string(k) + "]");
+    expect_close(grad[k], conv_fd_entry(net, x, gy, k), scale,
+                 "backward, θ[" + std::to_string(k) + "]");
   }
   if (!per_sample) return;
   const Matrix rows = net.per_sample_gradients(*cache, gy);
@@ -178,7 +180,9 @@ TEST(ConvNetwork, BadOptionsNameTheValue) {
   o = UNetOptions{};
   o.dims = 3;
   EXPECT_NE(conv_error_of([&] { ConvNetwork::unet(o); }).find("dims 3"), std::string::npos);
-  EXPECT_NE(conv_error_of([] { ConvNetwork::conv_stack(2, 4, {1, 1}, 2); }).find("kernel 2"),
+  EXPECT_NE(conv_error_of([] {
+              ConvNetwork::conv_stack(2, 4, {1, 1}, 2);
+            }).find("kernel 2"),
             std::string::npos);
   auto net = ConvNetwork::conv_stack(2, 4, {1, 2});
   const std::string wrong = conv_error_of([&] { net.forward(Matrix::Zero(15, 2)); });
@@ -198,8 +202,7 @@ TEST(ConvNetwork, BatchNormRefusesPerSampleMembers) {
   const std::vector<std::function<void()>> calls = {
       [&] { net.per_sample_gradients(*cache, gy); },
       [&] { net.jvp(*cache, 2, Vector::Zero(net.num_parameters())); },
-      [&] { net.per_sample_gram(*cache, {gy}); },
-      [&] { net.dense_layer_factors(*cache, {gy}); }};
+      [&] { net.per_sample_gram(*cache, {gy}); }, [&] { net.dense_layer_factors(*cache, {gy}); }};
   for (const auto& call : calls) {
     const std::string message = conv_error_of(call);
     EXPECT_NE(message.find("batch norm couples the samples"), std::string::npos) << message;

@@ -6,9 +6,7 @@
 
 namespace physgrad {
 
-std::string to_string(Padding padding) {
-  return padding == Padding::kZero ? "zero" : "periodic";
-}
+std::string to_string(Padding padding) { return padding == Padding::kZero ? "zero" : "periodic"; }
 std::string to_string(Downsample downsample) {
   return downsample == Downsample::kMaxPool ? "maxpool" : "strided";
 }

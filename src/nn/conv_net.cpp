@@ -8,7 +8,6 @@
 
 namespace physgrad {
 
-
 std::unique_ptr<NetworkCache> ConvNetwork::new_cache() const {
   return std::make_unique<ConvNetworkCache>();
 }

@@ -20,8 +20,8 @@ void check_unet_options(const UNetOptions& o) {
   if (o.levels > 30) throw Error(where + "levels " + std::to_string(o.levels) + " is above 30");
   const Index factor = Index{1} << (o.levels - 1);
   if (o.n < 1 || o.n % factor != 0) {
-    throw Error(where + "n " + std::to_string(o.n) + " is not a positive multiple of 2^(levels-1) = " +
-                std::to_string(factor));
+    throw Error(where + "n " + std::to_string(o.n) +
+                " is not a positive multiple of 2^(levels-1) = " + std::to_string(factor));
   }
   if (o.in_channels < 1 || o.out_channels < 1 || o.filters < 1) {
     throw Error(where + "in_channels " + std::to_string(o.in_channels) + ", out_channels " +
@@ -153,19 +153,26 @@ ConvNetwork ConvNetwork::unet(const UNetOptions& o) {
     slot = double_conv(o, slot, 1, conv, norm, act);
   }
   net.add_conv(slot, o.out_channels, 1, 1, o.padding);
-  net.finish({{"kind", "unet"},          {"dims", o.dims},
-              {"n", o.n},                {"in_channels", o.in_channels},
-              {"out_channels", o.out_channels}, {"levels", o.levels},
-              {"filters", o.filters},    {"activation", to_string(o.activation)},
-              {"batch_norm", o.batch_norm}, {"padding", to_string(o.padding)},
-              {"down", to_string(o.down)}, {"up", to_string(o.up)}});
+  net.finish({{"kind", "unet"},
+              {"dims", o.dims},
+              {"n", o.n},
+              {"in_channels", o.in_channels},
+              {"out_channels", o.out_channels},
+              {"levels", o.levels},
+              {"filters", o.filters},
+              {"activation", to_string(o.activation)},
+              {"batch_norm", o.batch_norm},
+              {"padding", to_string(o.padding)},
+              {"down", to_string(o.down)},
+              {"up", to_string(o.up)}});
   return net;
 }
 
 ConvNetwork ConvNetwork::conv_stack(int dims, Index n, const std::vector<Index>& channels,
                                     int kernel, Activation activation, Padding padding) {
   const std::string where = "ConvNetwork::conv_stack: ";
-  if (dims != 1 && dims != 2) throw Error(where + "dims " + std::to_string(dims) + " is not 1 or 2");
+  if (dims != 1 && dims != 2)
+    throw Error(where + "dims " + std::to_string(dims) + " is not 1 or 2");
   if (n < 1) throw Error(where + "n " + std::to_string(n) + " is below 1");
   if (kernel < 1 || kernel % 2 == 0) {
     throw Error(where + "kernel " + std::to_string(kernel) + " is not a positive odd number");
@@ -183,8 +190,12 @@ ConvNetwork ConvNetwork::conv_stack(int dims, Index n, const std::vector<Index>&
     slot = net.add_conv(slot, channels[l], kernel, 1, padding);
     if (l + 1 < channels.size()) slot = net.add_activation(slot, activation);
   }
-  net.finish({{"kind", "conv_stack"}, {"dims", dims}, {"n", n}, {"channels", channels},
-              {"kernel", kernel}, {"activation", to_string(activation)},
+  net.finish({{"kind", "conv_stack"},
+              {"dims", dims},
+              {"n", n},
+              {"channels", channels},
+              {"kernel", kernel},
+              {"activation", to_string(activation)},
               {"padding", to_string(padding)}});
   return net;
 }

@@ -22,8 +22,8 @@ void conv_sample_reverse(const ConvOp& op, const Vector& theta, const Matrix& x,
   const conv_ops::ConstMap gb(g.col(b).data(), cells_out, op.channels_out);
   const Index bias_at = conv_ops::conv_bias_offset(op);
   if (total != nullptr) {
-    conv_ops::MutMap dw(total->data() + op.offset, fan_in, op.channels_out);
-    dw.noalias() += patches.transpose() * gb;
+    conv_ops::conv_gemm(true, false, fan_in, op.channels_out, cells_out, 1.0, patches.data(),
+                        cells_out, gb.data(), cells_out, 1.0, total->data() + op.offset, fan_in);
     total->segment(bias_at, op.channels_out) += gb.colwise().sum().transpose();
   } else {
     const Matrix dw = patches.transpose() * gb;
@@ -31,8 +31,10 @@ void conv_sample_reverse(const ConvOp& op, const Vector& theta, const Matrix& x,
     rows->row(b).segment(bias_at, op.channels_out) = gb.colwise().sum();
   }
   if (gx != nullptr) {
-    const Matrix dpatches = gb * conv_ops::conv_weight(theta, op).transpose();
-    op.geometry->col2im_add(dpatches, op.channels_in, gx->col(b).data());
+    patches.resize(cells_out, fan_in);  // reused for ∂/∂patches = G Wᵀ
+    conv_ops::conv_gemm(false, true, cells_out, fan_in, op.channels_out, 1.0, gb.data(), cells_out,
+                        theta.data() + op.offset, fan_in, 0.0, patches.data(), cells_out);
+    op.geometry->col2im_add(patches, op.channels_in, gx->col(b).data());
   }
 }
 
@@ -186,8 +188,8 @@ Matrix ConvNetwork::jvp(const NetworkCache& cache, Index batch, const Vector& v)
     switch (op.kind) {
       case ConvOpKind::kConv: {
         const Vector dbias = conv_ops::conv_bias(v, op);
-        conv_ops::conv_apply(op, own.values[in_slot], conv_ops::conv_weight(v, op), &dbias,
-                             false, dy);
+        conv_ops::conv_apply(op, own.values[in_slot], conv_ops::conv_weight(v, op), &dbias, false,
+                             dy);
         if (in_slot != 0) {
           conv_ops::conv_apply(op, dx, conv_ops::conv_weight(theta_, op), nullptr, true, dy);
         }

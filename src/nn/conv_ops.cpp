@@ -1,5 +1,7 @@
 #include "conv_ops.hpp"
 
+#include <cblas.h>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -16,7 +18,8 @@ std::atomic<int> conv_thread_count{1};
 }  // namespace
 
 void set_conv_threads(int threads) {
-  if (threads < 1) throw Error("set_conv_threads: threads " + std::to_string(threads) + " is below 1");
+  if (threads < 1)
+    throw Error("set_conv_threads: threads " + std::to_string(threads) + " is below 1");
   conv_thread_count = threads;
 }
 
@@ -25,6 +28,13 @@ int conv_threads() { return conv_thread_count; }
 }  // namespace physgrad
 
 namespace physgrad::conv_ops {
+
+void conv_gemm(bool ta, bool tb, Index m, Index n, Index k, double alpha, const double* a,
+               Index lda, const double* b, Index ldb, double beta, double* c, Index ldc) {
+  const auto dim = [](Index value) { return static_cast<blasint>(value); };
+  cblas_dgemm(CblasColMajor, ta ? CblasTrans : CblasNoTrans, tb ? CblasTrans : CblasNoTrans,
+              dim(m), dim(n), dim(k), alpha, a, dim(lda), b, dim(ldb), beta, c, dim(ldc));
+}
 
 int for_sample_blocks(Index count, const std::function<void(Index, Index, int)>& work) {
   const int workers = static_cast<int>(std::min<Index>(conv_threads(), std::max<Index>(count, 1)));
@@ -48,11 +58,8 @@ void conv_apply(const ConvOp& op, const Matrix& x, ConstMap w, const Vector* bia
     for (Index b = begin; b < end; ++b) {
       op.geometry->im2col(x.col(b).data(), op.channels_in, patches);
       MutMap yb(y.col(b).data(), cells_out, op.channels_out);
-      if (add) {
-        yb.noalias() += patches * w;
-      } else {
-        yb.noalias() = patches * w;
-      }
+      conv_gemm(false, false, cells_out, op.channels_out, patches.cols(), 1.0, patches.data(),
+                cells_out, w.data(), w.rows(), add ? 1.0 : 0.0, yb.data(), cells_out);
       if (bias != nullptr) yb.rowwise() += bias->transpose();
     }
   });

@@ -12,8 +12,7 @@ using ConstMap = Eigen::Map<const Matrix>;
 using MutMap = Eigen::Map<Matrix>;
 
 inline ConstMap conv_weight(const Vector& theta, const ConvOp& op) {
-  return ConstMap(theta.data() + op.offset, op.channels_in * op.geometry->taps(),
-                  op.channels_out);
+  return ConstMap(theta.data() + op.offset, op.channels_in * op.geometry->taps(), op.channels_out);
 }
 inline Index conv_bias_offset(const ConvOp& op) {
   return op.offset + op.channels_in * op.geometry->taps() * op.channels_out;
@@ -21,6 +20,11 @@ inline Index conv_bias_offset(const ConvOp& op) {
 inline Eigen::Map<const Vector> conv_bias(const Vector& theta, const ConvOp& op) {
   return Eigen::Map<const Vector>(theta.data() + conv_bias_offset(op), op.channels_out);
 }
+
+// C (m × n) = α op(A) op(B) + β C, column-major, through the BLAS (cblas_dgemm); `ta`/`tb`
+// transpose A/B.
+void conv_gemm(bool ta, bool tb, Index m, Index n, Index k, double alpha, const double* a,
+               Index lda, const double* b, Index ldb, double beta, double* c, Index ldc);
 
 // Runs work(begin, end, worker) on conv_threads() contiguous blocks of [0, count), one per worker
 // (fewer when count is smaller), the last in the calling thread; returns the number of workers.
@@ -33,8 +37,7 @@ void batch_norm_forward(const ConvOp& op, const Vector& theta, const Matrix& x, 
                         Matrix& normalized, Vector& inv_std);
 // Adds ∂/∂x of the batch norm to gx and its [dγ, dβ] to grad (op.offset on).
 void batch_norm_backward(const ConvOp& op, const Vector& theta, const Matrix& g,
-                         const Matrix& normalized, const Vector& inv_std, Matrix& gx,
-                         Vector& grad);
+                         const Matrix& normalized, const Vector& inv_std, Matrix& gx, Vector& grad);
 // Sizes m to rows × cols of zeros unless it has that shape already.
 inline void ensure_zero(Matrix& m, Index rows, Index cols) {
   if (m.rows() != rows || m.cols() != cols) m = Matrix::Zero(rows, cols);

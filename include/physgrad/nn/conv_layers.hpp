@@ -1,6 +1,5 @@
-// Conv layers — the kernels of ConvNetwork on one sample of C channels on a line or square grid:
-// convolution y[o, c'] = b[c'] + Σ_{c,t} W[c·K + t, c'] x[s·o + d_t, c] (im2col + GEMM), 2× max-pool,
-// 2× nearest / bilinear upsampling (half-pixel) as fixed sparse weights, and batch-norm statistics.
+// Conv layers — ConvNetwork's kernels on one sample (cells × channels): convolution as im2col,
+// y[o, c'] = b[c'] + Σ_{c,t} W[c·K + t, c'] x[s·o + d_t, c]; 2× max-pool and 2× up-sampling.
 #pragma once
 
 #include <string>
