@@ -41,13 +41,15 @@ std::shared_ptr<Network> make_poisson_unet(const Settings& settings, std::uint64
 
 class SipPoisson final : public LearningExperiment {
  public:
-  SipPoisson() : LearningExperiment({.time = "120", .eval_every = "10", .data = "fresh"}) {}
+  SipPoisson() : LearningExperiment({.eval_every = "10", .data = "fresh"}) {}
   std::string name() const override { return "sip-poisson"; }
   std::string description() const override {
     return "U-net predicts x from y* where laplace(y*) = x* on 64x64 cells (zero boundary), "
            "fresh batches of 128 as in the SIP paper: SIP (exact inverse laplace) vs Adam "
            "through the solve";
   }
+  // Updates, not seconds: the rules are compared per update, which machine load cannot bias.
+  long long default_iterations() const override { return 200; }
   std::vector<OptionSpec> own_options() const override {
     const auto bytes_each = [](const Settings& settings) {
       const Index n = settings.integer("n");
