@@ -30,7 +30,7 @@ endif
 
 RESULTS_DIR ?= docs/results
 EXPERIMENTS  = scaled-toy sensitivity comparison hig-toy sin-rotation heat-inverse oscillators \
-               quantum-dipole poisson time-reversal
+               quantum-dipole poisson sip-poisson time-reversal
 
 .PHONY: all deps deps-test deps-python configure build demo test test-sanitize bench bench-mpi results clean
 

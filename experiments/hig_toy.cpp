@@ -115,8 +115,10 @@ class HigToy final : public LearningExperiment {
         const Dataset train_set = make_data(settings.integer("train-size"), 2 * seed);
         const Dataset test_set = make_data(settings.integer("test-size"), 2 * seed + 1);
 
-        const auto observe = [&](const Mlp& network, TrainingRecord& record) {
-          const ActivationStats stats = activation_stats(network, test_set.inputs);
+        const auto observe = [&](const Network& network, TrainingRecord& record) {
+          // The sweep trains the Mlp made below, so the network observed is that one.
+          const ActivationStats stats =
+              activation_stats(dynamic_cast<const Mlp&>(network), test_set.inputs);
           record.extras["act_mean"] = stats.mean;
           record.extras["act_std"] = stats.std;
           record.extras["saturated_fraction"] = stats.saturated_fraction;

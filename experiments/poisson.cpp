@@ -126,7 +126,7 @@ class PoissonExperiment final : public LearningExperiment {
     const Matrix x_test = make_fields(settings.integer("test-size"), n, 2 * seed + 1);
     const Matrix y_test = physics.forward_batch(x_test, Matrix());
     const Dataset test_set{y_test, y_test, Matrix()};
-    const auto observe = [&](const Mlp& network, TrainingRecord& record) {
+    const auto observe = [&](const Network& network, TrainingRecord& record) {
       // The published x_distance_l1: mean over samples of Σ|x − x*|.
       record.extras["x_l1"] =
           (network.forward(test_set.inputs) - x_test).cwiseAbs().sum() /

@@ -13,6 +13,7 @@ std::vector<std::unique_ptr<Experiment>> builtin_experiments() {
   list.push_back(make_oscillators());
   list.push_back(make_quantum_dipole());
   list.push_back(make_poisson());
+  list.push_back(make_sip_poisson());
   list.push_back(make_time_reversal());
   return list;
 }

@@ -31,6 +31,7 @@ std::unique_ptr<Experiment> make_heat_inverse();
 std::unique_ptr<Experiment> make_oscillators();
 std::unique_ptr<Experiment> make_quantum_dipole();
 std::unique_ptr<Experiment> make_poisson();
+std::unique_ptr<Experiment> make_sip_poisson();
 std::unique_ptr<Experiment> make_time_reversal();
 
 }  // namespace physgrad::experiments

@@ -112,7 +112,7 @@ class SinRotationExperiment final : public LearningExperiment {
         const auto seed = static_cast<std::uint64_t>(settings.integer("seed") + s);
         const Dataset train_set = make_data(settings.integer("train-size"), xi, form, 2 * seed);
         const Dataset test_set = make_data(settings.integer("test-size"), xi, form, 2 * seed + 1);
-        const auto observe = [&](const Mlp& network, TrainingRecord& record) {
+        const auto observe = [&](const Network& network, TrainingRecord& record) {
           record.extras["x_distance"] =
               x_distance(physics, network.forward(test_set.inputs), test_set.targets);
           if (xi != 1.0) return;  // the landscape figure's path

@@ -155,7 +155,9 @@ TEST_F(Hostile, SizesBeyondMemoryOrRangeAreRefusedNamingTheValue) {
   expect_refused("run hig-toy --train-size 1000000000000000",
                  "--train-size: 1000000000000000 (items of at least ");
   expect_refused("run sin-rotation --test-size 999999999999999", "--test-size: 999999999999999");
-  expect_refused("run heat-inverse --n 1000000", "--n: 1000000 cells (a network of ~8·1000000²");
+  expect_refused("run heat-inverse --network mlp --dims 1 --n 1000000",
+                 "--n: 1000000 cells (a network of ~8·1000000²");
+  expect_refused("run heat-inverse --n 1000000", "--train-size: 128 (items of at least ");
   expect_refused("run quantum-dipole --steps 1000000000", "--steps: must be in [1, 100000]");
   expect_refused("run comparison --iters 1000000000",
                  "--iters: 1000000000 (6 runs keeping every iterate) needs ");
@@ -196,10 +198,11 @@ TEST_F(Hostile, TimeReversalSizesBeyondTimeOrMemoryAreRefusedAtOnce) {
 // The learning experiments check a given --batch against the memory and the work of a
 // Gauss-Newton or HIG step, and --eval-every against the evaluations the limits allow.
 TEST_F(Hostile, LearningStepsAndEvaluationsBeyondTimeOrMemoryAreRefused) {
-  expect_refused_promptly("run heat-inverse --optimizers hig --batch 4096",
+  expect_refused_promptly("run heat-inverse --network mlp --dims 1 --optimizers hig --batch 4096",
                           "--batch: 4096 (a gn or hig step forms a 33088² matrix from 262144 "
                           "Jacobian rows of 33088 weights) needs ");
-  expect_refused_promptly("run heat-inverse --optimizers adam,gn --batch 256",
+  expect_refused_promptly("run heat-inverse --network mlp --dims 1 --optimizers adam,gn "
+                          "--batch 256",
                           "--batch: 256 (a gn or hig step forms a 16384² matrix from 16384 "
                           "Jacobian rows of 33088 weights) takes 4.571e+12 multiply-adds, more "
                           "than the 1e+12");
@@ -208,9 +211,16 @@ TEST_F(Hostile, LearningStepsAndEvaluationsBeyondTimeOrMemoryAreRefused) {
                           "needs ");
   expect_refused_promptly("run poisson --epochs 10000000000",
                           "--epochs: must be in [1, 1000000000]");
+  // The U-net's Jacobian (B·4096 rows of 37 697 weights) with batch norm off; with it on, the
+  // Jacobian rules are refused whatever the batch.
+  expect_refused_promptly("run heat-inverse --batch-norm off --optimizers hig --batch 16",
+                          "--batch: 16 (a gn or hig step forms a 37249² matrix from 65536 "
+                          "Jacobian rows of 37249 weights)");
+  expect_refused_promptly("run heat-inverse --optimizers adam,hig",
+                          "--optimizers: 'hig' needs per-sample Jacobians, which batch norm");
   // Rules without a Jacobian take any batch the samples allow.
-  const Outcome adam = run("run heat-inverse --optimizers adam --batch 4096 --iters 1 "
-                           "--train-size 16 --test-size 8 --out adam");
+  const Outcome adam = run("run heat-inverse --network mlp --dims 1 --optimizers adam --batch "
+                           "4096 --iters 1 --train-size 16 --test-size 8 --data fixed --out adam");
   EXPECT_EQ(adam.exit_code, 0) << adam.err;
 }
 

@@ -8,11 +8,13 @@
 #include <cctype>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <regex>
 #include <set>
 #include <string>
 #include <vector>
 
+#include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/report/colors.hpp"
 #include "physgrad/report/line_plot.hpp"
@@ -119,17 +121,24 @@ TEST(SvgLinePlot, InvalidInputThrows) {
   EXPECT_THROW(line_plot_svg({}, tiny), Error);
 }
 
-TEST(SvgColor, FixedColoursForOptimizerIdsAndStableHashForOthers) {
-  const std::vector<std::string> ids{"gd", "momentum", "adam", "newton", "bfgs", "lbfgs", "gn",
-                                     "lm", "ig",       "pg",   "sgd",    "hig",  "sip"};
-  std::set<std::string> colors;
-  for (const auto& id : ids) colors.insert(color_for(id));
-  EXPECT_EQ(colors.size(), ids.size());
-  EXPECT_EQ(color_for("my-optimizer"), color_for("my-optimizer"));
-  for (const auto& c : {color_for("adam"), color_for("something else")}) {
-    EXPECT_EQ(c.size(), 7u);
-    EXPECT_EQ(c[0], '#');
+TEST(SvgColor, EveryRuleHasTheCatalogueColourAndNoOtherRulesColour) {
+  // A figure draws each rule in the catalogue's colour; distinct ids never share one (the same
+  // id in both kinds, adam or gn, is one rule), and no Adam→rule twin takes a rule's colour.
+  std::map<std::string, std::string> by_id;
+  for (const RuleInfo& rule : rule_catalogue()) {
+    EXPECT_EQ(color_for(rule.id), rule.colour) << rule.id;
+    by_id[rule.id] = color_for(rule.id);
   }
+  for (const std::string& id : rule_ids(RuleKind::kLearning)) {
+    if (id != kPretrainingRule) by_id[pretrained_run_id(id)] = color_for(pretrained_run_id(id));
+  }
+  std::map<std::string, std::string> owner;
+  for (const auto& [id, colour] : by_id) {
+    const auto [it, fresh] = owner.emplace(colour, id);
+    EXPECT_TRUE(fresh) << id << " and " << it->second << " share " << colour;
+  }
+  EXPECT_EQ(color_for("my-optimizer"), color_for("my-optimizer"));
+  EXPECT_EQ(color_for("something else").size(), 7u);
 }
 
 

@@ -112,6 +112,28 @@ TEST_F(Resume, PretrainedRunContinuesFromItsAdamPartOrItsRulePart) {
   }
 }
 
+// A U-net with batch norm on fresh batches (heat-inverse on 8×8 cells, 4 filters), killed at its
+// 3rd and 5th checkpoint (Adam's run, then SIP's), continues to the metrics and networks of the
+// uninterrupted run, bit for bit.
+TEST_F(Resume, UNetRunContinuesBitIdentically) {
+  const std::string unet =
+      "run heat-inverse --n 8 --filters 4 --train-size 8 --test-size 4 --batch 4 --iters 12 "
+      "--eval-every 3 --checkpoint-every 4 --optimizers adam,sip --out ";
+  ASSERT_EQ(run(unet + "whole").exit_code, 0);
+  for (const int kill : {3, 5}) {
+    const std::string folder = "unet" + std::to_string(kill);
+    ASSERT_EQ(run(unet + folder, "PHYSGRAD_FAULT=kill@checkpoint:" + std::to_string(kill))
+                  .exit_code,
+              128 + SIGKILL);
+    const Outcome resumed = run("resume " + folder);
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    EXPECT_EQ(metrics_without_time(dir_ / folder), metrics_without_time(dir_ / "whole")) << kill;
+    EXPECT_EQ(read_file(dir_ / folder / "networks.json"),
+              read_file(dir_ / "whole" / "networks.json"))
+        << kill;
+  }
+}
+
 TEST_F(Resume, DamagedCheckpointOrConfigIsOneLineAndChangesNothing) {
   ASSERT_TRUE(WIFEXITED(interrupt("part", SIGTERM)));
   const fs::path folder = dir_ / "part";

@@ -49,8 +49,10 @@ TEST(SinRotationExperiment, SipEndsNearerTheExactSolutionsThanAdamWhenIllConditi
 // docs/reference_experiments.md (heat-inverse), shortened: after the same iterations SIP
 // reconstructs x* better.
 TEST(HeatExperiment, SipReconstructsTheInitialStateBetterThanAdam) {
-  const RunContext context = run_experiment("heat-inverse", {{"iters", "300"},
-                                                  {"time", "1e6"},
+  const RunContext context = run_experiment("heat-inverse", {{"network", "mlp"},
+                                                  {"dims", "1"},
+                                                  {"data", "fixed"},
+                                                  {"iters", "300"},
                                                   {"eval-every", "100"},
                                                   {"train-size", "512"},
                                                   {"test-size", "64"}});
@@ -68,7 +70,7 @@ TEST(HeatExperiment, SipReconstructsTheInitialStateBetterThanAdam) {
 TEST(HeatExperiment, RejectsTwoDimensionalGridsTooLargeForTheNetwork) {
   const Experiment& experiment = builtin_registry().find("heat-inverse");
   try {
-    resolve_settings(experiment, {{"dims", "2"}, {"n", "40"}});
+    resolve_settings(experiment, {{"network", "mlp"}, {"dims", "2"}, {"n", "40"}});
     FAIL() << "no error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("got 40"), std::string::npos) << e.what();

@@ -131,6 +131,13 @@ Mlp::Mlp(std::vector<Index> widths, Activation hidden, Activation output)
   theta_ = Vector::Zero(offsets_.back());
 }
 
+nlohmann::json Mlp::describe() const {
+  return {{"kind", "mlp"},
+          {"widths", widths_},
+          {"hidden", to_string(hidden_)},
+          {"output", to_string(output_)}};
+}
+
 Activation Mlp::activation(Index layer) const {
   return layer + 1 == num_layers() ? output_ : hidden_;
 }

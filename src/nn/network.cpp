@@ -20,6 +20,10 @@ std::string Network::name() const {
   return status == 0 && readable ? readable.get() : mangled;
 }
 
+nlohmann::json Network::describe() const {
+  return {{"kind", name()}, {"parameters", num_parameters()}};
+}
+
 void Network::set_parameters(const Vector& theta) {
   if (theta.size() != num_parameters()) {
     throw Error("set_parameters: got " + std::to_string(theta.size()) +

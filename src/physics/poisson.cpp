@@ -87,4 +87,13 @@ Vector Poisson::inverse(const Vector& y, const Vector& x0, const Vector& context
   return factor_->llt.solve(-y);
 }
 
+Matrix Poisson::solve_batch(const Matrix& y) const {
+  if (y.rows() != output_dim()) {
+    std::ostringstream msg;
+    msg << name() << ".solve_batch: y has " << y.rows() << " rows, expected " << output_dim();
+    throw Error(msg.str());
+  }
+  return factor_->llt.solve(-y);
+}
+
 }  // namespace physgrad

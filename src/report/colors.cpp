@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <utility>
 
+#include "physgrad/catalogue.hpp"
 #include "physgrad/io/hash.hpp"
 
 namespace physgrad {
@@ -19,43 +20,47 @@ constexpr std::array<const char*, 10> kPalette = {"#1f77b4", "#ff7f0e", "#2ca02c
 
 using Rgb = std::array<double, 3>;
 
+// "#rrggbb" of channel values in [0, 255], each rounded.
+std::string to_hex(const Rgb& rgb) {
+  std::array<char, 8> buf{};
+  std::snprintf(buf.data(), buf.size(), "#%02x%02x%02x", static_cast<int>(std::lround(rgb[0])),
+                static_cast<int>(std::lround(rgb[1])), static_cast<int>(std::lround(rgb[2])));
+  return buf.data();
+}
+
+// The channels of "#rrggbb".
+Rgb from_hex(const std::string& hex) {
+  return {static_cast<double>(std::stoi(hex.substr(1, 2), nullptr, 16)),
+          static_cast<double>(std::stoi(hex.substr(3, 2), nullptr, 16)),
+          static_cast<double>(std::stoi(hex.substr(5, 2), nullptr, 16))};
+}
+
 // Piecewise-linear interpolation between evenly spaced colour stops; t in [0, 1].
 template <std::size_t N>
 std::string interpolate(const std::array<Rgb, N>& stops, double t) {
   const double s = (std::isfinite(t) ? std::clamp(t, 0.0, 1.0) : 0.0) * (N - 1);
   const auto k = std::min<std::size_t>(N - 2, static_cast<std::size_t>(s));
   const double f = s - static_cast<double>(k);
-  std::array<int, 3> rgb{};
-  for (std::size_t c = 0; c < 3; ++c) {
-    rgb[c] = static_cast<int>(std::lround(stops[k][c] * (1 - f) + stops[k + 1][c] * f));
-  }
-  std::array<char, 8> buf{};
-  std::snprintf(buf.data(), buf.size(), "#%02x%02x%02x", rgb[0], rgb[1], rgb[2]);
-  return buf.data();
+  Rgb rgb{};
+  for (std::size_t c = 0; c < 3; ++c) rgb[c] = stops[k][c] * (1 - f) + stops[k + 1][c] * f;
+  return to_hex(rgb);
 }
 
 }  // namespace
 
 std::string color_for(std::string_view key) {
-  static constexpr std::array<std::pair<std::string_view, const char*>, 15> kFixed{{
-      {"gd", "#1f77b4"},
-      {"sgd", "#6baed6"},
-      {"momentum", "#17becf"},
-      {"adam", "#ff7f0e"},
-      {"newton", "#d62728"},
-      {"bfgs", "#9467bd"},
-      {"lbfgs", "#c5a3e0"},
-      {"gn", "#8c564b"},
-      {"lm", "#e377c2"},
-      {"ig", "#2ca02c"},
-      {"pg", "#bcbd22"},
-      {"hig", "#00633a"},
-      {"sip", "#000000"},
-      {"adam-gn", "#c51b7d"},  // learning runs pretrained with Adam (catalogue.hpp)
-      {"adam-hig", "#7b3294"},
-  }};
-  for (const auto& [id, color] : kFixed) {
-    if (id == key) return color;
+  // A rule's colour is the catalogue's, the one place it is written.
+  for (const RuleInfo& rule : rule_catalogue()) {
+    if (rule.id == key) return rule.colour;
+  }
+  // A run that Adam pretrains before its rule: Adam→GN and Adam→HIG as they have always been
+  // drawn, any other Adam→rule in its rule's colour darkened by a third.
+  if (key == "adam-gn") return "#c51b7d";
+  if (key == "adam-hig") return "#7b3294";
+  const std::string rule = pretrained_rule(std::string(key));
+  if (!rule.empty()) {
+    const Rgb rgb = from_hex(find_rule(RuleKind::kLearning, rule).colour);
+    return to_hex({rgb[0] * 2 / 3, rgb[1] * 2 / 3, rgb[2] * 2 / 3});
   }
   return kPalette[fnv1a64(key) % kPalette.size()];
 }

@@ -19,16 +19,27 @@ void require_training_limit(const Settings& settings, const std::string& experim
   }
 }
 
-// Throws Error naming --batch when a Gauss-Newton or HIG step (when one is selected) on the
-// given batch with `outputs` physics outputs per sample and a network of `widths` would not fit
-// in memory or would take more than kMaxStepMultiplyAdds, and naming --eval-every when the
-// evaluations an iteration or epoch limit allows would not fit in memory.
-void require_learning_sizes(const Settings& settings, Index outputs,
-                            const std::vector<Index>& widths) {
-  double parameters = 0;
+// |θ| and the multiply-adds of one J Jᵀ entry of the network `shape` describes: from the widths
+// of a dense network (nn/dense_layer_gram.hpp: Σ_l (w_l + w_{l+1} + 1) per entry), as given for
+// another.
+std::pair<double, double> network_size(const LearningExperiment::Shape& shape) {
+  if (shape.widths.empty()) return {shape.parameters, shape.gram_entry};
+  double parameters = 0, entry = 0;
+  const std::vector<Index>& widths = shape.widths;
   for (std::size_t i = 0; i + 1 < widths.size(); ++i) {
     parameters += static_cast<double>(widths[i] + 1) * static_cast<double>(widths[i + 1]);
+    entry += static_cast<double>(widths[i] + widths[i + 1] + 1);
   }
+  return {parameters, entry};
+}
+
+// Throws Error naming --batch when a Gauss-Newton or HIG step (when one is selected) on the
+// given batch with `outputs` physics outputs per sample and the network of `shape` would not fit
+// in memory or would take more than kMaxStepMultiplyAdds, and naming --eval-every when the
+// evaluations an iteration or epoch limit allows would not fit in memory.
+void require_learning_sizes(const Settings& settings, const LearningExperiment::Shape& shape) {
+  const Index outputs = shape.outputs;
+  const auto [parameters, entry] = network_size(shape);
   const double train_size = static_cast<double>(settings.integer("train-size"));
   bool jacobian = !settings.has("optimizers");  // the default rules may include gn or hig
   for (const std::string& id : settings.has("optimizers") ? settings.texts("optimizers")
@@ -47,13 +58,8 @@ void require_learning_sizes(const Settings& settings, Index outputs,
     // The matrix with the eigendecomposition's copy and workspace; the rows when they are
     // formed (the normal path, rows > weights).
     require_memory(8 * (3 * k * k + (rows > parameters ? rows * parameters : 0)), what);
-    // The Gram path (rows ≤ weights) forms J Jᵀ from the layer factors, an entry costing
-    // Σ_l (w_l + w_{l+1} + 1) multiply-adds (nn/dense_layer_gram.hpp); the normal path forms J
-    // and Jᵀ J (rows·weights² multiply-adds). Then the k × k eigendecomposition.
-    double entry = 0;
-    for (std::size_t i = 0; i + 1 < widths.size(); ++i) {
-      entry += static_cast<double>(widths[i] + widths[i + 1] + 1);
-    }
+    // The Gram path (rows ≤ weights) forms J Jᵀ, `entry` multiply-adds an entry; the normal
+    // path forms J and Jᵀ J (rows·weights² multiply-adds). Then the k × k eigendecomposition.
     const double work = (rows <= parameters ? rows * rows * entry : rows * parameters * k) + k * k * k;
     if (work > kMaxStepMultiplyAdds) {
       throw Error(what + " takes " + format_value(work) + " multiply-adds, more than the " +
@@ -202,8 +208,7 @@ void LearningExperiment::validate(const Settings& settings) const {
   if (settings.has("pretrain")) pretrain_iterations(settings.text("pretrain"));
   check(settings);
   require_training_limit(settings, name());
-  const Shape sizes = shape(settings);
-  require_learning_sizes(settings, sizes.outputs, sizes.widths);
+  require_learning_sizes(settings, shape(settings));
 }
 
 OptionSpec sample_count_option(std::string name, std::string default_text, std::string help,

@@ -72,8 +72,9 @@ std::string time_left(const RunContext::RunPlan& plan, double fraction) {
 // it: no more iterations than the run's limit (and than 2⁵³), every test loss finite when the
 // run has a test set, and each record's extras exactly the finite numbers the experiment's
 // on_evaluate records (found by letting it fill one record for `network` as it is).
-void check_saved_history(const RunKey& key, const TrainingSummary& summary, const Mlp& network,
-                         bool has_test_set, const TrainerOptions& options) {
+void check_saved_history(const RunKey& key, const TrainingSummary& summary,
+                         const Network& network, bool has_test_set,
+                         const TrainerOptions& options) {
   const long long limit = options.max_iterations.value_or(1LL << 53);
   if (summary.iterations > limit) {
     throw Error("checkpoint: " + key.describe() + " has " + std::to_string(summary.iterations) +
@@ -169,10 +170,10 @@ void LearningSweep::plan_runs(const std::vector<std::string>& rules) {
 }
 
 const LearningResult& LearningSweep::run(const std::string& id, const std::string& tag,
-                                         const nlohmann::json& params, Mlp& network,
+                                         const nlohmann::json& params, Network& network,
                                          const LearningProblem& problem,
                                          const Dataset& train_set, const Dataset* test_set,
-                                         std::function<void(const Mlp&, TrainingRecord&)> observe) {
+                                         std::function<void(const Network&, TrainingRecord&)> observe) {
   // A pretrained run: its Adam part as the Adam run of this sweep, then its rule.
   const std::string pretrained = pretrained_rule(id);
   std::unique_ptr<LearningUpdate> update;
@@ -267,7 +268,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   }
   context_.add_network({{"label", result.label},
                         {"seed", result.seed},
-                        {"widths", network.widths()},
+                        {"network", network.describe()},
                         {"parameters", vector_to_json(network.parameters())}});
 
   result.params = run_params;
@@ -324,7 +325,7 @@ Index LearningSweep::batch_size(const std::string& rule) const {
   return own.value_or(TrainerOptions{}.batch_size);
 }
 
-TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Mlp& network,
+TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Network& network,
                                                LearningUpdate& update,
                                                const LearningProblem& problem,
                                                const Dataset& train_set, const Dataset* test_set,

@@ -220,6 +220,20 @@ TEST_F(MpiRun, EmptyShareMatchesOneProcess) {
       3);
 }
 
+// A U-net (sip-poisson on 8×8 cells, 4 filters, 3 levels) without batch norm: the ranks share
+// each batch of 6 and every rule's losses are the one-process ones; with batch norm the run is
+// refused, as each rank would normalise its share with its own statistics.
+TEST_F(MpiRun, UNetMatchesOneProcessAndBatchNormIsRefused) {
+  const std::string unet =
+      "run sip-poisson --n 8 --levels 3 --filters 4 --train-size 12 --test-size 6 --batch 6 "
+      "--iters 4 --eval-every 2 ";
+  expect_same_losses(unet + "--batch-norm off --optimizers adam,sip,hig --pretrain 0",
+                     2);
+  std::string err;
+  EXPECT_EQ(run(2, unet + "--batch-norm on --optimizers adam --out bn", &err), 2);
+  EXPECT_NE(err.find("--batch-norm: on, under 2 ranks"), std::string::npos) << err;
+}
+
 // SIGTERM to mpiexec mid-run: every rank stops at the same iteration, rank 0 saves the
 // checkpoint, and `mpiexec physgrad resume` ends with the losses and networks of an
 // uninterrupted run on the same ranks.

@@ -32,6 +32,9 @@ class Mlp final : public Network {
   explicit Mlp(std::vector<Index> widths, Activation hidden = Activation::kTanh,
                Activation output = Activation::kIdentity);
 
+  // {"kind": "mlp", "widths": […], "hidden": "tanh", "output": "identity"}.
+  nlohmann::json describe() const override;
+
   Index num_layers() const { return static_cast<Index>(widths_.size()) - 1; }
   Index input_dim() const override { return widths_.front(); }
   Index output_dim() const override { return widths_.back(); }

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "physgrad/types.hpp"
 
 namespace physgrad {
@@ -45,6 +47,9 @@ class Network {
 
   // A name for messages; default: the C++ type of the network.
   virtual std::string name() const;
+  // The architecture as JSON, written beside the trained parameters (networks.json) so that a
+  // reader can rebuild the network; default: {"kind": name(), "parameters": |θ|}.
+  virtual nlohmann::json describe() const;
   virtual Index input_dim() const = 0;
   virtual Index output_dim() const = 0;
   virtual Index num_parameters() const = 0;

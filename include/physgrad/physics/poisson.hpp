@@ -29,9 +29,13 @@ class Poisson final : public Simulator {
   // The unique x with laplace(x) = y; x0 is only checked for its size.
   bool has_inverse() const override { return true; }
   Vector inverse(const Vector& y, const Vector& x0, const Vector& context = {}) const override;
+  // The x with laplace(x) = y for every column of y (n² × B): one solve per column with the
+  // Cholesky factor; throws Error unless y has n² rows.
+  Matrix solve_batch(const Matrix& y) const;
+  // laplace(x) of every column, unchecked (the simulator's forward without its shape checks).
+  Matrix laplace(const Matrix& x) const;
 
  private:
-  Matrix laplace(const Matrix& x) const;
 
   struct Factor;
   Index n_;

@@ -8,9 +8,9 @@
 
 namespace physgrad {
 
-// A fixed colour for each optimizer id (gd, momentum, adam, newton, bfgs, lbfgs, gn, lm, ig,
-// pg, sgd, hig, sip) and pretrained learning run (adam-gn, adam-hig), and a palette colour
-// chosen by a hash of the key otherwise; "#rrggbb".
+// The colour of a rule id in every figure: the catalogue's (RuleInfo::colour); of a run Adam
+// pretrains before a rule ("adam-hig"), one of its own; a palette colour chosen by a hash of the
+// key otherwise; "#rrggbb".
 std::string color_for(std::string_view key);
 // The index-th colour of a ten-colour categorical palette (cycling).
 std::string palette_color(std::size_t index);

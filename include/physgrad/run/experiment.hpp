@@ -155,7 +155,8 @@ class RunContext {
   const std::string& message_figure() const { return message_figure_; }
   const std::string& message() const { return message_; }
   const MessageMetric& message_metric() const { return message_metric_; }
-  // A trained network {"label", "seed", "widths", "parameters"} for networks.json.
+  // A trained network {"label", "seed", "network" (its describe()), "parameters"} for
+  // networks.json.
   void add_network(nlohmann::json network) { networks_.push_back(std::move(network)); }
   // A progress line, handed to the function set_progress() gave (none: the run is silent).
   void progress(const std::string& line);

@@ -75,14 +75,19 @@ class LearningExperiment : public Experiment {
     return std::nullopt;
   }
 
+  // What the size checks need under `settings`: physics outputs per sample and the network —
+  // a dense one by its widths, any other by its parameter count and the multiply-adds of one
+  // entry of J Jᵀ (|θ| for a network that forms the gradient rows, as a ConvNetwork does).
+  struct Shape {
+    Index outputs;
+    std::vector<Index> widths;  // a dense network {input, hidden…, output}; empty otherwise
+    double parameters = 0;      // |θ| when widths is empty
+    double gram_entry = 0;      // multiply-adds per entry of J Jᵀ when widths is empty
+  };
+
  protected:
   // The experiment's own options (its sizes, settings and --train-size/--test-size).
   virtual std::vector<OptionSpec> own_options() const = 0;
-  // What the size checks need under `settings`: physics outputs per sample, network widths.
-  struct Shape {
-    Index outputs;
-    std::vector<Index> widths;
-  };
   virtual Shape shape(const Settings& settings) const = 0;
   // The experiment's own checks between options; throws Error.
   virtual void check(const Settings& /*settings*/) const {}

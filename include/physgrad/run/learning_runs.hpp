@@ -66,7 +66,8 @@ class LearningSweep {
   // these ids.
   std::vector<std::string> run_ids(const std::vector<std::string>& rules) const;
 
-  // Trains `network` with rule `id` and records it; `params` (e.g. {"lambda", "seed"}) are
+  // Trains `network` (any Network: an Mlp, a ConvNetwork, …) with rule `id` and records it (its
+  // describe() and trained θ go to networks.json); `params` (e.g. {"lambda", "seed"}) are
   // added to the summary entry and to every metrics row. A pretrained run ("adam-hig") is a
   // SwitchingUpdate: Adam, with the settings and batch size of this sweep's Adam run, until
   // --pretrain's condition holds (N updates, or a plateau of its evaluated training loss:
@@ -74,10 +75,10 @@ class LearningSweep {
   // of the run's limits (which count the whole run); its history is one curve. With --data
   // fresh (and draw_from() called), every batch is drawn afresh.
   const LearningResult& run(const std::string& id, const std::string& tag,
-                            const nlohmann::json& params, Mlp& network,
+                            const nlohmann::json& params, Network& network,
                             const LearningProblem& problem, const Dataset& train_set,
                             const Dataset* test_set,
-                            std::function<void(const Mlp&, TrainingRecord&)> observe = {});
+                            std::function<void(const Network&, TrainingRecord&)> observe = {});
 
   // Where --data fresh is set, the runs draw every mini-batch from `source` (TrainerOptions::
   // fresh_samples) instead of the training set.
@@ -140,7 +141,7 @@ class LearningSweep {
   // Trains, or takes the run from the context's checkpoint when it finished there, or
   // continues it from its saved state; saves checkpoints as the settings ask. Throws
   // Interrupted when a stop request ended the run.
-  TrainingSummary train_or_resume(const RunKey& key, Mlp& network, LearningUpdate& update,
+  TrainingSummary train_or_resume(const RunKey& key, Network& network, LearningUpdate& update,
                                   const LearningProblem& problem, const Dataset& train_set,
                                   const Dataset* test_set, TrainerOptions options);
   // A note saying, for every pretrained run, after how many Adam updates its rule took over.

@@ -1,0 +1,81 @@
+#include "unet_case.hpp"
+
+#include <cmath>
+
+#include "physgrad/catalogue.hpp"
+#include "physgrad/error.hpp"
+
+namespace physgrad::experiments {
+
+std::vector<run::OptionSpec> unet_option_specs(const std::string& padding) {
+  using run::integer_option;
+  using run::text_option;
+  return {
+      integer_option("levels", "4", "U-net levels (each halves the grid; n must be a multiple "
+                                    "of 2^(levels−1))")
+          .at_least(1)
+          .at_most(8),
+      integer_option("filters", "16", "U-net channels per convolution").at_least(1).at_most(256)
+          .quick("4"),
+      text_option("batch-norm", "on",
+                  "batch norm after every 3×3 convolution, with the batch's own statistics "
+                  "(on, as phiml's u_net); the Jacobian rules (gn, hig, kfac, kfac-hig, "
+                  "lanczos-gn, lanczos-hig) need off")
+          .one_of({"on", "off"}),
+      text_option("padding", padding,
+                  "the convolutions' padding: zero (phiml, the book) or periodic (phiflow 2.2, "
+                  "the SIP repository)")
+          .one_of({"zero", "periodic"}),
+  };
+}
+
+UNetOptions unet_of(const run::Settings& settings, int dims, Index n) {
+  UNetOptions options;
+  options.dims = dims;
+  options.n = n;
+  options.levels = static_cast<int>(settings.integer("levels"));
+  options.filters = settings.integer("filters");
+  options.batch_norm = settings.text("batch-norm") == "on";
+  options.padding = settings.text("padding") == "periodic" ? Padding::kPeriodic : Padding::kZero;
+  return options;
+}
+
+void check_unet(const run::Settings& settings, Index n) {
+  const long long levels = settings.integer("levels");
+  const long long factor = 1LL << (levels - 1);
+  if (n % factor != 0) {
+    throw Error("--levels: " + std::to_string(levels) + " halves the grid " +
+                std::to_string(levels - 1) + " times, so n must be a multiple of " +
+                std::to_string(factor) + "; n is " + std::to_string(n));
+  }
+  if (settings.text("batch-norm") != "on") return;
+  // An Adam→rule twin (--pretrain) exists only beside a rule refused here.
+  for (const std::string& id : settings.texts("optimizers")) {
+    if (make_learning_update(id)->need() == UpdateNeed::kStackedJacobian) {
+      throw Error("--optimizers: '" + id + "' needs per-sample Jacobians, which batch norm " +
+                  "(the batch's own statistics) does not have; run it with --batch-norm off");
+    }
+  }
+}
+
+void check_unet_ranks(const run::Settings& settings, const run::RunContext& context) {
+  const auto& communicator = context.communicator();
+  if (settings.text("batch-norm") == "on" && communicator && communicator->size() > 1) {
+    throw Error("--batch-norm: on, under " + std::to_string(communicator->size()) +
+                " ranks each rank would normalise its share of a batch with its own statistics; "
+                "run with --batch-norm off or in one process");
+  }
+}
+
+run::LearningExperiment::Shape unet_shape(const UNetOptions& options, Index outputs) {
+  const double parameters = static_cast<double>(ConvNetwork::unet(options).num_parameters());
+  return {outputs, {}, parameters, parameters};
+}
+
+double unet_sample_bytes(const UNetOptions& options, Index data_values) {
+  const double cells = std::pow(static_cast<double>(options.n), options.dims);
+  const double activations = 16.0 * static_cast<double>(options.filters) * cells;
+  return (static_cast<double>(data_values) + activations) * sizeof(double);
+}
+
+}  // namespace physgrad::experiments
