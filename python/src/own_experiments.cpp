@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -77,9 +78,11 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
   std::vector<std::string> default_optimizers() const override { return optimizers_; }
   long long default_iterations() const override { return iterations_; }
 
-  // The exception a Python callback raised in the last run, if any (taken: the next run starts
-  // without one).
-  CallbackErrors& errors() const { return errors_; }
+  // The exception a Python callback raised in the last run of the calling thread, if any
+  // (taken: the next run starts without one). Each thread that runs this experiment has its
+  // own: one thread's exception is neither lost to another's run nor raised in it. Call it
+  // holding the GIL, which guards the map.
+  CallbackErrors& errors() const { return errors_[std::this_thread::get_id()]; }
 
   void run(const ex::Settings& settings, ex::RunContext& context) const override {
     // The simulator holds a reference to a Python object: made and released holding the GIL.
@@ -91,20 +94,20 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
         simulator.reset();
       }
     } release{physics};
+    CallbackErrors* errors = nullptr;  // this run's (a map's node: it stays where it is)
     {
       py::gil_scoped_acquire held;
-      errors_.error.reset();
-      errors_.method.clear();
-      errors_.stop_on_interrupt = true;  // Ctrl-C stops the run in order, keeping its checkpoint
-      errors_.interrupted = false;
+      errors = &this->errors();
+      *errors = CallbackErrors{};
+      errors->stop_on_interrupt = true;  // Ctrl-C stops the run in order, keeping its checkpoint
       physics.emplace(simulator_, widths_.back(), outputs_, Vector::Zero(widths_.back()),
-                      errors_);
+                      *errors);
     }
     const L2Loss loss;
     const LearningProblem problem{&*physics, &loss};
     const auto seed = static_cast<std::uint64_t>(settings.integer("seed"));
-    const Dataset train_set = samples(settings.integer("train-size"), 2 * seed);
-    const Dataset test_set = samples(settings.integer("test-size"), 2 * seed + 1);
+    const Dataset train_set = samples(settings.integer("train-size"), 2 * seed, *errors);
+    const Dataset test_set = samples(settings.integer("test-size"), 2 * seed + 1, *errors);
     ex::LearningSweep sweep(settings, context, rules_);
     for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
       Mlp network(widths_, Activation::kTanh);
@@ -232,8 +235,8 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
   }
 
   // data(count, seed) as a Dataset: its inputs (count, widths[0]) and targets (count, outputs).
-  Dataset samples(Index count, std::uint64_t seed) const {
-    return call_python(errors_, "data", [&] {
+  Dataset samples(Index count, std::uint64_t seed, CallbackErrors& errors) const {
+    return call_python(errors, "data", [&] {
       const py::object pair = data_(count, seed);
       if (!py::isinstance<py::tuple>(pair) || py::len(pair) != 2) {
         throw Error("LearningExperiment " + name_ + ": data(count, seed) returned " +
@@ -267,7 +270,7 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
   std::map<std::string, ex::RuleDefaults> rules_;
   std::map<std::string, std::string> rule_texts_;  // each rule's options as given (repr)
   std::string definition_;
-  mutable CallbackErrors errors_;
+  mutable std::map<std::thread::id, CallbackErrors> errors_;
 };
 
 // An experiment the Python object owns, lent to a Registry for one call.
