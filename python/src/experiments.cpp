@@ -129,20 +129,24 @@ std::string option_text(const std::string& name, const py::handle& value) {
   return text;
 }
 
-// `stopped` with the command that continues the run (`physgrad resume FOLDER`, which knows only
+// `text` with the command that continues the run (`physgrad resume FOLDER`, which knows only
 // the reference experiments) as the Python call that does, when the script has experiments of
-// its own (`own` not None): physgrad.resume_experiment('FOLDER', experiments=[...]).
-std::string python_resume_text(const std::string& stopped, const std::string& folder,
-                               const py::object& own) {
-  const std::string names = own_names(own);
-  const std::string cli = "physgrad resume " + folder;
-  const std::size_t at = stopped.find(cli);
-  if (names.empty() || folder.empty() || at == std::string::npos) return stopped;
+// its own (`own` not None): physgrad.resume_experiment('FOLDER', experiments=[...]). FOLDER runs
+// to the end of the text, or to " runs it again" (RunFolder::abandon's two forms).
+std::string python_resume_text(const std::string& text, const py::object& own) {
+  const std::string cli = "physgrad resume ";
+  const std::size_t at = text.find(cli);
+  const std::string names = at == std::string::npos ? "" : own_names(own);
+  if (names.empty()) return text;
+  const std::size_t start = at + cli.size();
+  const std::size_t again = text.find(" runs it again", start);
+  const std::size_t end = again == std::string::npos ? text.size() : again;
+  const std::string folder = text.substr(start, end - start);
   const std::string call = "physgrad.resume_experiment(" +
                            py::repr(py::str(folder)).cast<std::string>() +
                            ", experiments=[...]) given the LearningExperiment " + names +
                            " again";
-  return std::string(stopped).replace(at, cli.size(), call);
+  return std::string(text).replace(at, end - at, call);
 }
 
 // What a run returns to Python: where it is, whether it finished, and its summary.json as a dict.
@@ -151,7 +155,7 @@ py::dict outcome_dict(const experiments::RunOutcome& outcome, const py::object& 
   out["folder"] = outcome.folder.string();
   out["finished"] = outcome.finished;
   out["report"] = outcome.report.string();
-  out["stopped"] = python_resume_text(outcome.stopped, outcome.folder.string(), own);
+  out["stopped"] = python_resume_text(outcome.stopped, own);
   out["summary"] = outcome.summary.is_null()
                        ? py::object(py::none())
                        : py::module_::import("json").attr("loads")(outcome.summary.dump());
@@ -203,8 +207,7 @@ py::dict finished_outcome(const experiments::RunOutcome& outcome, const PythonHo
   const bool interrupted = own_interrupted(own) || hooks.interrupted;
   if (interrupted) clear_stop_request();
   if (interrupted && !outcome.finished) {
-    const std::string message =
-        python_resume_text(outcome.stopped, outcome.folder.string(), own);
+    const std::string message = python_resume_text(outcome.stopped, own);
     PyErr_SetString(PyExc_KeyboardInterrupt, message.c_str());
     throw py::error_already_set();
   }
@@ -231,7 +234,9 @@ py::dict run_experiment(const std::string& name, const py::dict& options, const 
     outcome = experiments::Run::start(experiment, settings, out, hooks.hooks());
   } catch (const Error& e) {
     if (own_interrupted(own) || hooks.interrupted) clear_stop_request();
-    raise_own_callback_error(own, "experiment " + name + ": " + e.what());
+    const std::string message = python_resume_text(e.what(), own);
+    raise_own_callback_error(own, "experiment " + name + ": " + message);
+    if (message != e.what()) throw Error(message);
     throw;
   }
   return finished_outcome(outcome, hooks, own);
@@ -247,7 +252,9 @@ py::dict resume_experiment(const std::string& folder, const py::object& progress
     outcome = experiments::Run::resume(registry, folder, hooks.hooks());
   } catch (const Error& e) {
     if (own_interrupted(own) || hooks.interrupted) clear_stop_request();
-    raise_own_callback_error(own, "resume " + folder + ": " + e.what());
+    const std::string message = python_resume_text(e.what(), own);
+    raise_own_callback_error(own, "resume " + folder + ": " + message);
+    if (message != e.what()) throw Error(message);
     throw;
   }
   return finished_outcome(outcome, hooks, own);

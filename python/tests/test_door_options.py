@@ -152,3 +152,33 @@ def test_find_lr_refuses_when_no_candidate_lowers_the_loss():
         opt.find_lr(uphill, evaluate, candidates=(0.001, 0.003, 0.01))
     assert opt.param_groups[0]["lr"] == 0.5
     assert all(torch.equal(p, b) for p, b in zip(model.parameters(), before))
+
+
+@pytest.mark.parametrize("option, value", [("refresh", 2**31), ("products", 2**31),
+                                           ("patience", 2**31), ("decay-every", 2**32)])
+def test_a_count_beyond_an_int_is_refused_before_a_folder_is_claimed(tmp_path, option, value):
+    with pytest.raises(physgrad.Error, match=f"{option}.*2147483647") as raised:
+        physgrad.run_experiment("hig-toy", {option: value, "iters": 2}, str(tmp_path / "run"),
+                                progress=None)
+    assert "\n" not in str(raised.value)
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_failed_own_run_names_the_python_call_that_resumes_it(tmp_path):
+    class BreaksLater(Square):
+        calls = 0
+
+        def forward(self, y):
+            BreaksLater.calls += 1
+            if BreaksLater.calls > 400:
+                raise KeyError("broken later")
+            return super().forward(y)
+
+    own = _experiment(simulator=BreaksLater(), rules={"adam": {"lr": 0.01, "batch": 8}})
+    with pytest.raises(KeyError, match="broken later") as raised:
+        physgrad.run_experiment("own", {"optimizers": "adam", "checkpoint-every": 1},
+                                str(tmp_path / "run"), progress=None, experiments=[own])
+    text = str(raised.value)
+    assert "checkpoint kept" in text, text
+    assert "physgrad.resume_experiment(" in text and "physgrad resume " not in text, text
+    assert (tmp_path / "run" / "checkpoint.pgc").exists()
