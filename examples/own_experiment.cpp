@@ -5,6 +5,8 @@
 //   own_experiment run DIR [--NAME VALUE …]   a new run (options as `physgrad run`)
 //   own_experiment resume DIR                 continues an unfinished run from its checkpoint
 //   own_experiment report DIR                 DIR/index.html over the run folders in DIR
+// Ctrl-C (SIGINT, or SIGTERM) stops a run in order: its checkpoint is kept, the folder and the
+// command that resumes it are printed, and the program exits with 128 + the signal's number.
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -17,6 +19,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
+#include "physgrad/run/interrupt.hpp"
 #include "physgrad/run/learning_experiment.hpp"
 #include "physgrad/run/registry.hpp"
 #include "physgrad/run/run.hpp"
@@ -75,17 +78,25 @@ class InverseScale final : public run::LearningExperiment {
   Shape shape(const run::Settings& /*settings*/) const override { return {2, {2, 16, 2}}; }
 };
 
-// The final mean test loss of every run of the outcome, one line each.
-void print_finals(const run::RunOutcome& outcome) {
+// The final mean test loss of every run of the outcome, one line each; for a run stopped on
+// request, why and how to continue it (this program's resume, which knows its experiment, in
+// place of `physgrad resume`, which does not). Returns the exit status.
+int print_finals(const run::RunOutcome& outcome) {
   if (!outcome.finished) {
-    std::cout << outcome.stopped << '\n';
-    return;
+    std::string stopped = outcome.stopped;
+    const std::string cli = "physgrad resume ";
+    for (std::size_t at = stopped.find(cli); at != std::string::npos; at = stopped.find(cli)) {
+      stopped.replace(at, cli.size(), "own_experiment resume ");
+    }
+    std::cout << stopped << '\n';
+    return outcome.signal > 0 ? 128 + outcome.signal : 1;
   }
   for (const auto& run : outcome.summary.at("runs")) {
     std::printf("%-6s final test loss %.6e\n", run.at("label").get<std::string>().c_str(),
                 run.at("final").at("test_loss").get<double>());
   }
   std::cout << "report: " << outcome.report.string() << '\n';
+  return 0;
 }
 
 }  // namespace
@@ -102,6 +113,7 @@ int main(int argc, char** argv) {
   list.push_back(std::make_unique<InverseScale>());
   const run::Registry experiments(std::move(list));
 
+  run::install_interrupt_handlers();
   run::RunHooks hooks;
   hooks.log = [](const std::string& line) { std::cerr << line << '\n'; };
   try {
@@ -112,10 +124,10 @@ int main(int argc, char** argv) {
         if (args[i].rfind("--", 0) != 0) throw physgrad::Error("not an option: " + args[i]);
         given.emplace_back(args[i].substr(2), args[i + 1]);
       }
-      print_finals(run::Run::start(experiment, run::resolve_settings(experiment, given), args[1],
-                                   hooks));
+      return print_finals(
+          run::Run::start(experiment, run::resolve_settings(experiment, given), args[1], hooks));
     } else if (args[0] == "resume") {
-      print_finals(run::Run::resume(experiments, args[1], hooks));
+      return print_finals(run::Run::resume(experiments, args[1], hooks));
     } else if (args[0] == "report") {
       const run::RunIndex index = run::write_run_index(experiments, args[1]);
       std::cout << index.folders << " run folders: " << index.page.string() << '\n';

@@ -46,14 +46,19 @@ bool OptionRange::contains(const nlohmann::json& value) const {
 std::string OptionRange::text() const {
   if (type == Type::kChoice) return "one of: " + comma_list(choices);
   const bool has_min = std::isfinite(min), has_max = std::isfinite(max);
+  // An integer's bounds in all their digits (2147483647, not 2.14748e+09).
+  const auto number = [this](double value) {
+    return type == Type::kInteger ? std::to_string(static_cast<long long>(value))
+                                  : report_number(value);
+  };
   std::string bounds;
   if (has_min && has_max) {
-    bounds = "in " + std::string(min_open ? "(" : "[") + report_number(min) + ", " +
-             report_number(max) + (max_open ? ")" : "]");
+    bounds = "in " + std::string(min_open ? "(" : "[") + number(min) + ", " + number(max) +
+             (max_open ? ")" : "]");
   } else if (has_min) {
-    bounds = (min_open ? "> " : "≥ ") + report_number(min);
+    bounds = (min_open ? "> " : "≥ ") + number(min);
   } else if (has_max) {
-    bounds = (max_open ? "< " : "≤ ") + report_number(max);
+    bounds = (max_open ? "< " : "≤ ") + number(max);
   }
   if (type == Type::kInteger) return bounds.empty() ? "an integer" : "an integer " + bounds;
   return bounds.empty() ? "finite" : bounds;
@@ -102,7 +107,9 @@ OptionRange non_negative() { return real_range(0, false, kInf, false); }
 OptionRange fraction() { return real_range(0, false, 1, true); }
 OptionRange open_fraction() { return real_range(0, true, 1, true); }
 OptionRange integer_at_least(int min) {
-  OptionRange range = real_range(min, false, kInf, false);
+  // Bounded by what the option's int can hold: a larger count is refused where it is given,
+  // not found when the rule is made, after a run claimed its folder.
+  OptionRange range = real_range(min, false, std::numeric_limits<int>::max(), false);
   range.type = OptionRange::Type::kInteger;
   return range;
 }

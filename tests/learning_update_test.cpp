@@ -148,9 +148,15 @@ TEST(Catalogue, AValueOutsideItsRangeIsAnErrorNamingRuleOptionValueAndRange) {
   EXPECT_EQ(error_of([] { make_optimizer("gn", {{"rcond", 1.5}}); }),
             "gn: rcond must be in [0, 1), got 1.5");
   EXPECT_EQ(error_of([] { make_optimizer("lbfgs", {{"memory", 0}}); }),
-            "lbfgs: memory must be an integer ≥ 1, got 0");
+            "lbfgs: memory must be an integer in [1, 2147483647], got 0");
   EXPECT_EQ(error_of([] { make_optimizer("lbfgs", {{"memory", 2.5}}); }),
-            "lbfgs: memory must be an integer ≥ 1, got 2.5");
+            "lbfgs: memory must be an integer in [1, 2147483647], got 2.5");
+  // A count beyond the option's int is refused where it is given (it would wrap when stored).
+  EXPECT_EQ(error_of([] { make_learning_update("kfac-hig", {{"refresh", 2147483648.0}}); }),
+            "kfac-hig: refresh must be an integer in [1, 2147483647], got 2147483648");
+  EXPECT_EQ(error_of([] { make_learning_update("lanczos-hig", {{"products", 4294967296.0}}); }),
+            "lanczos-hig: products must be an integer in [1, 2147483647], got 4294967296");
+  EXPECT_NO_THROW(make_learning_update("kfac-hig", {{"refresh", 2147483647}}));
   EXPECT_EQ(error_of([] { make_optimizer("bfgs", {{"lr", -1}}); }),
             "bfgs: initial_step must be > 0, got -1");
   EXPECT_EQ(error_of([] { make_optimizer("bfgs", {{"c1", 1}}); }),

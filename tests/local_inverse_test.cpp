@@ -189,7 +189,7 @@ TEST(LocalInverse, OutOfRangeOptionsAndMissingCapabilitiesAreErrors) {
   EXPECT_EQ(message({.method = InverseMethod::kInverseGradient, .rcond = -1}),
             "local inverse: inverse_rcond must be in [0, 1), got -1");
   EXPECT_EQ(message({.method = InverseMethod::kLbfgs, .max_iterations = 0}),
-            "local inverse: inverse_iterations must be an integer ≥ 1, got 0");
+            "local inverse: inverse_iterations must be an integer in [1, 2147483647], got 0");
   EXPECT_EQ(message({.method = InverseMethod::kTimeReversal}),
             "simulator 'comparison_toy' has no time reversal; use a numerical inverse (lbfgs or ig)");
   EXPECT_THROW(parse_inverse_method("reverse"), Error);

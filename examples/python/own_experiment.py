@@ -5,7 +5,8 @@ the reference experiments.
 
     PYTHONPATH=build/python /usr/bin/python3 examples/python/own_experiment.py ARGUMENTS
     … run DIR [--NAME VALUE …]   a new run (options as `physgrad run`)
-    … resume DIR                 continues an unfinished run (killed, or stopped with Ctrl-C)
+    … resume DIR                 continues an unfinished run (killed, or stopped with Ctrl-C,
+                                 which keeps its checkpoint and prints the resume command)
     … report DIR                 DIR/index.html over the run folders in DIR
     … --quick                    a short run into a temporary folder
 """
@@ -78,4 +79,10 @@ def main(args):
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    try:
+        sys.exit(main(sys.argv[1:]))
+    except KeyboardInterrupt as stopped:  # Ctrl-C: the run stopped in order, its checkpoint kept
+        print(stopped)
+        if len(sys.argv) > 2:
+            print(f"or: {sys.argv[0]} resume {sys.argv[2]}")
+        sys.exit(130)

@@ -31,7 +31,7 @@ struct OptionRange {
   // Whether `value` is one of the values: a finite number within the bounds (an integral one for
   // kInteger), or one of the names.
   bool contains(const nlohmann::json& value) const;
-  // "> 0", "in [0, 1)", "an integer ≥ 1", "one of: auto, svd", "finite" — after "must be".
+  // "> 0", "in [0, 1)", "an integer in [1, 2147483647]", "one of: auto, svd", "finite" — after "must be".
   std::string text() const;
   // The values both ranges take (a shared option of several rules); Error when they are of
   // different types or have no value in common.
@@ -43,7 +43,7 @@ OptionRange positive();          // (0, ∞)
 OptionRange non_negative();      // [0, ∞)
 OptionRange fraction();          // [0, 1): relative cutoffs and tolerances
 OptionRange open_fraction();     // (0, 1)
-OptionRange integer_at_least(int min);
+OptionRange integer_at_least(int min);  // [min, 2³¹ − 1]: what the option's int holds
 OptionRange any_finite();
 
 // What every option says about itself, whichever options struct it belongs to.

@@ -12,11 +12,28 @@ from ._results import Experiment, LocalInverseResult, RunOutcome, _experiments
 
 __version__ = _physgrad.__version__
 
+
+class BlasCoreWarning(RuntimeWarning):
+    """OpenBLAS runs slower kernels than the CPU can (blas_core_note() says which to set)."""
+
+
+def _warn_of_the_blas_core():
+    """Warns once, on import, when OpenBLAS runs generic kernels on a CPU that can run faster
+    ones (as the CLI prints its note); OPENBLAS_CORETYPE is read when OpenBLAS loads, so only
+    the user can set it, before Python starts."""
+    note = blas_core_note()
+    if note:
+        import warnings
+        warnings.warn(note, BlasCoreWarning, stacklevel=3)
+
+
+_warn_of_the_blas_core()
+
 __all__ = ["Error", "NumericalError", "MinimizeResult", "LocalInverseResult", "RunOutcome",
            "Experiment", "minimize", "local_inverse", "direct_rules", "learning_rules",
            "jacobian_step", "reference_step", "experiments", "open_metrics", "open_summary",
            "run_experiment", "resume_experiment", "write_index", "LearningExperiment",
-           "blas_core", "blas_core_note", "__version__"]
+           "blas_core", "blas_core_note", "BlasCoreWarning", "__version__"]
 
 
 def _bounds(bounds, n):

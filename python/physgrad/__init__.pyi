@@ -16,6 +16,8 @@ from ._results import (Experiment as Experiment, LocalInverseResult as LocalInve
 
 __version__: str
 
+class BlasCoreWarning(RuntimeWarning): ...
+
 Bounds = Union[Tuple[Optional[npt.ArrayLike], Optional[npt.ArrayLike]],
                List[Tuple[Optional[float], Optional[float]]], Any]
 

@@ -5,8 +5,28 @@ from typing import Any, Dict, Iterator, List, NamedTuple, Optional
 import numpy as np
 
 
-class _DictView:
-    """result["x"] is result.x; keys(), items(), get() and `in` as for the dict it replaces."""
+class _DictView(dict):
+    """A dict whose keys are also attributes: result["x"] is result.x; len(), iteration (over
+    the keys), keys(), items(), get(), `in` and json.dumps as for a dict."""
+
+    _fields: tuple = ()
+
+    def __getattr__(self, name):
+        try:
+            return self[name]
+        except KeyError:
+            raise AttributeError(f"{type(self).__name__} has no attribute {name!r}") from None
+
+    def __setattr__(self, name, value):
+        self[name] = value
+
+    def as_dict(self) -> Dict[str, Any]:
+        return dict(self)
+
+
+class _KeyedTuple:
+    """For a NamedTuple: e["name"] is e.name, keys(), items(), get() and `in` over the names;
+    e[0] and iteration as for the tuple."""
 
     _fields: tuple = ()
 
@@ -15,7 +35,7 @@ class _DictView:
             if key not in self._fields:
                 raise KeyError(key)
             return getattr(self, key)
-        return super().__getitem__(key)  # a NamedTuple's index
+        return tuple.__getitem__(self, key)
 
     def __contains__(self, key):
         return key in self._fields
@@ -62,7 +82,7 @@ class RunOutcome(_DictView):
         return f"RunOutcome(folder={self.folder!r}, finished={self.finished})"
 
 
-class Experiment(_DictView, NamedTuple("_Experiment", [("name", str), ("description", str)])):
+class Experiment(_KeyedTuple, NamedTuple("_Experiment", [("name", str), ("description", str)])):
     """An experiment: `for name, description in experiments()`, or e.name, or e["name"]."""
 
     _fields = ("name", "description")

@@ -23,6 +23,10 @@ void bind_own_experiments(pybind11::module_& m);  // LearningExperiment (own_exp
 // physgrad.LearningExperiment): what a run, a resume or an index of them is given.
 // (own_experiments.cpp)
 run::Registry registry_with(const pybind11::object& own);
+// Whether Ctrl-C stopped the run of one of `own`'s experiments that just ended (the flag taken).
+bool own_interrupted(const pybind11::object& own);
+// The names of `own`'s experiments, quoted: "'a', 'b'".
+std::string own_names(const pybind11::object& own);
 // Raises in Python the exception a callback of one of `own`'s experiments raised in the run that
 // just ended (its message gains " (in CONTEXT, METHOD)"); returns when none did.
 void raise_own_callback_error(const pybind11::object& own, const std::string& context);

@@ -129,13 +129,33 @@ std::string option_text(const std::string& name, const py::handle& value) {
   return text;
 }
 
+// `text` with the command that continues the run (`physgrad resume FOLDER`, which knows only
+// the reference experiments) as the Python call that does, when the script has experiments of
+// its own (`own` not None): physgrad.resume_experiment('FOLDER', experiments=[...]). FOLDER runs
+// to the end of the text, or to " runs it again" (RunFolder::abandon's two forms).
+std::string python_resume_text(const std::string& text, const py::object& own) {
+  const std::string cli = "physgrad resume ";
+  const std::size_t at = text.find(cli);
+  const std::string names = at == std::string::npos ? "" : own_names(own);
+  if (names.empty()) return text;
+  const std::size_t start = at + cli.size();
+  const std::size_t again = text.find(" runs it again", start);
+  const std::size_t end = again == std::string::npos ? text.size() : again;
+  const std::string folder = text.substr(start, end - start);
+  const std::string call = "physgrad.resume_experiment(" +
+                           py::repr(py::str(folder)).cast<std::string>() +
+                           ", experiments=[...]) given the LearningExperiment " + names +
+                           " again";
+  return std::string(text).replace(at, end - at, call);
+}
+
 // What a run returns to Python: where it is, whether it finished, and its summary.json as a dict.
-py::dict outcome_dict(const experiments::RunOutcome& outcome) {
+py::dict outcome_dict(const experiments::RunOutcome& outcome, const py::object& own) {
   py::dict out;
   out["folder"] = outcome.folder.string();
   out["finished"] = outcome.finished;
   out["report"] = outcome.report.string();
-  out["stopped"] = outcome.stopped;
+  out["stopped"] = python_resume_text(outcome.stopped, own);
   out["summary"] = outcome.summary.is_null()
                        ? py::object(py::none())
                        : py::module_::import("json").attr("loads")(outcome.summary.dump());
@@ -179,14 +199,19 @@ struct PythonHooks {
   }
 };
 
-// Raises KeyboardInterrupt naming the stopped run (and how to continue it) when Ctrl-C stopped it.
-py::dict finished_outcome(const experiments::RunOutcome& outcome, const PythonHooks& hooks) {
-  if (hooks.interrupted && !outcome.finished) {
-    clear_stop_request();
-    PyErr_SetString(PyExc_KeyboardInterrupt, outcome.stopped.c_str());
+// Raises KeyboardInterrupt naming the stopped run (and how to continue it) when Ctrl-C stopped
+// it: seen by a progress hook, or by a callback of one of `own`'s experiments. The stop request
+// is cleared whenever Ctrl-C made it, also when the run finished before it stopped.
+py::dict finished_outcome(const experiments::RunOutcome& outcome, const PythonHooks& hooks,
+                          const py::object& own) {
+  const bool interrupted = own_interrupted(own) || hooks.interrupted;
+  if (interrupted) clear_stop_request();
+  if (interrupted && !outcome.finished) {
+    const std::string message = python_resume_text(outcome.stopped, own);
+    PyErr_SetString(PyExc_KeyboardInterrupt, message.c_str());
     throw py::error_already_set();
   }
-  return outcome_dict(outcome);
+  return outcome_dict(outcome, own);
 }
 
 // Runs experiment `name` (a reference experiment or one of `own`) with `options` (option name →
@@ -208,10 +233,13 @@ py::dict run_experiment(const std::string& name, const py::dict& options, const 
     py::gil_scoped_release released;
     outcome = experiments::Run::start(experiment, settings, out, hooks.hooks());
   } catch (const Error& e) {
-    raise_own_callback_error(own, "experiment " + name + ": " + e.what());
+    if (own_interrupted(own) || hooks.interrupted) clear_stop_request();
+    const std::string message = python_resume_text(e.what(), own);
+    raise_own_callback_error(own, "experiment " + name + ": " + message);
+    if (message != e.what()) throw Error(message);
     throw;
   }
-  return finished_outcome(outcome, hooks);
+  return finished_outcome(outcome, hooks, own);
 }
 
 py::dict resume_experiment(const std::string& folder, const py::object& progress,
@@ -223,10 +251,13 @@ py::dict resume_experiment(const std::string& folder, const py::object& progress
     py::gil_scoped_release released;
     outcome = experiments::Run::resume(registry, folder, hooks.hooks());
   } catch (const Error& e) {
-    raise_own_callback_error(own, "resume " + folder + ": " + e.what());
+    if (own_interrupted(own) || hooks.interrupted) clear_stop_request();
+    const std::string message = python_resume_text(e.what(), own);
+    raise_own_callback_error(own, "resume " + folder + ": " + message);
+    if (message != e.what()) throw Error(message);
     throw;
   }
-  return finished_outcome(outcome, hooks);
+  return finished_outcome(outcome, hooks, own);
 }
 
 // `physgrad report FOLDER` with the reference experiments and `own`: {folders, page}; what is

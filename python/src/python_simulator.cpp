@@ -6,8 +6,26 @@
 
 #include "physgrad/autodiff/finite_difference.hpp"
 #include "physgrad/error.hpp"
+#include "physgrad/stop.hpp"
 
 namespace physgrad::python {
+
+bool take_interrupt(CallbackErrors& errors, py::error_already_set& raised) {
+  if (!errors.stop_on_interrupt || errors.interrupted || !raised.matches(PyExc_KeyboardInterrupt)) {
+    return false;
+  }
+  errors.interrupted = true;
+  request_stop();
+  return true;
+}
+
+void keep_and_fail(CallbackErrors& errors, const char* method, py::error_already_set&& raised) {
+  if (!errors.error) {
+    errors.error.emplace(std::move(raised));
+    errors.method = method;
+  }
+  throw CallbackFailed();
+}
 
 void raise_kept(CallbackErrors& errors, const std::string& context) {
   py::error_already_set error = std::move(*errors.error);

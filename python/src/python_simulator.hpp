@@ -23,14 +23,26 @@ namespace py = pybind11;
 // A Python exception raised in a callback while the library ran. The callback keeps it here and
 // throws CallbackFailed, which unwinds the library; the binding then raises the original
 // exception in Python with `context` ("rule lm, iteration 3") added to its message.
+// With `stop_on_interrupt` (a run of the experiment framework, which stops in order and keeps
+// its checkpoint), the first KeyboardInterrupt is no failure: it becomes the library's stop
+// request (`interrupted` set), and the callback is called again for the result the step needs.
 struct CallbackErrors {
   std::optional<py::error_already_set> error;
   std::string method;  // the callback that raised it ("forward", "vjp", ...)
   int iteration = 0;   // the iteration the library was in (updated by the caller)
+  bool stop_on_interrupt = false;
+  bool interrupted = false;
 };
 struct CallbackFailed : std::exception {
   const char* what() const noexcept override { return "a Python callback raised an exception"; }
 };
+
+// Whether `raised` is the KeyboardInterrupt that `errors` takes as a stop request (see above);
+// when it is, the request is made.
+bool take_interrupt(CallbackErrors& errors, py::error_already_set& raised);
+// Keeps `raised` in `errors` (unless one is kept already) and throws CallbackFailed.
+[[noreturn]] void keep_and_fail(CallbackErrors& errors, const char* method,
+                                py::error_already_set&& raised);
 
 // Runs `body` holding the GIL; a Python exception it raises is kept in `errors` (named `method`)
 // and CallbackFailed thrown in its place. Python's pending signals are looked at after every
@@ -39,16 +51,17 @@ struct CallbackFailed : std::exception {
 template <class Body>
 auto call_python(CallbackErrors& errors, const char* method, Body&& body) {
   py::gil_scoped_acquire gil;
-  try {
-    auto result = body();
-    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-    return result;
-  } catch (py::error_already_set& e) {
-    if (!errors.error) {
-      errors.error.emplace(std::move(e));
-      errors.method = method;
+  for (;;) {
+    try {
+      auto result = body();
+      if (PyErr_CheckSignals() == 0) return result;
+      py::error_already_set raised;
+      if (take_interrupt(errors, raised)) return result;
+      keep_and_fail(errors, method, std::move(raised));
+    } catch (py::error_already_set& e) {
+      if (take_interrupt(errors, e)) continue;  // interrupted inside: asked again
+      keep_and_fail(errors, method, std::move(e));
     }
-    throw CallbackFailed();
   }
 }
 

@@ -14,6 +14,8 @@ import torch
 from torch.autograd import forward_ad
 from torch.nn.utils import stateless
 
+from .. import _physgrad
+
 # The memory one chunk of a Jacobian may take (bytes), unless PHYSGRAD_JACOBIAN_MEMORY says.
 _DEFAULT_BUDGET = 512 << 20
 
@@ -62,6 +64,17 @@ def per_sample_jacobian(model, simulate, inputs, chunk=None, dtype=None, params=
     (forward mode when P < m). chunk: samples per vmap call; None chooses the largest that fits
     the memory budget (memory_budget()). dtype: J's dtype (default: the parameters').
     """
+    if not isinstance(inputs, torch.Tensor):
+        raise _physgrad.Error(f"per_sample_jacobian: inputs is a {type(inputs).__name__}, "
+                              "expected a torch tensor (torch.as_tensor(inputs))")
+    batch_norms = [name for name, module in model.named_modules()
+                   if isinstance(module, torch.nn.modules.batchnorm._BatchNorm) and
+                   module.training]
+    if batch_norms:
+        raise _physgrad.Error(
+            f"per_sample_jacobian: {batch_norms[0] or 'the model'} is a BatchNorm in training "
+            "mode, which mixes the samples of a batch and has no per-sample Jacobian (call "
+            "model.eval(), or use LayerNorm or GroupNorm)")
     named = dict(model.named_parameters())
     chosen = trainable(model.parameters()) if params is None else list(params)
     by_id = {id(p): name for name, p in named.items()}

@@ -117,9 +117,24 @@ class SIP(torch.optim.Adam):
         return x_tilde, info
 
     @torch.no_grad()
-    def step(self, closure):
+    def step(self, closure=None):
+        if closure is None:
+            raise _physgrad.Error("sip: step needs a closure returning (loss, x, y, y_star); "
+                                  "make one with physgrad.torch.sip_closure(...)")
         with torch.enable_grad():
-            loss, x, y, y_star = closure()
+            returned = closure()
+        if not isinstance(returned, (tuple, list)) or len(returned) != 4:
+            shown = type(returned).__name__ + (f" of {len(returned)}" if isinstance(
+                returned, (tuple, list)) else "")
+            raise _physgrad.Error(
+                f"sip: the closure returned a {shown}, expected (loss, x, y, y_star) as "
+                "physgrad.torch.sip_closure(...) makes (HIG's and GN's closure returns three "
+                "items: (loss, J, dL_dy))")
+        loss, x, y, y_star = returned
+        for name, value in (("x", x), ("y", y), ("y_star", y_star)):
+            if not isinstance(value, torch.Tensor) or value.dim() != 2:
+                raise _physgrad.Error(f"sip: the closure's {name} is not a (B, ·) torch tensor "
+                                      f"({type(value).__name__})")
         x_tilde, info = self.proxy_targets(x, y, y_star)
         params = [p for group in self.param_groups for p in group["params"] if p.requires_grad]
         with torch.enable_grad():
@@ -136,6 +151,10 @@ class SIP(torch.optim.Adam):
 def sip_closure(model, simulate, inputs, targets):
     """A closure for SIP.step: x = model(inputs) with its graph, y = simulate(x) without one,
     loss = ½‖y − targets‖² (the batch mean)."""
+    for name, value in (("inputs", inputs), ("targets", targets)):
+        if not isinstance(value, torch.Tensor):
+            raise _physgrad.Error(f"sip_closure: {name} is a {type(value).__name__}, expected a "
+                                  "torch tensor (torch.as_tensor(...))")
 
     def closure():
         x = model(inputs)
