@@ -110,8 +110,8 @@ class Comparison final : public Experiment {
   }
 
  private:
-  // Which rule ends closest to the minimum x = 0, and how many times closer than each rule that
-  // ends more than 5 % farther (ratios with two significant digits, distances with three).
+  // Which rules end closest to the minimum x = 0 (all of those within a relative 1e-4 of the
+  // smallest distance), and how many times closer than each rule that ends more than 5 % farther (ratios with two significant digits, distances with three).
   static std::string closest_sentence(const std::vector<DirectResult>& results, int iterations) {
     const auto distance = [](const DirectResult& r) { return r.summary.x.norm(); };
     if (results.empty()) return "No rule ran.";
@@ -121,8 +121,15 @@ class Comparison final : public Experiment {
     const auto best = std::find_if(results.begin(), results.end(), [&](const DirectResult& r) {
       return distance(r) <= smallest * (1 + 1e-4);
     });
+    // Every rule level with it is named with it: none of them is the sole best.
+    std::string level;
+    for (const DirectResult& r : results) {
+      if (&r != &*best && distance(r) <= smallest * (1 + 1e-4)) level += " and " + r.rule.label;
+    }
     std::string out = "After " + std::to_string(iterations) + " steps " + best->rule.label +
-                      " ends " + value_text(distance(*best)) + " from the minimum";
+                      level + (level.empty() ? " ends " : " end ") + value_text(distance(*best)) +
+                      " from the minimum" +
+                      (level.empty() ? "" : " (level within a relative 1e-4)");
     std::string closer;
     for (const DirectResult& r : results) {
       const double ratio = distance(r) / distance(*best);

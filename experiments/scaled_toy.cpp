@@ -119,7 +119,7 @@ class ScaledToy final : public Experiment {
                                   format_value(alphas.back());
     if (varying.empty()) return out + ".";
     const DirectResult& moved = first[varying.front()];
-    out += "; " + moved.rule.label + " needs " + iterations_cell(moved) + " at α = " +
+    out += "; " + moved.rule.label + " " + outcome_phrase(moved) + " at α = " +
            format_value(alphas.front());
     if (!invariant.empty() && converged(moved) && first[invariant.front()].summary.iterations > 0) {
       out += " (" +
@@ -127,7 +127,7 @@ class ScaledToy final : public Experiment {
                         static_cast<double>(first[invariant.front()].summary.iterations)) +
              " " + first[invariant.front()].rule.label + "'s)";
     }
-    return out + " and " + iterations_cell(by_alpha.back()[varying.front()]) + " at α = " +
+    return out + " and " + outcome_phrase(by_alpha.back()[varying.front()]) + " at α = " +
            format_value(alphas.back()) + ".";
   }
 

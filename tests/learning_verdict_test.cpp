@@ -96,6 +96,22 @@ TEST(LearningVerdict, FailedDivergedAndUnswitchedRunsAreNeverRanked) {
       << equal;
 }
 
+// Two seeds each: Adam ends at 0.1 and 0.3 (median 0.2, which its second seed never reached),
+// HIG at 0.01 and 0.03. The level compared is the upper median final (0.3), which both of Adam's
+// seeds reached, so no count reads "nan" for an even number of seeds.
+TEST(LearningVerdict, EvenSeedCountsGiveNumbersNotNan) {
+  const LearningResult adam1 = run("adam", {1.0, 0.5, 0.1}, 100, 1e-3);
+  const LearningResult adam2 = run("adam", {1.0, 0.6, 0.3}, 100, 1e-3);
+  const LearningResult hig1 = run("hig", {1.0, 0.1, 0.01}, 10, 0.1);
+  const LearningResult hig2 = run("hig", {1.0, 0.3, 0.03}, 10, 0.1);
+  const std::string sentence = verdict_sentence(
+      {{{&adam1, &adam2}, {&hig1, &hig2}}, kTestLoss, "final test loss"});
+  EXPECT_EQ(sentence.find("nan"), std::string::npos) << sentence;
+  // Adam reaches 0.3 at 132 (log-linear between 100 and 200) and 200 updates: median 166.
+  EXPECT_NE(sentence.find("to reach 0.3 HIG needs"), std::string::npos) << sentence;
+  EXPECT_NE(sentence.find(" vs 166)"), std::string::npos) << sentence;
+}
+
 TEST(LearningVerdict, RatiosCarryTwoSignificantDigits) {
   EXPECT_EQ(ratio_text(1.5), "1.5×");
   EXPECT_EQ(ratio_text(12.34), "12×");

@@ -123,6 +123,113 @@ nlohmann::json hand_run(const std::string& label, const std::string& id, double 
           {"wall_seconds", 1e-4},     {"termination", termination}};
 }
 
+// Medians 1e-10 apart (relative) share rank 1 and "best"; a direct run that hit its iteration
+// limit with the loss above its start is "diverging", not "did not converge".
+TEST_F(RunIndex, NearTiesShareARankAndADivergingRunIsNamedSo) {
+  const auto direct_run = [](const std::string& label, const std::string& id, double loss,
+                             const std::string& termination) {
+    return nlohmann::json{{"label", label},          {"optimizer", id},
+                          {"params", nlohmann::json::object()},
+                          {"initial", {{"loss", 1.0}}}, {"final", {{"loss", loss}}},
+                          {"iterations", 50},        {"epochs", nullptr},
+                          {"wall_seconds", 1e-4},    {"termination", termination}};
+  };
+  const auto write = [&](const std::string& name, const nlohmann::json& runs,
+                         const std::string& metric) {
+    const nlohmann::json summary = {
+        {"experiment", "hand-direct"},
+        {"runs", runs},
+        {"message", {{"figure", "x.svg"}, {"sentence", "Hand."}, {"metric", metric},
+                     {"metric_text", metric == "loss" ? "final loss" : "iterations"},
+                     {"labels", {}}}}};
+    fs::create_directories(dir_ / "runs" / name);
+    std::ofstream(dir_ / "runs" / name / "summary.json") << summary.dump();
+  };
+  write("ties",
+        {direct_run("PG (analytic inverse)", "pg", 1e-3, "max_iterations"),
+         direct_run("PG (L-BFGS inverse)", "pg", 1e-3 * (1 - 1e-10), "max_iterations"),
+         direct_run("GD", "gd", 2e-3, "max_iterations")},
+        "loss");
+  write("costs",
+        {direct_run("Newton", "newton", 1e-12, "converged"),
+         direct_run("GD", "gd", 7e190, "max_iterations"),
+         direct_run("IG", "ig", 0.5, "max_iterations")},
+        "iterations");
+  const physgrad::testing::Outcome index = run("report runs");
+  ASSERT_EQ(index.exit_code, 0) << index.err;
+  const std::string html = read_file(dir_ / "runs" / "index.html");
+  const std::vector<Row> ties = table_rows(html, html.find("<th>final loss</th>"));
+  for (const char* pg : {"PG (analytic inverse)", "PG (L-BFGS inverse)"}) {
+    const Row row = row_with(ties, {{"run folder", "ties"}, {"rule", pg}});
+    EXPECT_EQ(row.at("rank"), "1") << pg;
+    EXPECT_EQ(row.at("× best"), "best") << pg;
+  }
+  EXPECT_EQ(row_with(ties, {{"run folder", "ties"}, {"rule", "GD"}}).at("rank"), "3");
+  const std::vector<Row> costs = table_rows(html, html.find("<th>iterations</th>"));
+  EXPECT_EQ(row_with(costs, {{"run folder", "costs"}, {"rule", "GD"}}).at("apart"),
+            "1 of 1 diverging (loss above its start)");
+  EXPECT_EQ(row_with(costs, {{"run folder", "costs"}, {"rule", "IG"}}).at("apart"),
+            "1 of 1 did not converge");
+}
+
+// A learning folder whose message compares the "median final test loss at λ = 1" draws its
+// curves over updates as the "test loss at λ = 1": a curve is neither a median of finals nor final.
+TEST_F(RunIndex, CurvesOverUpdatesAreNotLabelledAsFinals) {
+  nlohmann::json runs = nlohmann::json::array();
+  std::string csv = "label,optimizer,seed,iteration,wall_seconds,test_loss\n";
+  for (const char* rule : {"adam", "hig"}) {
+    const std::string label = rule == std::string("adam") ? "Adam" : "HIG";
+    runs.push_back({{"label", label}, {"optimizer", rule}, {"params", {{"seed", 0}}},
+                    {"initial", {{"loss", 1.0}}}, {"final", {{"loss", 0.1}, {"test_loss", 0.1}}},
+                    {"iterations", 20}, {"epochs", 1}, {"wall_seconds", 0.1},
+                    {"termination", "max_iterations"}});
+    for (int k = 0; k <= 2; ++k) {
+      csv += label + "," + rule + ",0," + std::to_string(10 * k) + "," + std::to_string(0.01 * k) +
+             "," + std::to_string(1.0 / (1 + k)) + "\n";
+    }
+  }
+  const nlohmann::json summary = {
+      {"experiment", "hand-learning"},
+      {"runs", runs},
+      {"message", {{"figure", "x.svg"}, {"sentence", "Hand."}, {"metric", "test_loss"},
+                   {"metric_text", "median final test loss at λ = 1"}, {"labels", {}}}}};
+  fs::create_directories(dir_ / "runs" / "learn");
+  std::ofstream(dir_ / "runs" / "learn" / "summary.json") << summary.dump();
+  std::ofstream(dir_ / "runs" / "learn" / "metrics.csv") << csv;
+  const physgrad::testing::Outcome index = run("report runs");
+  ASSERT_EQ(index.exit_code, 0) << index.err;
+  const std::string html = read_file(dir_ / "runs" / "index.html");
+  const std::vector<std::string> svgs = inline_svgs(html);
+  ASSERT_FALSE(svgs.empty());
+  for (const std::string& svg : svgs) {
+    EXPECT_EQ(svg.find("median final test loss"), std::string::npos);
+    EXPECT_NE(svg.find(">test loss at λ = 1</text>"), std::string::npos);
+  }
+}
+
+// Folders a run started and did not finish (config.json, no summary.json) are counted beside
+// the shown ones, with how many hold a checkpoint to resume from.
+TEST_F(RunIndex, TheFolderCountNamesUnfinishedAndResumableFolders) {
+  const nlohmann::json summary = {
+      {"experiment", "hand-direct"},
+      {"runs", {{{"label", "GD"}, {"optimizer", "gd"}, {"params", nlohmann::json::object()},
+                 {"initial", {{"loss", 1.0}}}, {"final", {{"loss", 0.5}}}, {"iterations", 5},
+                 {"epochs", nullptr}, {"wall_seconds", 1e-4}, {"termination", "max_iterations"}}}}};
+  fs::create_directories(dir_ / "runs" / "done");
+  std::ofstream(dir_ / "runs" / "done" / "summary.json") << summary.dump();
+  for (const char* killed : {"killed-a", "killed-b"}) {
+    fs::create_directories(dir_ / "runs" / killed);
+    std::ofstream(dir_ / "runs" / killed / "config.json") << "{}";
+  }
+  std::ofstream(dir_ / "runs" / "killed-b" / "checkpoint.pgc") << "x";
+  fs::create_directories(dir_ / "runs" / "not-a-run");
+  const physgrad::testing::Outcome index = run("report runs");
+  ASSERT_EQ(index.exit_code, 0) << index.err;
+  const std::string html = read_file(dir_ / "runs" / "index.html");
+  EXPECT_NE(html.find("1 run folders (and 2 unfinished, not shown"), std::string::npos);
+  EXPECT_NE(html.find("1 of them with a checkpoint, resumable"), std::string::npos);
+}
+
 // Folders of converged, diverged, failed and unconverged direct runs: the index compares them
 // by iterations to the tolerance, counts the runs that failed or did not converge apart from the
 // median, never ranks a rule with any, ranks ties alike, and shows the digits the spread allows.

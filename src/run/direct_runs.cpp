@@ -145,6 +145,22 @@ std::string iterations_cell(const DirectResult& result) {
   return "> " + std::to_string(s.iterations);
 }
 
+std::string outcome_phrase(const DirectResult& result) {
+  const MinimizeSummary& s = result.summary;
+  const std::string at = " at iteration " + std::to_string(s.iterations + 1);
+  switch (s.termination) {
+    case Termination::kConverged:
+      return "needs " + std::to_string(s.iterations) + " iterations";
+    case Termination::kNumericalFailure: return "diverged" + at;
+    case Termination::kFailed: return "failed" + at;
+    case Termination::kStationary:
+      return "stalled at iteration " + std::to_string(s.iterations);
+    default: break;
+  }
+  if (s.loss > result.initial_loss) return "is " + iterations_cell(result);
+  return "has not converged after " + std::to_string(s.iterations) + " iterations";
+}
+
 std::string step_size_text(const RuleSetup& rule) {
   const nlohmann::json params = make_optimizer(rule.id, rule.settings)->params();
   if (params.contains("lr")) return format_value(params["lr"].get<double>());

@@ -60,7 +60,7 @@ std::string against_adam(const RuleStanding& rule, const std::vector<const Learn
                          const RuleStanding& base,
                          const std::vector<const LearningResult*>& base_runs,
                          const VerdictInput& input) {
-  const double level = std::max(rule.final_value, base.final_value);
+  const double level = std::max(rule.reach_level, base.reach_level);
   const auto reach = [&](const std::vector<const LearningResult*>& group, bool in_seconds) {
     std::vector<double> values;
     for (const LearningResult* run : group) {
@@ -137,6 +137,13 @@ RuleStanding standing(const std::vector<const LearningResult*>& group,
     }
   }
   s.final_value = median(finals);
+  if (!finals.empty()) {
+    std::vector<double> sorted = finals;
+    std::sort(sorted.begin(), sorted.end(), [](double a, double b) {
+      return std::isnan(b) ? !std::isnan(a) : (!std::isnan(a) && a < b);
+    });
+    s.reach_level = sorted[sorted.size() / 2];
+  }
   s.seconds_per_update = median(costs);
   return s;
 }

@@ -17,6 +17,7 @@
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/report/page_spool.hpp"
+#include "physgrad/run/checkpoint.hpp"
 #include "physgrad/run/registry.hpp"
 #include "physgrad/run/run_folder.hpp"
 #include "physgrad/run/run_index_compare.hpp"
@@ -58,6 +59,30 @@ std::vector<fs::path> run_folder_paths(const fs::path& dir) {
   }
   std::sort(paths.begin(), paths.end());
   return paths;
+}
+
+// The folders directly in `dir` that a run started and did not finish (config.json without
+// summary.json: killed, or running), and how many of them hold a checkpoint to resume from.
+std::pair<std::size_t, std::size_t> unfinished_run_folders(const fs::path& dir) {
+  std::size_t unfinished = 0, resumable = 0;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
+    std::error_code error;
+    if (!entry.is_directory(error) || fs::exists(entry.path() / kSummaryFile, error)) continue;
+    if (!fs::exists(entry.path() / kConfigFile, error)) continue;
+    ++unfinished;
+    resumable += fs::exists(entry.path() / kCheckpointFile, error) ? 1 : 0;
+  }
+  return {unfinished, resumable};
+}
+
+// "15 run folders" and, when there are any, the unfinished ones that are not shown.
+std::string run_folders_text(std::size_t shown, std::pair<std::size_t, std::size_t> unfinished) {
+  std::string out = std::to_string(shown) + " run folders";
+  if (unfinished.first == 0) return out;
+  return out + " (and " + std::to_string(unfinished.first) +
+         " unfinished, not shown: config.json without summary.json, killed or still running; " +
+         std::to_string(unfinished.second) + " of them with a checkpoint, resumable with "
+         "`physgrad resume FOLDER`)";
 }
 
 HtmlTable every_run_table() {
@@ -107,6 +132,7 @@ struct IndexPage {
   PageSpool::Part notes, warnings, every_run, commands;
   std::string first_note;  // named in the error when no folder can be shown
   std::size_t shown = 0, overlaid = 0;  // folders shown; comparisons with overlays
+  std::pair<std::size_t, std::size_t> unfinished{};  // folders unfinished; of them, resumable
   std::vector<ExperimentSection> experiments;
   HtmlTable every_run_header = every_run_table();
 
@@ -168,7 +194,7 @@ struct IndexPage {
   void write(const ContentSink& sink, const fs::path& dir) {
     const auto copy = [&](const PageSpool::Part& part) { spool.copy(part, sink); };
     sink(html_page_open("Runs in " + dir.string() + " — physgrad",
-                        std::to_string(shown) + " run folders" +
+                        run_folders_text(shown, unfinished) +
                             (notes.empty() ? "."
                                            : "; some of what they hold is left out, as listed "
                                              "below.")));
@@ -209,6 +235,7 @@ RunIndex write_run_index(const Registry& experiments, const fs::path& dir,
     throw Error("report: '" + dir.string() + "' is not a directory");
   }
   IndexPage page(experiments, dir);
+  page.unfinished = unfinished_run_folders(dir);
   for (const fs::path& path : run_folder_paths(dir)) {
     std::vector<std::string> notes;
     std::optional<IndexedFolder> folder;

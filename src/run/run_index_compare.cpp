@@ -62,7 +62,8 @@ std::string differing_options(const json& settings, const json& defaults) {
   return index_clipped(std::move(out), kIndexMaxName);
 }
 
-// "1 of 4 failed, 1 did not converge, 1 never switched from Adam"; empty when every run counts.
+// "1 of 4 failed, 1 did not converge, 1 diverging (loss above its start), 1 never switched from
+// Adam"; empty when every run counts.
 std::string apart_text(const ComparedGroup& g) {
   std::string out;
   if (g.failed > 0) out = std::to_string(g.failed) + " of " + std::to_string(g.runs) + " failed";
@@ -70,6 +71,11 @@ std::string apart_text(const ComparedGroup& g) {
     out += (out.empty() ? std::to_string(g.unreached) + " of " + std::to_string(g.runs)
                         : ", " + std::to_string(g.unreached)) +
            " did not converge";
+  }
+  if (g.diverging > 0) {
+    out += (out.empty() ? std::to_string(g.diverging) + " of " + std::to_string(g.runs)
+                        : ", " + std::to_string(g.diverging)) +
+           " diverging (loss above its start)";
   }
   if (g.unswitched > 0) {
     out += (out.empty() ? std::to_string(g.unswitched) + " of " + std::to_string(g.runs)
@@ -80,6 +86,10 @@ std::string apart_text(const ComparedGroup& g) {
 }
 
 }  // namespace
+
+bool index_tied(double a, double b) {
+  return std::abs(a - b) <= kIndexTieTolerance * std::max(std::abs(a), std::abs(b));
+}
 
 bool IndexComparison::compares(const IndexedFolder& folder) const {
   return metric == folder.message.metric && metric_text == folder.message.metric_text;
@@ -96,9 +106,11 @@ IndexComparison new_index_comparison(const IndexedFolder& folder, bool overlays)
              "By " + text + " (lower is better): per run folder and rule, the median over its "
              "runs (seeds, settings) that count, with their range in brackets and the digits "
              "their spread supports. Apart: runs that failed (a non-finite value, a failure, "
-             "divergence) or, where the metric is a cost, did not converge; they are not in the "
+             "divergence) or, where the metric is a cost, did not converge (diverging: ended above "
+             "the start); they are not in the "
              "median, and a rule with any is not ranked. Rank and × best: among the folder's "
-             "ranked rules. Options: the settings that differ from the experiment's defaults "
+             "ranked rules; medians within a relative 1e-9 of each other share a rank. "
+             "Options: the settings that differ from the experiment's defaults "
              "(every setting for an experiment this program does not know). Seconds: the median "
              "time of a run.",
              {},
@@ -122,15 +134,15 @@ HtmlTable index_comparison_rows(const IndexComparison& c, const IndexedFolder& f
   });
   std::map<std::size_t, std::size_t> rank;  // group → rank (ties share one)
   for (std::size_t r = 0; r < ranked.size(); ++r) {
-    const bool tie = r > 0 && folder.compared[ranked[r]].metric.median ==
-                                  folder.compared[ranked[r - 1]].metric.median;
+    const bool tie = r > 0 && index_tied(folder.compared[ranked[r - 1]].metric.median,
+                                          folder.compared[ranked[r]].metric.median);
     rank[ranked[r]] = tie ? rank[ranked[r - 1]] : r + 1;
   }
   for (std::size_t k = 0; k < folder.compared.size(); ++k) {
     const ComparedGroup& g = folder.compared[k];
     const bool is_ranked = rank.contains(k);
     std::string times = "–";
-    if (is_ranked && rank[k] == 1) {
+    if (is_ranked && rank[k] == 1) {  // every rule tied with the lowest is best
       times = "best";
     } else if (is_ranked && folder.compared[ranked.front()].metric.median > 0) {
       times = ratio_text(g.metric, folder.compared[ranked.front()].metric) + "×";
@@ -185,6 +197,8 @@ void overlay_index_curves(IndexComparison& c, const IndexedFolder& folder) {
                                         std::to_string(group->switched_at)});
         }
         if (group->failed > 0) s.end_label = std::to_string(group->failed) + " failed";
+        // A rule with a failed or diverging run never sets the axis range (as in the reports).
+        s.sets_range = group->failed == 0 && group->diverging == 0;
       }
       figure->second.push_back(std::move(s));
     }

@@ -34,7 +34,12 @@ using RunRecord = IndexedRun;
 std::vector<IndexAxes> index_axes_of(const IndexedFolder& folder) {
   const std::string& metric = folder.message.metric;
   std::string y_text = folder.message.metric_text;
-  if (y_text.rfind("final ", 0) == 0) y_text = y_text.substr(6);
+  // A curve over updates is neither a median of finals nor final: "median final test loss at
+  // λ = 1" is drawn as "test loss at λ = 1".
+  static const std::string kDropped[] = {"median ", "final "};
+  for (const std::string& prefix : kDropped) {
+    if (y_text.rfind(prefix, 0) == 0) y_text = y_text.substr(prefix.size());
+  }
   if (folder.learning) {
     return {{"iteration", "updates (iterations)", metric, y_text},
             {"wall_seconds", "training time (s, evaluations excluded)", metric, y_text}};

@@ -157,6 +157,8 @@ std::vector<RunRecord> read_index_summary(const json& summary, IndexedFolder& fo
                        index_number_field(run, "wall_seconds", where + "."),
                        index_summary_number(run, folder.message.metric),
                        index_text_field(run, "termination", where + ".", "–"), learning});
+    const json& initial = index_object_field(run, "initial", where + ".");
+    records.back().initial_loss = index_number_field(initial, "loss", where + ".initial.");
   }
   folder.learning = std::any_of(records.begin(), records.end(),
                                 [](const RunRecord& r) { return r.learning; });
@@ -282,7 +284,7 @@ void add_index_compared(IndexedFolder& folder, const std::vector<RunRecord>& run
       } else if (run->params.is_object() && run->params.value("switched", true) == false) {
         ++group.unswitched;
       } else if (cost && !index_converged_end(run->termination)) {
-        ++group.unreached;
+        ++(run->loss > run->initial_loss ? group.diverging : group.unreached);
       } else {
         values.push_back(run->metric);
       }

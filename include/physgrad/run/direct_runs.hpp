@@ -66,6 +66,10 @@ DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Object
 // ended (budget, or a stopping rule: Termination::kDiverged) with the loss above its start,
 // "> N" otherwise.
 std::string iterations_cell(const DirectResult& result);
+// The same outcome as a predicate for a sentence after the rule's name: "needs 12 iterations",
+// "diverged at iteration 7", "failed at iteration 7", "stalled at iteration 7", "is diverging
+// (L ×… after N)", "has not converged after N iterations".
+std::string outcome_phrase(const DirectResult& result);
 // The step size a rule actually runs with: "0.5", "line search from 1", "adaptive μ from 0.001".
 std::string step_size_text(const RuleSetup& rule);
 

@@ -33,6 +33,9 @@ struct RuleStanding {
   std::string label;
   std::string id;
   double final_value = NAN;
+  // The upper median of the finals (the median for an odd count): a level that at least half the
+  // runs reached, so that the median of their counts to reach it is a number for any seed count.
+  double reach_level = NAN;
   double seconds_per_update = NAN;
   int credited = 0, failed = 0;
   bool never_switched = false;  // a twin whose rule never took over

@@ -22,6 +22,9 @@ namespace physgrad::run {
 inline constexpr std::size_t kIndexDrawnFolders = 5;          // folders one overlay draws
 inline constexpr std::size_t kIndexOverlaySeries = 32;        // curves one overlay draws
 inline constexpr std::size_t kIndexOverlaidComparisons = 24;  // comparisons of a page with overlays
+// Medians within this relative difference share a rank (and "best"): |a − b| ≤ tol·max(|a|, |b|).
+inline constexpr double kIndexTieTolerance = 1e-9;
+bool index_tied(double a, double b);
 
 struct IndexComparison {
   std::string metric, metric_text;

@@ -32,11 +32,12 @@ struct ComparedGroup {
   std::string label, rule;
   std::size_t runs = 0, failed = 0, unreached = 0;
   std::size_t unswitched = 0;  // pretrained runs whose rule never took over: Adam's runs
+  std::size_t diverging = 0;   // of a cost metric: unconverged runs that ended above their start
   Spread metric, seconds;
   std::string ended;         // the distinct terminations, in the order first seen
   long long switched_at = -1;  // a pretrained run's last Adam iteration, when it switched
   bool ranked() const {
-    return failed == 0 && unreached == 0 && unswitched == 0 && metric.count > 0;
+    return failed == 0 && unreached == 0 && unswitched == 0 && diverging == 0 && metric.count > 0;
   }
 };
 
@@ -98,6 +99,7 @@ struct IndexedRun {
   double loss, test_loss, iterations, seconds, metric;  // NaN when absent
   std::string termination;
   bool learning;
+  double initial_loss = NAN;  // the loss at the start (NaN when absent)
 };
 // The experiment, message and runs (the first kIndexMaxRuns) of a summary.json; Error naming
 // the field that is not of its type.
