@@ -1,8 +1,9 @@
 // Every experiment's report and the index of their folders as a reader sees them: headless
-// Chromium shows each page in frames 420 px (a phone) and 1280 px (a laptop) wide, with a script
-// added that measures the laid-out page. At 420 px no figure or table reaches past the viewport
-// or hides part of itself behind a sideways scroll, and every figure shows its narrow layout; at
-// 1280 px its wide one; at both, no figure is drawn out of its shape, no text in a figure is
+// Chromium shows each page in frames 420 × 900 px (a phone) and 1280 × 800 px (a laptop), with a
+// script added that measures the laid-out page. At both no figure or table reaches past the
+// viewport or hides part of itself behind a sideways scroll and each report's message sentence
+// starts on the first screen; at 420 px every figure shows its narrow layout, at 1280 px its
+// wide one; at both, no figure is drawn out of its shape, no text in a figure is
 // below 11 px (scaled either way) and every rule in each figure (each
 // <g class="series">: its line and markers) has a visible mark that differs from every other
 // rule's of its panel in colour, dashes or marker shape — and from one it coincides with in
@@ -26,11 +27,13 @@ using physgrad::testing::run_chromium;
 namespace fs = std::filesystem;
 
 // The script each framed page runs once laid out. It logs "physgrad-layout FRAME WIDTH RIGHT
-// FIGURES TABLES SMALLEST SERIES WIDE NARROW STRETCHED": the viewport's width, the right edge of
-// the widest figure or table box, how many pixels of figures and of tables are hidden behind a
-// sideways scroll, the smallest text in a figure (px), how many series it checked, how many
-// figures show their wide and narrow layouts and how far (‰) the most stretched one is out of
-// its shape; and "physgrad-problem FRAME …" for each rule without a mark of its own.
+// FIGURES TABLES SMALLEST SERIES WIDE NARROW STRETCHED HEIGHT TOP BOTTOM PAGE": the viewport's
+// width, the right edge of the widest figure or table box, how many pixels of figures and of
+// tables are hidden behind a sideways scroll, the smallest text in a figure (px), how many series
+// it checked, how many figures show their wide and narrow layouts and how far (‰) the most
+// stretched one is out of its shape, the viewport's height, where the message sentence starts
+// and ends and the page's height; and "physgrad-problem FRAME …" for each rule without a mark of
+// its own.
 constexpr const char* kLayoutScript = R"js(
 window.addEventListener('load', () => {
   const frame = location.hash.slice(1);
@@ -113,12 +116,6 @@ window.addEventListener('load', () => {
   const box = sentence ? sentence.getBoundingClientRect() : null;
   const top = box ? Math.round(box.top + scrollY) : -1;
   const bottom = box ? Math.round(box.bottom + scrollY) : -1;
-  // Points of a plotted series (markers' circles, dots) without a hover value of their own.
-  let silent = 0;
-  for (const dot of document.querySelectorAll('g.series circle, g.series .dot')) {
-    if (!dot.querySelector('title') && !(dot.parentElement.tagName === 'g' &&
-                                         dot.parentElement.querySelector(':scope > title'))) ++silent;
-  }
   console.log('physgrad-layout ' + frame + ' ' + innerWidth + ' ' + Math.ceil(right) + ' ' +
               figures + ' ' + tables + ' ' + smallest.toFixed(2) + ' ' + checked + ' ' + wide +
               ' ' + narrow + ' ' + stretched + ' ' + innerHeight + ' ' + top + ' ' + bottom +
