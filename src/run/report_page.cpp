@@ -142,7 +142,7 @@ std::string reproduce_command(const Experiment& experiment, const Settings& sett
 
 std::string report_page_html(const Experiment& experiment, const Settings& settings,
                              const RunContext& context, const std::string& command_line,
-                             bool index_exists) {
+                             bool index_exists, const nlohmann::json& machine_json) {
   std::vector<HtmlSection> sections;
   // The message figure first, its sentence above it, so that the sentence is on the first
   // screen; then what the page is of, when, by what and on what machine, and the links.
@@ -153,7 +153,7 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
         .figures.push_back({figure.caption, figure.svg, figure.file,
                             is_message ? context.message() : std::string(), figure.row});
   }
-  const std::string machine = run_machine_text(run_machine());
+  const std::string machine = run_machine_text(machine_json);
   const bool leads = !message.figures.empty();
   if (leads) sections.push_back(std::move(message));
   sections.push_back({"", (leads ? experiment.description() + "\n\n" : std::string()) +

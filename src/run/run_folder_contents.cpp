@@ -93,11 +93,11 @@ bool is_result_file(const std::string& name) {
 
 void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
-                      const std::string& command_line) {
+                      const std::string& command_line, const nlohmann::json& summary) {
   write_file_atomic(staging, kConfigFile,
                     config_document(experiment, settings, command_line).dump(2) + "\n");
   write_file_atomic(staging, kMetricsFile, metrics_csv(context));
-  write_file_atomic(staging, kSummaryFile, summary_document(experiment, context).dump(2) + "\n");
+  write_file_atomic(staging, kSummaryFile, summary.dump(2) + "\n");
   for (const RunContext::Figure& figure : context.figures()) {
     if (!is_figure_file(figure.file)) {
       throw Error("figure file '" + figure.file + "': expected a name NAME.svg");
@@ -110,7 +110,8 @@ void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
   }
   write_file_atomic(staging, kReportFile,
                     report_page_html(experiment, settings, context, command_line,
-                                     run_index_beside(staging)));
+                                     run_index_beside(staging),
+                                     summary.value("machine", nlohmann::json::object())));
 }
 
 }  // namespace physgrad::run

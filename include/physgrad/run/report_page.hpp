@@ -8,9 +8,10 @@
 
 namespace physgrad::run {
 
+// The page of a finished run; `index_exists`: link ../index.html; `machine`: summary.json's.
 std::string report_page_html(const Experiment& experiment, const Settings& settings,
                              const RunContext& context, const std::string& command_line,
-                             bool index_exists = false);
+                             bool index_exists, const nlohmann::json& machine);
 
 // A number of a summary or settings document with 4 significant digits ("–" for null).
 std::string format_number(const nlohmann::json& value);
