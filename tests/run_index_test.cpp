@@ -104,7 +104,8 @@ TEST_F(RunIndex, TheIndexComparesFoldersByTheMessageMetric) {
   const std::vector<std::string> svgs = inline_svgs(table);
   ASSERT_EQ(svgs.size(), 2u);
   for (const std::string& svg : svgs) {
-    EXPECT_NE(svg.find(">x-distance to the nearest exact solution (log scale)</text>"), std::string::npos);
+    EXPECT_NE(svg.find(">x-distance to the nearest exact solution (log scale)</text>"),
+              std::string::npos);
     EXPECT_NE(svg.find("b: Adam (ξ=32)"), std::string::npos);
     EXPECT_EQ(svg.find("ξ=1)"), std::string::npos);
   }
