@@ -1,8 +1,9 @@
 // Every experiment's report and the index of their folders as a reader sees them: headless
-// Chromium shows each page in frames 420 px (a phone) and 1280 px (a laptop) wide, with a script
-// added that measures the laid-out page. At 420 px no figure or table reaches past the viewport
-// or hides part of itself behind a sideways scroll, and every figure shows its narrow layout; at
-// 1280 px its wide one; at both, no figure is drawn out of its shape, no text in a figure is
+// Chromium shows each page in frames 420 × 900 px (a phone) and 1280 × 800 px (a laptop), with a
+// script added that measures the laid-out page. At both no figure or table reaches past the
+// viewport or hides part of itself behind a sideways scroll and each report's message sentence
+// starts on the first screen; at 420 px every figure shows its narrow layout, at 1280 px its
+// wide one; at both, no figure is drawn out of its shape, no text in a figure is
 // below 11 px (scaled either way) and every rule in each figure (each
 // <g class="series">: its line and markers) has a visible mark that differs from every other
 // rule's of its panel in colour, dashes or marker shape — and from one it coincides with in
@@ -26,11 +27,13 @@ using physgrad::testing::run_chromium;
 namespace fs = std::filesystem;
 
 // The script each framed page runs once laid out. It logs "physgrad-layout FRAME WIDTH RIGHT
-// FIGURES TABLES SMALLEST SERIES WIDE NARROW STRETCHED": the viewport's width, the right edge of
-// the widest figure or table box, how many pixels of figures and of tables are hidden behind a
-// sideways scroll, the smallest text in a figure (px), how many series it checked, how many
-// figures show their wide and narrow layouts and how far (‰) the most stretched one is out of
-// its shape; and "physgrad-problem FRAME …" for each rule without a mark of its own.
+// FIGURES TABLES SMALLEST SERIES WIDE NARROW STRETCHED HEIGHT TOP BOTTOM PAGE": the viewport's
+// width, the right edge of the widest figure or table box, how many pixels of figures and of
+// tables are hidden behind a sideways scroll, the smallest text in a figure (px), how many series
+// it checked, how many figures show their wide and narrow layouts and how far (‰) the most
+// stretched one is out of its shape, the viewport's height, where the message sentence starts
+// and ends and the page's height; and "physgrad-problem FRAME …" for each rule without a mark of
+// its own.
 constexpr const char* kLayoutScript = R"js(
 window.addEventListener('load', () => {
   const frame = location.hash.slice(1);
@@ -108,9 +111,15 @@ window.addEventListener('load', () => {
       }
     }
   }
+  // Where the message sentence starts and ends on the page (px from its top; -1: none).
+  const sentence = document.querySelector('p.message');
+  const box = sentence ? sentence.getBoundingClientRect() : null;
+  const top = box ? Math.round(box.top + scrollY) : -1;
+  const bottom = box ? Math.round(box.bottom + scrollY) : -1;
   console.log('physgrad-layout ' + frame + ' ' + innerWidth + ' ' + Math.ceil(right) + ' ' +
               figures + ' ' + tables + ' ' + smallest.toFixed(2) + ' ' + checked + ' ' + wide +
-              ' ' + narrow + ' ' + stretched);
+              ' ' + narrow + ' ' + stretched + ' ' + innerHeight + ' ' + top + ' ' + bottom +
+              ' ' + document.documentElement.scrollHeight);
 });
 )js";
 
@@ -118,6 +127,7 @@ struct Layout {
   int width = 0, right = 0, figures_hidden = 0, tables_hidden = 0;
   double smallest = 0;
   int series = 0, wide = 0, narrow = 0, stretched = 0;
+  int height = 0, sentence_top = 0, sentence_bottom = 0, page_height = 0;
 };
 
 TEST_F(ReportPages, ChromiumShowsEveryPageAt420And1280PixelsWithAMarkForEveryRule) {
@@ -128,7 +138,8 @@ TEST_F(ReportPages, ChromiumShowsEveryPageAt420And1280PixelsWithAMarkForEveryRul
     pages.push_back(c.folder + "/report.html");
   }
   pages.push_back("index.html");
-  const std::vector<int> widths = {420, 1280};
+  // A phone (420 × 900) and a laptop (1280 × 800).
+  const std::vector<int> widths = {420, 1280}, heights = {900, 800};
   std::string frames;
   for (std::size_t k = 0; k < pages.size(); ++k) {
     std::string html = read_file(dir_ / pages[k]);
@@ -137,7 +148,8 @@ TEST_F(ReportPages, ChromiumShowsEveryPageAt420And1280PixelsWithAMarkForEveryRul
     std::ofstream(dir_ / page) << html;
     for (std::size_t w = 0; w < widths.size(); ++w) {
       frames += "<iframe src=\"" + page.string() + "#" + std::to_string(k * widths.size() + w) +
-                "\" width=\"" + std::to_string(widths[w]) + "\" height=\"700\"></iframe>\n";
+                "\" width=\"" + std::to_string(widths[w]) + "\" height=\"" +
+                std::to_string(heights[w]) + "\"></iframe>\n";
     }
   }
   std::ofstream(dir_ / "all.html") << "<!DOCTYPE html><html><body>\n" << frames << "</body></html>\n";
@@ -154,10 +166,11 @@ TEST_F(ReportPages, ChromiumShowsEveryPageAt420And1280PixelsWithAMarkForEveryRul
   for (const std::string& message : console_messages(console, "layout")) {
     std::size_t frame = 0;
     Layout l;
-    ASSERT_EQ(std::sscanf(message.c_str(), "%zu %d %d %d %d %lf %d %d %d %d", &frame, &l.width,
-                          &l.right, &l.figures_hidden, &l.tables_hidden, &l.smallest, &l.series,
-                          &l.wide, &l.narrow, &l.stretched),
-              10)
+    ASSERT_EQ(std::sscanf(message.c_str(), "%zu %d %d %d %d %lf %d %d %d %d %d %d %d %d", &frame,
+                          &l.width, &l.right, &l.figures_hidden, &l.tables_hidden, &l.smallest,
+                          &l.series, &l.wide, &l.narrow, &l.stretched, &l.height,
+                          &l.sentence_top, &l.sentence_bottom, &l.page_height),
+              14)
         << message;
     ASSERT_LT(frame, layouts.size());
     layouts[frame] = l;
@@ -175,8 +188,19 @@ TEST_F(ReportPages, ChromiumShowsEveryPageAt420And1280PixelsWithAMarkForEveryRul
     EXPECT_LE(l.right, width) << page << " at " << width << " px: a box reaches past the page";
     EXPECT_LE(l.figures_hidden, 1) << page << " at " << width << " px: part of a figure is "
                                    << "behind a sideways scroll";
+    std::printf("%s at %d px: page %d px tall, sentence at %d–%d px, tables hide %d px\n",
+                page.c_str(), width, l.page_height, l.sentence_top, l.sentence_bottom,
+                l.tables_hidden);
+    // No table wider than its box, at either width (settings wrap).
+    EXPECT_LE(l.tables_hidden, 1) << page << " at " << width << " px: part of a table is behind "
+                                  << "a sideways scroll";
+    // Every report's message sentence starts on the first screen.
+    if (page != "index.html") {
+      EXPECT_GE(l.sentence_top, 0) << page << ": no message sentence";
+      EXPECT_LT(l.sentence_top, l.height) << page << " at " << width << " px: the message "
+                                          << "sentence starts below the first screen";
+    }
     if (width == 420) {
-      EXPECT_LE(l.tables_hidden, 1) << page << ": part of a table is behind a sideways scroll";
       EXPECT_EQ(l.wide, 0) << page << ": a figure shows its wide layout on a phone";
     } else {
       EXPECT_EQ(l.narrow, 0) << page << ": a figure shows its narrow layout on a laptop";

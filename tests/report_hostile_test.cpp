@@ -162,8 +162,16 @@ class HostileFolders : public ReportPages {
     return pages;
   }
 
-  // The link in a console message of Chromium (a resolved address) is a file inside runs/.
-  void expect_local_file(const std::string& address, const std::string& page) const {
+  // The link in a console message of Chromium (a resolved address) is a file inside runs/, or
+  // a section anchor of the index's contents ("#s-" and lower-case letters, digits, '-').
+  void expect_local_file(std::string address, const std::string& page) const {
+    const std::size_t anchor = address.find("#s-");
+    if (page == "index.html" && anchor != std::string::npos) {
+      EXPECT_EQ(address.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-", anchor + 3),
+                std::string::npos)
+          << page << " links to " << address;
+      address.erase(anchor);
+    }
     const std::string prefix = "file://" + (dir_ / "runs").string() + "/";
     EXPECT_EQ(address.rfind(prefix, 0), 0u) << page << " links to " << address;
     EXPECT_EQ(address.find_first_of("?#"), std::string::npos) << page << " links to " << address;
@@ -185,6 +193,12 @@ TEST_F(HostileFolders, NamesAndLabelsGiveLocalLinksAndValidPages) {
     EXPECT_EQ(html.find("<script"), std::string::npos) << page;
     for (const std::string& link : link_attributes(html)) {
       ++links;
+      if (link.rfind("#s-", 0) == 0) {  // the index's contents: an anchor on the page
+        EXPECT_EQ(link.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-", 1),
+                  std::string::npos) << page << ": " << link;
+        EXPECT_NE(html.find("id=\"" + link.substr(1) + "\""), std::string::npos) << link;
+        continue;
+      }
       // A report's link to the index in the folder above, else a file in the page's folder.
       const bool up = link == "../index.html" && page != "index.html";
       EXPECT_EQ(link.compare(up ? 1 : 0, 2, "./"), 0) << page << ": " << link;

@@ -23,7 +23,7 @@ table{border-collapse:collapse;font-size:.9em}
 p.caption{font-weight:600;margin:1.2em 0 .3em}
 .table{overflow-x:auto;max-width:100%;margin:0 0 1em}
 p.links a{margin-right:1em}
-th,td{border:1px solid #ccc;padding:.3em .7em;text-align:right;white-space:nowrap}
+th,td{border:1px solid #ccc;padding:.3em .7em;text-align:right;overflow-wrap:break-word}
 th{background:#f3f3f3}
 th:first-child,td:first-child{text-align:left}
 .figures{display:flex;flex-wrap:wrap;gap:1.5em;align-items:flex-start}
@@ -205,8 +205,27 @@ std::string html_page_open(const std::string& title, const std::string& intro) {
          "<h1>" + xml_escape(title) + "</h1>\n" + html_paragraphs(intro);
 }
 
+std::string html_anchor_id(std::string_view text) {
+  std::string out = "s-";
+  for (const char c : text) {
+    const bool keep = (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9');
+    out += keep ? c : (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : '-';
+  }
+  return out;
+}
+
+std::string html_contents(const std::vector<std::pair<std::string, std::string>>& entries) {
+  std::string out = "<nav class=\"contents\"><p class=\"links\">Contents:";
+  for (const auto& [text, id] : entries) {
+    out += " <a href=\"#" + html_anchor_id(id) + "\">" + xml_escape(text) + "</a>";
+  }
+  return out + "</p></nav>\n";
+}
+
 std::string html_section_open(const HtmlSection& section) {
-  std::string out = "<section>\n";
+  std::string out = section.id.empty()
+                        ? std::string("<section>\n")
+                        : "<section id=\"" + html_anchor_id(section.id) + "\">\n";
   if (!section.heading.empty()) out += "<h2>" + xml_escape(section.heading) + "</h2>\n";
   if (!section.links.empty()) {
     out += "<p class=\"links\">";
@@ -235,16 +254,16 @@ std::string html_figures(const std::vector<HtmlFigure>& figures) {
             ? figure.svg
             : svg::switched_below(figure.svg, readable_width(svg::layouts(figure.svg).wide) +
                                                   kPageMargins);
+    // The message sentence above the figure, so that it is read first (and on the first screen).
     out += (figure.id.empty() ? std::string("<figure>\n")
                               : "<figure id=\"" + xml_escape(figure.id) + "\">\n") +
+           (figure.message.empty()
+                ? std::string()
+                : "<p class=\"message\">" + xml_escape(figure.message) + "</p>\n") +
            "<div class=\"figure-scroll\"><div style=\"min-width:" +
            std::to_string(readable_width(narrow)) + "px\">\n" + svg + "</div></div>\n";
-    if (!figure.message.empty() || !figure.caption.empty()) {
-      out += "<figcaption>" +
-             (figure.message.empty()
-                  ? std::string()
-                  : "<p class=\"message\">" + xml_escape(figure.message) + "</p>") +
-             xml_escape(figure.caption) + "</figcaption>\n";
+    if (!figure.caption.empty()) {
+      out += "<figcaption>" + xml_escape(figure.caption) + "</figcaption>\n";
     }
     out += "</figure>\n";
   }

@@ -18,6 +18,12 @@ namespace physgrad {
 
 namespace {
 
+// An axis label that says its axis is logarithmic: "loss (log scale)".
+std::string log_marked(const std::string& label, bool log) {
+  if (!log) return label;
+  return label.empty() ? "log scale" : label + " (log scale)";
+}
+
 using plot::Axis;
 using plot::Box;
 using plot::Point;
@@ -232,14 +238,18 @@ std::string draw_line_plot(const std::vector<Series>& series, const LinePlotOpti
       group += plot::markers_svg(points, bounds, shape, size, color, every,
                                  retraced * std::max<std::size_t>(1, every / 3));
     }
+    // Every point its values on hover, with the band's ends (e.g. the seeds' range) where drawn.
     std::vector<plot::HoverPoint> targets;
+    const bool band = has_band(s);
     for (std::size_t k = 0; k < s.x.size(); ++k) {
       const Point p{ax.scale(s.x[k]), y_pixel(s.y[k])};
-      if (std::isfinite(p.x) && std::isfinite(p.y)) targets.push_back({p, s.x[k], s.y[k]});
+      if (!(std::isfinite(p.x) && std::isfinite(p.y))) continue;
+      targets.push_back({p, s.x[k], s.y[k], band ? s.band_low[k] : NAN,
+                         band ? s.band_high[k] : NAN});
     }
     hover += plot::hover_targets(targets, box, s.label,
                                  options.x_label.empty() ? "x" : options.x_label,
-                                 options.y_label.empty() ? "y" : options.y_label);
+                                 options.y_label.empty() ? "y" : options.y_label, targets.size());
     for (const Series::Mark& mark : s.marks) {
       const Point p{ax.scale(mark.x), y_pixel(mark.y)};
       if (!(std::isfinite(p.x) && std::isfinite(p.y) && svg::inside(p, box))) continue;
@@ -303,7 +313,8 @@ std::string draw_line_plot(const std::vector<Series>& series, const LinePlotOpti
   return svg::open(options.width, height) + plot::grid_lines(box, ax, ay) +
          svg::clipped(svg::grow(box, 3, 3), content) +
          plot::axes(options.width, box, ax, ay,
-                    {options.title, options.x_label, options.y_label}) +
+                    {options.title, log_marked(options.x_label, options.log_x),
+                     log_marked(options.y_label, options.log_y)}) +
          notes + hover + legend.svg + "</svg>\n";
 }
 

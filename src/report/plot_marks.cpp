@@ -71,7 +71,10 @@ std::string hover_targets(const std::vector<HoverPoint>& points, const svg::Box&
     const HoverPoint& p = *inside[k];
     out += "<circle cx=\"" + num(p.pixel.x) + "\" cy=\"" + num(p.pixel.y) + "\" r=\"5\"><title>" +
            xml_escape((label.empty() ? "" : label + ": ") + x_name + " = " + short_number(p.x) +
-                      ", " + y_name + " = " + short_number(p.y)) +
+                      ", " + y_name + " = " + short_number(p.y) +
+                      (std::isfinite(p.low) && std::isfinite(p.high)
+                           ? " (from " + short_number(p.low) + " to " + short_number(p.high) + ")"
+                           : std::string())) +
            "</title></circle>\n";
   }
   return out + "</g>\n";

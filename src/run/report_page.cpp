@@ -1,11 +1,14 @@
 #include "physgrad/run/report_page.hpp"
 
+#include <charconv>
 #include <chrono>
+#include <cmath>
 #include <ctime>
 #include <sstream>
 
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/run/run_folder.hpp"
+#include "physgrad/run/run_machine.hpp"
 
 namespace physgrad::run {
 
@@ -21,29 +24,29 @@ std::string report_time_now() {
   return text;
 }
 
-// The links to the folder's files and to the index of the folder above (`physgrad report`).
-std::vector<HtmlLink> report_links(const RunContext& context) {
+// The links to the folder's files and, when it exists, to the index of the folder above.
+std::vector<HtmlLink> report_links(const RunContext& context, bool index_exists) {
   std::vector<HtmlLink> links = {{"metrics.csv (every evaluation)", "metrics.csv"},
                                  {"summary.json (how each run ended)", kSummaryFile},
                                  {"config.json (the settings)", kConfigFile}};
   if (!context.networks().empty()) {
     links.push_back({"networks.json (the trained networks)", "networks.json"});
   }
-  links.push_back({"index of the run folders (physgrad report)", "index.html", true});
+  if (index_exists) {  // a link to nothing until `physgrad report` writes the index
+    links.push_back({"index of the run folders (physgrad report)", "index.html", true});
+  }
   return links;
 }
 
-// A setting's value as the table of options shows it: lists joined by commas, "unset" for none.
-std::string report_option_text(const nlohmann::json& value) {
-  if (value.is_null()) return "unset";
-  if (value.is_string()) return value.get<std::string>();
-  if (!value.is_array()) return format_number(value);
-  std::string out;
-  for (const nlohmann::json& item : value) {
-    if (!out.empty()) out += ',';
-    out += report_option_text(item);
-  }
-  return out;
+// A text as one shell word: unchanged when it needs no quotes, else in single quotes.
+std::string shell_word(const std::string& text) {
+  const bool plain = !text.empty() && text.find_first_not_of(
+                                          "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz"
+                                          "0123456789._,/:=+-@%") == std::string::npos;
+  if (plain) return text;
+  std::string out = "'";
+  for (const char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
 }
 
 // Every option with the value the run had and the default, those changed first marked.
@@ -54,7 +57,7 @@ HtmlTable report_options_table(const Experiment& experiment, const Settings& set
                   "default is the value when the option is not given"};
   for (const OptionSpec& spec : all_options(experiment)) {
     const nlohmann::json value = settings.json().value(spec.name, nlohmann::json());
-    table.rows.push_back({"--" + spec.name, report_option_text(value),
+    table.rows.push_back({"--" + spec.name, option_value_text(value),
                           spec.default_text.empty() ? "unset" : spec.default_text});
   }
   return table;
@@ -102,14 +105,47 @@ std::string format_number(const nlohmann::json& value) {
   return out.str();
 }
 
+std::string option_value_text(const nlohmann::json& value) {
+  if (value.is_null()) return "unset";
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_boolean()) return value.get<bool>() ? "true" : "false";
+  if (value.is_number_integer()) return value.dump();
+  if (value.is_number()) {
+    const double v = value.get<double>();
+    // Whole numbers as integers (10000, never 1e+04), others as the shortest text that reads
+    // back to the same double.
+    if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 1e15) {
+      return std::to_string(static_cast<long long>(v));
+    }
+    char text[32];
+    const auto end = std::to_chars(text, text + sizeof text, v).ptr;
+    return std::string(text, end);
+  }
+  std::string out;
+  for (const nlohmann::json& item : value) {
+    if (!out.empty()) out += ',';
+    out += option_value_text(item);
+  }
+  return out;
+}
+
+std::string reproduce_command(const Experiment& experiment, const Settings& settings) {
+  std::string out = "physgrad run " + experiment.name();
+  for (const OptionSpec& spec : all_options(experiment)) {
+    if (spec.name == "out") continue;  // a fresh folder under runs/ each time
+    const nlohmann::json value = settings.json().value(spec.name, nlohmann::json());
+    if (value.is_null()) continue;
+    out += " --" + spec.name + " " + shell_word(option_value_text(value));
+  }
+  return out;
+}
+
 std::string report_page_html(const Experiment& experiment, const Settings& settings,
-                             const RunContext& context, const std::string& command_line) {
+                             const RunContext& context, const std::string& command_line,
+                             bool index_exists, const nlohmann::json& machine_json) {
   std::vector<HtmlSection> sections;
-  // What the page is of, when and by what, and the links to the folder's files.
-  sections.push_back({"", "Written " + report_time_now() + " by physgrad " + PHYSGRAD_VERSION +
-                              "; the command and every option are under Settings at the end.",
-                      {}, {}, report_links(context)});
-  // The message figure first, in a section of its own, with its sentence under it.
+  // The message figure first, its sentence above it, so that the sentence is on the first
+  // screen; then what the page is of, when, by what and on what machine, and the links.
   HtmlSection message{"", "", {}, {}}, figures{"Figures", "", {}, {}};
   for (const RunContext::Figure& figure : context.figures()) {
     const bool is_message = figure.file == context.message_figure();
@@ -117,7 +153,14 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
         .figures.push_back({figure.caption, figure.svg, figure.file,
                             is_message ? context.message() : std::string(), figure.row});
   }
-  if (!message.figures.empty()) sections.push_back(std::move(message));
+  const std::string machine = run_machine_text(machine_json);
+  const bool leads = !message.figures.empty();
+  if (leads) sections.push_back(std::move(message));
+  sections.push_back({"", (leads ? experiment.description() + "\n\n" : std::string()) +
+                              "Written " + report_time_now() + " by physgrad " +
+                              PHYSGRAD_VERSION + " (" + machine +
+                              "); the command and every option are under Settings at the end.",
+                      {}, {}, report_links(context, index_exists)});
   HtmlSection results{"Results",
                       is_learning(context)
                           ? "Losses in these tables are measured on the test set (samples not "
@@ -137,12 +180,15 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
                       {{"metrics.csv: every evaluation of every run", "metrics.csv"}}});
   sections.push_back({"Settings",
                       "physgrad " + std::string(PHYSGRAD_VERSION) + ", report written " +
-                          report_time_now() + ".\n\nCommand: " +
+                          report_time_now() + ".\n\nMachine: " + machine +
+                          ".\n\nTo run it again (into a new folder under runs/): " +
+                          reproduce_command(experiment, settings) + "\n\nCommand as typed: " +
                           (command_line.empty() ? "(not recorded)" : command_line),
                       {report_options_table(experiment, settings)},
                       {},
                       {{"config.json", kConfigFile}}});
-  return html_report(experiment.name() + " — physgrad", experiment.description(), sections);
+  return html_report(experiment.name() + " — physgrad", leads ? "" : experiment.description(),
+                     sections);
 }
 
 }  // namespace physgrad::run

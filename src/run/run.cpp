@@ -97,7 +97,7 @@ RunOutcome run_in(const Experiment& experiment, const Settings& settings,
     outcome.summary = summary_document(experiment, context);
     outcome.tables = context.tables();
     if (!writer) return outcome;
-    write_run_folder(folder->staging(), experiment, settings, context, command);
+    write_run_folder(folder->staging(), experiment, settings, context, command, outcome.summary);
     folder->commit();
     outcome.folder = folder->shown_now();
     outcome.report = outcome.folder / "report.html";

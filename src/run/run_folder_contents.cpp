@@ -2,12 +2,16 @@
 // into the staging folder before commit (write_run_folder, run_folder.hpp).
 #include "physgrad/run/run_folder.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <set>
 
 #include "physgrad/error.hpp"
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/io/csv.hpp"
 #include "physgrad/run/report_page.hpp"
+#include "physgrad/run/run_machine.hpp"
 
 namespace physgrad::run {
 
@@ -54,6 +58,11 @@ std::string metrics_csv(const RunContext& context) {
   return table.str();
 }
 
+// Whether the folder holding the run folder (staging is RUN/.staging) has an index.html.
+bool run_index_beside(const FolderHandle& staging) {
+  return ::faccessat(staging.fd(), "../../index.html", F_OK, 0) == 0;
+}
+
 }  // namespace
 
 nlohmann::json config_document(const Experiment& experiment, const Settings& settings,
@@ -64,7 +73,8 @@ nlohmann::json config_document(const Experiment& experiment, const Settings& set
 }
 
 nlohmann::json summary_document(const Experiment& experiment, const RunContext& context) {
-  nlohmann::json summary = {{"experiment", experiment.name()}, {"runs", context.runs()}};
+  nlohmann::json summary = {
+      {"experiment", experiment.name()}, {"runs", context.runs()}, {"machine", run_machine()}};
   if (!context.message_figure().empty()) {
     const MessageMetric& metric = context.message_metric();
     summary["message"] = {{"figure", context.message_figure()},
@@ -83,11 +93,11 @@ bool is_result_file(const std::string& name) {
 
 void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
-                      const std::string& command_line) {
+                      const std::string& command_line, const nlohmann::json& summary) {
   write_file_atomic(staging, kConfigFile,
                     config_document(experiment, settings, command_line).dump(2) + "\n");
   write_file_atomic(staging, kMetricsFile, metrics_csv(context));
-  write_file_atomic(staging, kSummaryFile, summary_document(experiment, context).dump(2) + "\n");
+  write_file_atomic(staging, kSummaryFile, summary.dump(2) + "\n");
   for (const RunContext::Figure& figure : context.figures()) {
     if (!is_figure_file(figure.file)) {
       throw Error("figure file '" + figure.file + "': expected a name NAME.svg");
@@ -99,7 +109,9 @@ void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
                       nlohmann::json{{"networks", context.networks()}}.dump() + "\n");
   }
   write_file_atomic(staging, kReportFile,
-                    report_page_html(experiment, settings, context, command_line));
+                    report_page_html(experiment, settings, context, command_line,
+                                     run_index_beside(staging),
+                                     summary.value("machine", nlohmann::json::object())));
 }
 
 }  // namespace physgrad::run

@@ -198,13 +198,19 @@ struct IndexPage {
                             (notes.empty() ? "."
                                            : "; some of what they hold is left out, as listed "
                                              "below.")));
+    std::vector<std::pair<std::string, std::string>> contents;
+    if (!notes.empty()) contents.emplace_back("Left out", "Left out");
+    for (const ExperimentSection& e : experiments) contents.emplace_back(e.name, e.name);
+    contents.emplace_back("Every run", "Every run");
+    contents.emplace_back("Commands", "Commands");
+    sink(html_contents(contents));
     if (!notes.empty()) {
-      sink(html_section_open({"Left out", "", {}, {}}));
+      sink(html_section_open({"Left out", "", {}, {}, {}, "Left out"}));
       copy(notes);
       sink(kHtmlSectionClose);
     }
     for (const ExperimentSection& e : experiments) {
-      sink(html_section_open({e.name, "", {}, {}}));
+      sink(html_section_open({e.name, "", {}, {}, {}, e.name}));
       copy(e.sentences);
       for (const IndexComparison& c : e.comparisons) {
         sink(html_table_open(c.table));
@@ -214,12 +220,12 @@ struct IndexPage {
       }
       sink(kHtmlSectionClose);
     }
-    sink(html_section_open({"Every run", "", {}, {}}));
+    sink(html_section_open({"Every run", "", {}, {}, {}, "Every run"}));
     sink(html_table_open(every_run_header));
     copy(every_run);
     sink(kHtmlTableClose);
     sink(kHtmlSectionClose);
-    sink(html_section_open({"Commands", "", {}, {}}));
+    sink(html_section_open({"Commands", "", {}, {}, {}, "Commands"}));
     copy(commands);
     sink(kHtmlSectionClose);
     sink(kHtmlPageClose);

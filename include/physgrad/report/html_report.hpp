@@ -28,7 +28,7 @@ struct HtmlFigure {
   std::string caption;
   std::string svg;  // an SVG document, embedded as is
   std::string id{};  // the figure element's id (an anchor), e.g. its file name; empty: none
-  std::string message{};  // the point the figure makes, in one sentence, shown above the caption
+  std::string message{};  // the point the figure makes, in one sentence, shown above the figure
   // Consecutive figures of one row key share a row (e.g. one setting's landscape beside its loss
   // plot), wrapping only when the page is too narrow; a new key starts a new row.
   std::string row{};
@@ -48,7 +48,15 @@ struct HtmlSection {
   std::vector<HtmlTable> tables;
   std::vector<HtmlFigure> figures;
   std::vector<HtmlLink> links{};  // one line of links under the heading
+  std::string id{};  // the section's anchor (html_anchor_id of it); empty: none
 };
+
+// A text as an element id: lower-case letters, digits and '-' (every other character '-'),
+// prefixed by "s-"; "Every run" → "s-every-run".
+std::string html_anchor_id(std::string_view text);
+
+// A table of contents: one line of links to the sections' anchors, (text, id) each.
+std::string html_contents(const std::vector<std::pair<std::string, std::string>>& entries);
 
 // The address of a file inside the page's folder, for href and src: "./" and the path's
 // '/'-separated segments, each percent-encoded but for RFC 3986's unreserved characters

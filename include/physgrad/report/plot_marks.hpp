@@ -3,6 +3,7 @@
 // a curve (e.g. where a pretrained run switched rules).
 #pragma once
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -24,9 +25,12 @@ std::string markers_svg(const std::vector<svg::Polyline>& pieces, const svg::Box
 
 // One hover target per point (at most `most`, evenly spread over the points) inside `bounds`:
 // a transparent circle whose <title> reads "LABEL: X_NAME = x, Y_NAME = y".
+// With a finite low and high, the title adds "(from low to high)" (a band's ends, e.g. the
+// seeds' range around their median).
 struct HoverPoint {
   svg::Point pixel;
   double x, y;
+  double low = NAN, high = NAN;
 };
 std::string hover_targets(const std::vector<HoverPoint>& points, const svg::Box& bounds,
                           const std::string& label, const std::string& x_name,

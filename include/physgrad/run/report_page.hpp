@@ -8,10 +8,21 @@
 
 namespace physgrad::run {
 
+// The page of a finished run; `index_exists`: link ../index.html; `machine`: summary.json's.
 std::string report_page_html(const Experiment& experiment, const Settings& settings,
-                             const RunContext& context, const std::string& command_line);
+                             const RunContext& context, const std::string& command_line,
+                             bool index_exists, const nlohmann::json& machine);
 
 // A number of a summary or settings document with 4 significant digits ("–" for null).
 std::string format_number(const nlohmann::json& value);
+
+// A setting's value as the command line takes it: whole numbers as integers ("10000"), other
+// numbers as the shortest text that reads back exactly, lists joined by commas, "unset" for none.
+std::string option_value_text(const nlohmann::json& value);
+
+// "physgrad run NAME --option value …": every set option but --out (so that each run of it
+// writes a fresh folder under runs/), values as option_value_text() gives them, shell-quoted
+// where needed.
+std::string reproduce_command(const Experiment& experiment, const Settings& settings);
 
 }  // namespace physgrad::run

@@ -94,11 +94,11 @@ class RunFolder {
 nlohmann::json config_document(const Experiment& experiment, const Settings& settings,
                                const std::string& command_line);
 
-// Writes config.json, metrics.csv, summary.json, the figures, networks.json and report.html
-// into `staging`, through its handle.
+// Writes config.json, metrics.csv, summary.json (`summary`, of summary_document()), the figures,
+// networks.json and report.html into `staging`, through its handle.
 void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
-                      const std::string& command_line);
+                      const std::string& command_line, const nlohmann::json& summary);
 // True for the name of a file write_run_folder() writes: what a commit cut short leaves in an
 // unfinished folder besides config.json and the checkpoint.
 bool is_result_file(const std::string& name);
