@@ -5,7 +5,8 @@ an initial state x, the simulator diffuses it (FFT, exp(−D k²) per mode), los
 averaged over the batch. Prints (1) the cosine of each structured update (KFAC, KFACHIG,
 LanczosGN, LanczosHIG) to the exact one (GN for κ = 1, HIG for κ = ½) at initialisation and
 after 200 Adam steps, and (2) the test loss after N updates of every rule and of Adam, and of
-Adam given the same seconds as the rule took. Usage: torch_structured_cnn.py [N] [seed]
+Adam given the same seconds as the rule took.
+Usage: torch_structured_cnn.py [N] [seed]   (--quick: N = 3, 10 Adam steps)
 """
 
 import copy
@@ -108,8 +109,11 @@ LR = {}
 
 
 def main():
-    updates = int(sys.argv[1]) if len(sys.argv) > 1 else 100
-    seed = int(sys.argv[2]) if len(sys.argv) > 2 else 0
+    args = [a for a in sys.argv[1:] if a != "--quick"]
+    quick = "--quick" in sys.argv[1:]
+    updates = 3 if quick else int(args[0]) if args else 100
+    seed = int(args[1]) if len(args) > 1 else 0
+    warmup = 10 if quick else 200
     data = (make_data(8 * BATCH, seed), make_data(256, seed + 1))
     model = make_model(seed)
     print(f"1-D CNN, {sum(p.numel() for p in model.parameters())} weights, {CELLS} cells, "
@@ -118,10 +122,10 @@ def main():
     at_init = cosines(model, x, t)
     adam_model = copy.deepcopy(model)
     adam = lambda m: (torch.optim.Adam(m.parameters(), lr=1e-3), None)  # noqa: E731
-    train(adam, adam_model, data, 200)
+    train(adam, adam_model, data, warmup)
     after = cosines(adam_model, x, t)
     print("\ncosine to the exact update (GN for κ = 1, HIG for κ = ½), lr 1, one batch")
-    print(f"{'rule':<11} {'at init':>8} {'after 200 Adam':>15}")
+    print(f"{'rule':<11} {'at init':>8} {'after ' + str(warmup) + ' Adam':>15}")
     for name in at_init:
         print(f"{name:<11} {at_init[name]:8.4f} {after[name]:15.4f}")
     # The step size of each rule: the best of three on a short run (a fifth of the updates).

@@ -1,5 +1,5 @@
-// Learning from PyTorch: the options of the structured rules (kfac, kfac-hig, lanczos-gn,
-// lanczos-hig) checked by the library, and their first step on a given Mlp θ, batch and P = diag(s).
+// Learning from PyTorch: the structured rules' options (kfac, kfac-hig, lanczos-gn, lanczos-hig)
+// checked by the library, and their first step on a given Mlp θ, batch and P = diag(s).
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 

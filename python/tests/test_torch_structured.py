@@ -207,3 +207,26 @@ def test_float32_steps_in_float32_and_agree_with_float64(cls):
     # the Kronecker factors' eigenvalues are better separated.
     tolerance = 5e-2 if cls is pt.LanczosHIG else 1e-3
     assert float((steps[0] - steps[1]).norm()) <= tolerance * float(steps[1].norm())
+
+
+def test_the_lanczos_products_are_the_jacobian_by_central_differences():
+    model, simulate, inputs, targets = _mlp()
+    opt = pt.LanczosGN(model.parameters(), model)
+    batch = pt.structured_closure(model, simulate, _loss, inputs, targets)()
+    pairs = opt._trainable()
+    forward, backward = opt._products(batch, pairs)
+    torch.manual_seed(3)
+    w = torch.randn(sum(p.numel() for _, p in pairs), dtype=torch.float64)
+    c = torch.randn(batch.dl_dy.numel(), dtype=torch.float64)
+    theta = torch.nn.utils.parameters_to_vector(model.parameters()).detach()
+    ys = []
+    for sign in (1, -1):
+        torch.nn.utils.vector_to_parameters(theta + sign * 1e-6 * w, model.parameters())
+        with torch.no_grad():
+            ys.append(batch.forward().reshape(-1))
+    torch.nn.utils.vector_to_parameters(theta, model.parameters())
+    difference = (ys[0] - ys[1]) / 2e-6
+    with torch.enable_grad():
+        jw, jtc = forward(w), backward(c)
+    torch.testing.assert_close(jw, difference, rtol=1e-7, atol=1e-8)
+    torch.testing.assert_close(float(jtc @ w), float(c @ jw), rtol=1e-12, atol=0)
