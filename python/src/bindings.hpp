@@ -18,6 +18,7 @@ void bind_learning(pybind11::module_& m);     // HIG/GN steps, reference steps (
 void bind_sip(pybind11::module_& m);          // SIP's options and targets (sip.cpp)
 void bind_experiments(pybind11::module_& m);  // experiments and run folders (experiments.cpp)
 void bind_own_experiments(pybind11::module_& m);  // LearningExperiment (own_experiments.cpp)
+void bind_structured(pybind11::module_& m);  // kfac, lanczos options and steps (structured.cpp)
 
 // The Registry of the reference experiments and of `own` (None, or a list of the script's
 // physgrad.LearningExperiment): what a run, a resume or an index of them is given.

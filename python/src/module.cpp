@@ -34,4 +34,5 @@ PYBIND11_MODULE(_physgrad, m) {
   physgrad::python::bind_sip(m);
   physgrad::python::bind_experiments(m);
   physgrad::python::bind_own_experiments(m);
+  physgrad::python::bind_structured(m);
 }
