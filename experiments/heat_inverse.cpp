@@ -168,7 +168,7 @@ class HeatInverse final : public LearningExperiment {
   // 8·cells² weights (8n⁴ in 2-D), and a rule keeps a few vectors that long.
   void check(const Settings& settings) const override {
     if (uses_unet(settings)) {
-      check_unet(settings, axis_cells(settings));
+      check_unet(settings, static_cast<int>(settings.integer("dims")), axis_cells(settings));
       return;
     }
     if (settings.integer("dims") == 2 && settings.has("n") && settings.integer("n") > 32) {
@@ -317,7 +317,7 @@ class HeatInverse final : public LearningExperiment {
       for (const TrainingRecord& r : run->summary.history) {
         if (r.iteration == 49) return r.extras["x_loss"].get<double>();
       }
-      return NAN;
+      return std::nan("");
     };
     const LearningResult* sip = nullptr;
     const LearningResult* adam = nullptr;
@@ -327,7 +327,7 @@ class HeatInverse final : public LearningExperiment {
     }
     const auto shown = [](double v) { return std::isfinite(v) ? format_value(v) : "–"; };
     const auto final_l1 = [](const LearningResult* run) {
-      return run == nullptr ? NAN : run->summary.history.back().extras["x_l1"].get<double>();
+      return run == nullptr ? std::nan("") : run->summary.history.back().extras["x_l1"].get<double>();
     };
     const double sip_49 = sip ? at_49(sip) : NAN, adam_49 = adam ? at_49(adam) : NAN;
     return {"Published values (docs/reference_experiments.md: the book's notebook at step 49, "

@@ -9,7 +9,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
-#include "physgrad/report/colors.hpp"
+#include "physgrad/run/rule_colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/svg_document.hpp"
 #include "physgrad/run/learning_verdict.hpp"

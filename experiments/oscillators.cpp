@@ -9,7 +9,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"
-#include "physgrad/report/colors.hpp"
+#include "physgrad/run/rule_colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/run/sampling.hpp"
 

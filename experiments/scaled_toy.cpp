@@ -5,6 +5,7 @@
 
 #include "physgrad/run/direct_runs.hpp"
 #include "physgrad/run/learning_verdict.hpp"  // ratio_text
+#include "physgrad/run/rule_colors.hpp"
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "physgrad/run/direct_runs.hpp"
+#include "physgrad/run/rule_colors.hpp"
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"

@@ -9,7 +9,7 @@
 #include "physgrad/run/learning_experiment.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/sin_rotation.hpp"
-#include "physgrad/report/colors.hpp"
+#include "physgrad/run/rule_colors.hpp"
 #include "physgrad/report/landscape.hpp"
 #include "physgrad/run/sampling.hpp"
 

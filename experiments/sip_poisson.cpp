@@ -74,7 +74,7 @@ class SipPoisson final : public LearningExperiment {
     return unet_shape(unet_of(settings, 2, n), n * n);
   }
   void check(const Settings& settings) const override {
-    check_unet(settings, settings.integer("n"));
+    check_unet(settings, 2, settings.integer("n"));
   }
 
   void run(const Settings& settings, RunContext& context) const override {

@@ -4,6 +4,7 @@
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
+#include "physgrad/memory.hpp"
 
 namespace physgrad::experiments {
 
@@ -40,7 +41,9 @@ UNetOptions unet_of(const run::Settings& settings, int dims, Index n) {
   return options;
 }
 
-void check_unet(const run::Settings& settings, Index n) {
+void check_unet(const run::Settings& settings, int dims, Index n) {
+  require_memory(unet_sample_bytes(unet_of(settings, dims, n), 0),
+                 "--n: " + std::to_string(n) + " cells per axis (one sample's U-net activations)");
   const long long levels = settings.integer("levels");
   const long long factor = 1LL << (levels - 1);
   if (n % factor != 0) {

@@ -18,11 +18,11 @@ std::vector<run::OptionSpec> unet_option_specs(const std::string& padding);
 // The U-net of `settings` for fields of n^dims cells, one channel in and one out.
 UNetOptions unet_of(const run::Settings& settings, int dims, Index n);
 
-// Throws Error unless n is a multiple of 2^(levels − 1) (each level halves the grid), and when batch
-// norm is on while a selected rule (or the Adam→rule twin of --pretrain) needs per-sample
+// Throws Error when one sample's activations exceed the memory, unless n is a multiple of
+// 2^(levels − 1) (each level halves the grid), and when batch norm is on while a selected rule (or the Adam→rule twin of --pretrain) needs per-sample
 // Jacobians: batch norm normalises with the batch's own statistics, so one sample's output depends
 // on the others and J of per-sample rows is not defined; those rules need --batch-norm off.
-void check_unet(const run::Settings& settings, Index n);
+void check_unet(const run::Settings& settings, int dims, Index n);
 
 // Throws Error when batch norm is on and the run's batches are shared among several processes
 // (MPI): each rank would normalise its share with its own statistics, so the run would differ from

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace physgrad::testing {
 
@@ -60,20 +61,32 @@ inline bool is_finished(const fs::path& folder) {
 // A run folder's metrics.csv without its wall-clock column: what an interrupted and resumed run
 // must reproduce exactly.
 inline std::string metrics_without_time(const fs::path& folder) {
+  // The fields of a CSV line; a quoted field may hold commas (a label such as "Adam (2-D, n=8)").
+  const auto fields = [](const std::string& line) {
+    std::vector<std::string> out(1);
+    bool quoted = false;
+    for (const char c : line) {
+      if (c == '"') quoted = !quoted;
+      if (c == ',' && !quoted) {
+        out.emplace_back();
+      } else {
+        out.back() += c;
+      }
+    }
+    return out;
+  };
   std::istringstream lines(read_file(folder / "metrics.csv"));
   std::string header, result;
   std::getline(lines, header);
-  std::size_t skip = 0;  // the wall_seconds column's position
-  for (std::size_t at = 0, column = 0; at != std::string::npos; ++column) {
-    const std::size_t comma = header.find(',', at);
-    if (header.substr(at, comma - at) == "wall_seconds") skip = column;
-    at = comma == std::string::npos ? comma : comma + 1;
-  }
-  EXPECT_GT(skip, 0u) << header;
+  const std::vector<std::string> names = fields(header);
+  const auto skip = static_cast<std::size_t>(
+      std::find(names.begin(), names.end(), "wall_seconds") - names.begin());
+  EXPECT_LT(skip, names.size()) << header;
   for (std::string line; std::getline(lines, line);) {
-    std::size_t at = 0;
-    for (std::size_t column = 0; column < skip; ++column) at = line.find(',', at) + 1;
-    result += line.substr(0, at) + line.substr(line.find(',', at) + 1) + "\n";
+    std::vector<std::string> row = fields(line);
+    if (skip < row.size()) row.erase(row.begin() + static_cast<std::ptrdiff_t>(skip));
+    for (std::size_t i = 0; i < row.size(); ++i) result += (i ? "," : "") + row[i];
+    result += "\n";
   }
   return result;
 }

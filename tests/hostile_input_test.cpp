@@ -157,7 +157,8 @@ TEST_F(Hostile, SizesBeyondMemoryOrRangeAreRefusedNamingTheValue) {
   expect_refused("run sin-rotation --test-size 999999999999999", "--test-size: 999999999999999");
   expect_refused("run heat-inverse --network mlp --dims 1 --n 1000000",
                  "--n: 1000000 cells (a network of ~8·1000000²");
-  expect_refused("run heat-inverse --n 1000000", "--train-size: 128 (items of at least ");
+  expect_refused("run heat-inverse --n 1000000",
+                 "--n: 1000000 cells per axis (one sample's U-net activations) needs ");
   expect_refused("run quantum-dipole --steps 1000000000", "--steps: must be in [1, 100000]");
   expect_refused("run comparison --iters 1000000000",
                  "--iters: 1000000000 (6 runs keeping every iterate) needs ");
@@ -198,11 +199,12 @@ TEST_F(Hostile, TimeReversalSizesBeyondTimeOrMemoryAreRefusedAtOnce) {
 // The learning experiments check a given --batch against the memory and the work of a
 // Gauss-Newton or HIG step, and --eval-every against the evaluations the limits allow.
 TEST_F(Hostile, LearningStepsAndEvaluationsBeyondTimeOrMemoryAreRefused) {
-  expect_refused_promptly("run heat-inverse --network mlp --dims 1 --optimizers hig --batch 4096",
+  expect_refused_promptly("run heat-inverse --network mlp --dims 1 --optimizers hig --batch 4096 "
+                          "--train-size 4096",
                           "--batch: 4096 (a gn or hig step forms a 33088² matrix from 262144 "
                           "Jacobian rows of 33088 weights) needs ");
   expect_refused_promptly("run heat-inverse --network mlp --dims 1 --optimizers adam,gn "
-                          "--batch 256",
+                          "--batch 256 --train-size 256",
                           "--batch: 256 (a gn or hig step forms a 16384² matrix from 16384 "
                           "Jacobian rows of 33088 weights) takes 4.571e+12 multiply-adds, more "
                           "than the 1e+12");

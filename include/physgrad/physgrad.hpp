@@ -28,6 +28,7 @@
 #include "physgrad/physics/fpu_chain.hpp"
 #include "physgrad/physics/heat_diffusion.hpp"
 #include "physgrad/physics/poisson.hpp"
+#include "physgrad/physics/poisson_solve.hpp"
 #include "physgrad/physics/quantum_dipole.hpp"
 #include "physgrad/physics/simulator.hpp"
 #include "physgrad/physics/sin_rotation.hpp"
@@ -37,7 +38,10 @@
 
 #include "physgrad/nn/activation.hpp"
 #include "physgrad/nn/checked_network.hpp"
+#include "physgrad/nn/conv_layers.hpp"
+#include "physgrad/nn/conv_net.hpp"
 #include "physgrad/nn/dense_layer_gram.hpp"
+#include "physgrad/nn/mean_matched_network.hpp"
 #include "physgrad/nn/mlp.hpp"
 #include "physgrad/nn/network.hpp"
 

@@ -5,10 +5,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <string>
 #include <utility>
 
-#include "physgrad/catalogue.hpp"
-#include "physgrad/io/hash.hpp"
 
 namespace physgrad {
 
@@ -48,21 +47,9 @@ std::string interpolate(const std::array<Rgb, N>& stops, double t) {
 
 }  // namespace
 
-std::string color_for(std::string_view key) {
-  // A rule's colour is the catalogue's, the one place it is written.
-  for (const RuleInfo& rule : rule_catalogue()) {
-    if (rule.id == key) return rule.colour;
-  }
-  // A run that Adam pretrains before its rule: Adam→GN and Adam→HIG as they have always been
-  // drawn, any other Adam→rule in its rule's colour darkened by a third.
-  if (key == "adam-gn") return "#c51b7d";
-  if (key == "adam-hig") return "#7b3294";
-  const std::string rule = pretrained_rule(std::string(key));
-  if (!rule.empty()) {
-    const Rgb rgb = from_hex(find_rule(RuleKind::kLearning, rule).colour);
-    return to_hex({rgb[0] * 2 / 3, rgb[1] * 2 / 3, rgb[2] * 2 / 3});
-  }
-  return kPalette[fnv1a64(key) % kPalette.size()];
+std::string scaled_color(const std::string& hex, double factor) {
+  const Rgb rgb = from_hex(hex);
+  return to_hex({rgb[0] * factor, rgb[1] * factor, rgb[2] * factor});
 }
 
 std::string palette_color(std::size_t index) { return kPalette[index % kPalette.size()]; }

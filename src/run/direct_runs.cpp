@@ -6,7 +6,7 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
-#include "physgrad/report/colors.hpp"
+#include "physgrad/run/rule_colors.hpp"
 #include "physgrad/report/landscape.hpp"
 #include "physgrad/report/line_plot.hpp"
 

@@ -5,7 +5,7 @@
 
 #include "physgrad/run/learning_runs.hpp"
 #include "physgrad/run/learning_verdict.hpp"
-#include "physgrad/report/colors.hpp"
+#include "physgrad/run/rule_colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
 #include "physgrad/report/svg_document.hpp"

@@ -8,6 +8,7 @@
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/report/colors.hpp"
+#include "physgrad/run/rule_colors.hpp"
 #include "physgrad/report/plot_marks.hpp"
 #include "physgrad/report/significant.hpp"
 

@@ -82,7 +82,7 @@ class ConvNetwork final : public Network {
   // with std::mt19937_64(seed); batch norm's γ = 1, β = 0.
   void initialize(std::uint64_t seed);
   // The architecture as JSON: kind, options, parameter count.
-  nlohmann::json describe() const;
+  nlohmann::json describe() const override;
   const std::vector<ConvOp>& ops() const { return ops_; }
   bool has_batch_norm() const;
 

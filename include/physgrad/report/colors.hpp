@@ -1,5 +1,5 @@
-// Colours of figures: one fixed colour per update rule, a categorical palette, and colormaps
-// for fields (viridis for magnitudes, a blue–white–red map for signed values around 0).
+// Colours of figures: a categorical palette, and colormaps for fields (viridis for magnitudes,
+// a blue–white–red map for signed values around 0). A rule's colour: run/rule_colors.hpp.
 #pragma once
 
 #include <cstddef>
@@ -8,10 +8,8 @@
 
 namespace physgrad {
 
-// The colour of a rule id in every figure: the catalogue's (RuleInfo::colour); of a run Adam
-// pretrains before a rule ("adam-hig"), one of its own; a palette colour chosen by a hash of the
-// key otherwise; "#rrggbb".
-std::string color_for(std::string_view key);
+// "#rrggbb" with each channel of `hex` ("#rrggbb") multiplied by factor ∈ [0, 1] (rounded).
+std::string scaled_color(const std::string& hex, double factor);
 // The index-th colour of a ten-colour categorical palette (cycling).
 std::string palette_color(std::size_t index);
 // Viridis at t ∈ [0, 1] (clamped), "#rrggbb".
