@@ -327,9 +327,10 @@ class HeatInverse final : public LearningExperiment {
     }
     const auto shown = [](double v) { return std::isfinite(v) ? format_value(v) : "–"; };
     const auto final_l1 = [](const LearningResult* run) {
-      return run == nullptr ? std::nan("") : run->summary.history.back().extras["x_l1"].get<double>();
+      if (run == nullptr) return std::nan("");
+      return run->summary.history.back().extras["x_l1"].get<double>();
     };
-    const double sip_49 = sip ? at_49(sip) : NAN, adam_49 = adam ? at_49(adam) : NAN;
+    const double sip_49 = sip ? at_49(sip) : std::nan(""), adam_49 = adam ? at_49(adam) : std::nan("");
     return {"Published values (docs/reference_experiments.md: the book's notebook at step 49, "
             "the SIP paper's networks after 6000 s on a GPU) beside this run's: the x loss "
             "½‖x − x*‖² after 49 updates and the final x L1 Σ|x − x*| (means over test samples)",

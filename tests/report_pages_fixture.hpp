@@ -37,13 +37,17 @@ inline const std::vector<Case>& cases() {
        "run sin-rotation --xi 1,32 --time 0.1 --train-size 100 --test-size 20 --eval-every 50",
        {"x_distance_xi_32.svg", "landscape_xi_1.svg"}},
       {"heat-inverse",
+       "run heat-inverse --n 8 --filters 4 --train-size 16 --test-size 4 --iters 10 "
+       "--eval-every 5 --batch 4",
+       {"x_loss_2d.svg", "sample_1.svg"}},
+      {"heat-inverse-1d",
        "run heat-inverse --network mlp --dims 1 --n 16 --train-size 32 --test-size 8 --iters 20 "
        "--eval-every 5 --batch 8",
        {"reconstruction_1.svg", "x_loss_1d.svg"}},
-      {"heat-inverse-2d",
-       "run heat-inverse --n 8 --filters 4 --train-size 16 --test-size 4 --iters 10 "
-       "--eval-every 5 --batch 4",
-       {"sample_1.svg"}},
+      {"sip-poisson",
+       "run sip-poisson --n 8 --filters 4 --train-size 8 --test-size 4 --iters 4 --eval-every 2 "
+       "--batch 4",
+       {"x_l1.svg"}},
       {"oscillators",
        "run oscillators --train-size 32 --test-size 16 --iters 8 --eval-every 4 --batch 16",
        {"loss_vs_time_paper.svg", "trajectory.svg", "controls.svg"}},

@@ -103,7 +103,7 @@ TEST_F(ReportPages, EachReportOpensWithTheMessageFigureTheResultsDocumentNames) 
   for (const Case& c : cases()) {
     const std::string name = experiment_of(c);
     ASSERT_TRUE(messages.contains(name)) << "docs/results.md names no message figure of " << name;
-    if (c.folder != name) continue;  // a variant (e.g. 2-D) names its files differently
+    if (c.folder != name) continue;  // a variant (e.g. 1-D) names its files differently
     const std::string html = read_file(dir_ / c.folder / "report.html");
     const std::size_t first = html.find("<figure");
     ASSERT_NE(first, std::string::npos) << c.folder;
@@ -118,7 +118,7 @@ TEST_F(ReportPages, EachReportOpensWithTheMessageFigureTheResultsDocumentNames) 
     EXPECT_NE(text.find_first_of("0123456789"), std::string::npos) << c.folder << ": " << text;
     ++checked;
   }
-  EXPECT_EQ(checked + 1, cases().size());  // all but the 2-D variant
+  EXPECT_EQ(checked + 1, cases().size());  // all but the 1-D variant
   EXPECT_EQ(messages.size(), checked);    // and no documented experiment without a case
 }
 

@@ -1,4 +1,4 @@
-// The SIP learning experiments sin-rotation and heat-inverse through the experiment API: short
+// The SIP learning experiments sin-rotation, heat-inverse and sip-poisson through the experiment API: short
 // runs limited by iterations (not time, so they are deterministic) that must show the outcome
 // each experiment exists for.
 #include <gtest/gtest.h>
@@ -65,6 +65,45 @@ TEST(HeatExperiment, SipReconstructsTheInitialStateBetterThanAdam) {
   const double sip = first_and_last(context, "sip").second["x_loss"];
   const double adam = first_and_last(context, "adam").second["x_loss"];
   EXPECT_LT(sip, 0.9 * adam);
+}
+
+// The default heat-inverse on a U-net, shrunk to 16×16 cells and 4 filters: fresh batches, both rules lower the reconstruction error, and the report carries the table
+// beside the published values.
+TEST(HeatExperiment, UNetRunsLowerTheReconstructionErrorOfBothRules) {
+  const RunContext context = run_experiment("heat-inverse", {{"n", "16"},
+                                                  {"filters", "4"},
+                                                  {"iters", "20"},
+                                                  {"eval-every", "10"},
+                                                  {"train-size", "16"},
+                                                  {"test-size", "8"},
+                                                  {"batch", "8"}});
+  for (const std::string id : {"sip", "adam"}) {
+    const auto [start, end] = first_and_last(context, id);
+    EXPECT_EQ(end["iteration"], 20) << id;
+    EXPECT_LT(end["x_loss"].get<double>(), start["x_loss"].get<double>()) << id;
+    EXPECT_LT(end["x_l1"].get<double>(), start["x_l1"].get<double>()) << id;
+  }
+  bool reference = false;
+  for (const RunContext::Table& table : context.tables()) {
+    reference |= table.title.starts_with("Published values");
+  }
+  EXPECT_TRUE(reference);
+}
+
+// sip-poisson shrunk to 16×16 cells: both rules bring x nearer x* (Σ|x − x*|).
+TEST(SipPoissonExperiment, BothRulesBringTheSolutionNearerTheTruth) {
+  const RunContext context = run_experiment("sip-poisson", {{"n", "16"},
+                                                 {"filters", "4"},
+                                                 {"iters", "20"},
+                                                 {"eval-every", "10"},
+                                                 {"train-size", "16"},
+                                                 {"test-size", "8"},
+                                                 {"batch", "8"}});
+  for (const std::string id : {"sip", "adam"}) {
+    const auto [start, end] = first_and_last(context, id);
+    EXPECT_EQ(end["iteration"], 20) << id;
+    EXPECT_LT(end["x_l1"].get<double>(), start["x_l1"].get<double>()) << id;
+  }
 }
 
 TEST(HeatExperiment, RejectsTwoDimensionalGridsTooLargeForTheNetwork) {

@@ -18,7 +18,7 @@ double radius(double f, double g) {
   return r > 1e-150 ? r : std::hypot(f, g);
 }
 
-void check_size(const Vector& v, Index n, const char* what) {
+void check_vector_size(const Vector& v, Index n, const char* what) {
   if (v.size() != n) {
     throw Error(std::string("TridiagonalEigen::") + what + ": the vector has " +
                 std::to_string(v.size()) + " entries, T is " + std::to_string(n) + " × " +
@@ -123,7 +123,7 @@ void TridiagonalEigen::iterate(Vector& e) {
 // Sᵀ v = G_Kᵀ ⋯ G_1ᵀ (P v) for S = P G_1 ⋯ G_K (P the reversal when T was iterated upside
 // down, else the identity): the rotations in the order they were made.
 Vector TridiagonalEigen::apply_transpose(Vector v) const {
-  check_size(v, lambda_.size(), "apply_transpose");
+  check_vector_size(v, lambda_.size(), "apply_transpose");
   if (reversed_) v.reverseInPlace();
   double* x = v.data();
   for (const Sweep& sweep : sweeps_) {
@@ -140,7 +140,7 @@ Vector TridiagonalEigen::apply_transpose(Vector v) const {
 
 // S v = P G_1 ⋯ G_K v: the rotations in reverse order.
 Vector TridiagonalEigen::apply(Vector v) const {
-  check_size(v, lambda_.size(), "apply");
+  check_vector_size(v, lambda_.size(), "apply");
   double* x = v.data();
   for (auto sweep = sweeps_.rbegin(); sweep != sweeps_.rend(); ++sweep) {
     Index i = sweep->top - static_cast<Index>(sweep->count) + 1;

@@ -11,7 +11,7 @@ namespace physgrad {
 
 namespace {
 
-void check_size(const Vector& v, Index n, const char* name) {
+void check_bound_size(const Vector& v, Index n, const char* name) {
   if (v.size() != 0 && v.size() != n) {
     std::ostringstream msg;
     msg << "domain: " << name << " has " << v.size() << " entries, expected " << n
@@ -24,9 +24,9 @@ void check_size(const Vector& v, Index n, const char* name) {
 
 Domain::Domain(Index n, Vector lower, Vector upper, Vector scale)
     : lower_(std::move(lower)), upper_(std::move(upper)), scale_(std::move(scale)) {
-  check_size(lower_, n, "lower");
-  check_size(upper_, n, "upper");
-  check_size(scale_, n, "x_scale");
+  check_bound_size(lower_, n, "lower");
+  check_bound_size(upper_, n, "upper");
+  check_bound_size(scale_, n, "x_scale");
   if (lower_.size() != 0 || upper_.size() != 0) {
     if (lower_.size() == 0) lower_ = Vector::Constant(n, -kInf);
     if (upper_.size() == 0) upper_ = Vector::Constant(n, kInf);
