@@ -20,10 +20,6 @@ namespace {
 // Evaluations by time in a run limited by --time alone: this many over the budget.
 constexpr double kEvaluationsOverTime = 40;
 
-// What a run limited by --time takes in wall time, evaluations included, as a multiple of its
-// budget: the range measured over the learning experiments' default runs.
-constexpr double kWallPerBudgetLow = 1.2, kWallPerBudgetHigh = 1.55;
-
 double steady_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
       .count();
@@ -161,8 +157,8 @@ void LearningSweep::plan_runs(const std::vector<std::string>& rules) {
   if (settings_.has("time")) {
     const double budget = settings_.real("time") * static_cast<double>(plan.runs);
     line += ", " + format_value(settings_.real("time")) +
-            " s of training each: about " + duration_text(kWallPerBudgetLow * budget) + " to " +
-            duration_text(kWallPerBudgetHigh * budget) + " with the evaluations";
+            " s each, evaluations and checkpoints included: about " + duration_text(budget) +
+            " of training runs";
   } else {
     line += "; the time left shows once training starts";
   }
@@ -296,6 +292,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                     {"iterations", s.iterations},
                     {"epochs", s.history.back().epoch},
                     {"wall_seconds", s.train_seconds},
+                    {"run_seconds", s.wall_seconds},  // evaluations and checkpoints included
                     {"termination", to_string(*s.termination)},
                     {"message", s.message},
                     {"step_halvings", s.step_halvings},
