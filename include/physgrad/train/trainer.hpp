@@ -115,8 +115,10 @@ struct TrainerOptions {
   // Wall time of the run (TrainingSummary::wall_seconds): steps, evaluations and checkpoints.
   // The run ends once it is spent, or before a step whose cost — the last step's, plus the
   // evaluation and checkpoint due after it, as last measured — would take the run past it;
-  // the first step after a start or a resume is taken unmeasured. A run limited by time writes
-  // its checkpoints no more often than keeps them to a tenth of its wall time
+  // the first step after a start or a resume is taken unmeasured (and the first of a rule's
+  // next part is judged by its last part's step), so the run ends within the budget plus one
+  // step with its evaluation and checkpoint, and makes at least one update. A run limited by
+  // time writes its checkpoints no more often than keeps them to a tenth of its wall time
   // (checkpoint_every and checkpoint_seconds are then the shortest spacing).
   std::optional<double> time_budget_seconds;
   // Evaluate every this many iterations; unset: at the start and after every epoch.
