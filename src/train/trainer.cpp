@@ -57,7 +57,7 @@ TrainingSummary TrainingRun::run() {
       } else if (pending.time_out) {
         end_by_limit(TrainingTermination::kTimeBudget);
       } else if (pending.overrun) {
-        end_by_limit(TrainingTermination::kTimeBudget, overrun_message());
+        end_by_limit(TrainingTermination::kTimeBudget, overrun_message(pending.spent));
       }
       if (ended()) break;
       try {
@@ -92,8 +92,8 @@ TrainingSummary TrainingRun::run() {
   return summary_;
 }
 
-std::string TrainingRun::overrun_message() const {
-  return "time limit: next step would overrun (" + report_number(wall_now()) + " of " +
+std::string TrainingRun::overrun_message(double spent) const {
+  return "time limit: next step would overrun (" + report_number(spent) + " of " +
          report_number(*options_.time_budget_seconds) + " s spent; the last step, evaluation " +
          "and checkpoint took " + report_number(step_cost_) + ", " +
          report_number(evaluation_cost_) + " and " + report_number(checkpoint_cost_) + " s)";

@@ -132,9 +132,9 @@ TrainingRun::Requests TrainingRun::requests() const {
       summary_.train_seconds - summary_.history.back().train_seconds >= *options_.eval_seconds;
   // A run makes at least one update; after that the budget bounds its wall time.
   bool time_out = false, overrun = false;
+  const double spent = wall_now();
   if (options_.time_budget_seconds && summary_.iterations > 0) {
     const double budget = *options_.time_budget_seconds;
-    const double spent = wall_now();
     const double due_before = (evaluation_due ? evaluation_cost_ : 0.0) +
                               (checkpoint_due() ? checkpoint_cost_ : 0.0);
     time_out = spent >= budget;
@@ -144,7 +144,7 @@ TrainingRun::Requests TrainingRun::requests() const {
       (options_.stop != nullptr && options_.stop->load()) || stop_requested() ? 1.0 : 0.0,
       time_out ? 1.0 : 0.0, overrun ? 1.0 : 0.0, evaluation_due ? 1.0 : 0.0};
   step_state_.shard.sum(flags, 4);
-  return {flags[0] > 0, flags[1] > 0, flags[2] > 0 && !(flags[1] > 0), flags[3] > 0};
+  return {flags[0] > 0, flags[1] > 0, flags[2] > 0 && !(flags[1] > 0), flags[3] > 0, spent};
 }
 
 double TrainingRun::next_step_cost(double due_before) const {

@@ -53,6 +53,7 @@ class TrainingRun {
     bool time_out = false;  // the budget is spent
     bool overrun = false;   // the next step would take the run past it (next_step_cost())
     bool evaluate = false;
+    double spent = 0;  // the run's wall time when this rank judged the budget
   };
   Requests requests() const;
   // What the next step would add to the run's wall time as last measured: the evaluation and
@@ -75,7 +76,7 @@ class TrainingRun {
   // `why` becomes the message (with the divergence's, when there is one).
   void end_by_limit(TrainingTermination limit, const std::string& why = "");
   // "time limit: next step would overrun (…)", with the budget and the costs it was judged by.
-  std::string overrun_message() const;
+  std::string overrun_message(double spent) const;
   // Saves a checkpoint and ends with kInterrupted and `message`.
   TrainingSummary interrupted(std::string message);
   bool ended() const { return summary_.termination.has_value(); }
