@@ -139,6 +139,8 @@ TEST_F(Hostile, CraftedCheckpointsAreRefusedAndTheIntactOneResumes) {
        "record");
   with([](nlohmann::json& d) { d["current"]["state"]["summary"]["history"][0]["test_loss"] = nullptr; },
        "run 1 (gn, λ=1, seed 0): the record of iteration 0 has no finite test loss");
+  with([](nlohmann::json& d) { d["current"]["state"]["summary"]["wall_seconds"] = -1; },
+       "checkpoint field 'wall_seconds': must be a finite time ≥ 0");
   with([](nlohmann::json& d) { d["current"]["state"]["summary"]["iterations"] = 5000; },
        "run 1 (gn, λ=1, seed 0) has 5000 iterations, more than the run's 1000");
   with([](nlohmann::json& d) { d["current"]["state"]["epoch"] = 123456789; },

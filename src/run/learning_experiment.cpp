@@ -114,9 +114,10 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
           .at_least(1)
           .at_most(1e9),
       real_option("time", defaults.time,
-                  "training-time budget per run in seconds, evaluations excluded (the first of "
-                  "--iters, --epochs, --time reached ends a run; a run limited by --time alone is "
-                  "also evaluated every 1/40 of it)")
+                  "wall-time budget per run in seconds, evaluations and checkpoints included; a "
+                  "step that would overrun it is not started (the first of --iters, --epochs, "
+                  "--time reached ends a run; a run limited by --time alone is also evaluated "
+                  "every 1/40 of its training time)")
           .above(0),
       integer_option("eval-every", defaults.eval_every,
                      defaults.eval_every_help.empty()

@@ -20,10 +20,6 @@ namespace {
 // Evaluations by time in a run limited by --time alone: this many over the budget.
 constexpr double kEvaluationsOverTime = 40;
 
-// What a run limited by --time takes in wall time, evaluations included, as a multiple of its
-// budget: the range measured over the learning experiments' default runs.
-constexpr double kWallPerBudgetLow = 1.2, kWallPerBudgetHigh = 1.55;
-
 double steady_seconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
       .count();
@@ -37,10 +33,11 @@ std::string duration_text(double seconds) {
   return std::to_string(s / 3600) + " h " + std::to_string(s % 3600 / 60) + " min";
 }
 
-// How much of a run is done, 0 to 1, by the limits it has (the furthest of them).
-double run_fraction(const TrainerOptions& options, const TrainingRecord& r) {
+// How much of a run is done, 0 to 1, by the limits it has (the furthest of them); `run_seconds`
+// is the wall time this process has spent on the run (what --time bounds, with the evaluations).
+double run_fraction(const TrainerOptions& options, const TrainingRecord& r, double run_seconds) {
   double f = 0;
-  if (options.time_budget_seconds) f = std::max(f, r.train_seconds / *options.time_budget_seconds);
+  if (options.time_budget_seconds) f = std::max(f, run_seconds / *options.time_budget_seconds);
   if (options.max_iterations) {
     f = std::max(f, static_cast<double>(r.iteration) / static_cast<double>(*options.max_iterations));
   }
@@ -161,8 +158,8 @@ void LearningSweep::plan_runs(const std::vector<std::string>& rules) {
   if (settings_.has("time")) {
     const double budget = settings_.real("time") * static_cast<double>(plan.runs);
     line += ", " + format_value(settings_.real("time")) +
-            " s of training each: about " + duration_text(kWallPerBudgetLow * budget) + " to " +
-            duration_text(kWallPerBudgetHigh * budget) + " with the evaluations";
+            " s each, evaluations and checkpoints included: about " + duration_text(budget) +
+            " for the runs";
   } else {
     line += "; the time left shows once training starts";
   }
@@ -227,8 +224,11 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   }
   RunContext::RunPlan& plan = context_.run_plan();
   const std::string name = context_.experiment_name() + ": " + run_number(plan) + ", ";
-  const std::string budget =
-      options.time_budget_seconds ? " of " + format_value(*options.time_budget_seconds) : "";
+  const std::string budget = options.time_budget_seconds
+                                 ? " s of training, the run's budget " +
+                                       format_value(*options.time_budget_seconds)
+                                 : "";
+  const double run_started = steady_seconds();
   bool trained_now = false;  // a run taken whole from the checkpoint reports nothing
   options.on_progress = [&](const TrainingRecord& r) {
     trained_now = true;
@@ -239,7 +239,8 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
     context_.progress(name + result.label + " seed " + std::to_string(result.seed) +
                       ", iteration " + std::to_string(r.iteration) + ", test loss " +
                       format_value(r.test_loss) + " · " + format_value(r.train_seconds) +
-                      budget + " s · " + time_left(plan, run_fraction(options, r)));
+                      budget + " s · " +
+                      time_left(plan, run_fraction(options, r, steady_seconds() - run_started)));
   };
   result.summary = train_or_resume(RunKey{context_.next_learning_run(), id, tag, result.seed},
                                    network, *update, problem, train_set, test_set, options);
@@ -296,6 +297,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                     {"iterations", s.iterations},
                     {"epochs", s.history.back().epoch},
                     {"wall_seconds", s.train_seconds},
+                    {"run_seconds", s.wall_seconds},  // evaluations and checkpoints included
                     {"termination", to_string(*s.termination)},
                     {"message", s.message},
                     {"step_halvings", s.step_halvings},

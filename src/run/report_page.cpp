@@ -80,6 +80,11 @@ HtmlTable runs_table(const RunContext& context) {
                            : "Every run: the loss L(x) at the start and at the end, the "
                              "iterations made, what ended the run and its wall-clock seconds"};
   for (const nlohmann::json& run : context.runs()) {
+    // A run that --time ended before a step that would not have fit says so.
+    std::string ended = run.value("termination", std::string());
+    if (run.value("message", std::string()).rfind("time limit: next step would overrun", 0) == 0) {
+      ended += " (next step would overrun)";
+    }
     std::string params;
     for (const auto& [key, value] : run.at("params").items()) {
       params += (params.empty() ? "" : ", ") + key + " = " +
@@ -89,8 +94,7 @@ HtmlTable runs_table(const RunContext& context) {
                           format_number(run.at("initial").at("loss")),
                           format_number(run.at("final").at("loss")),
                           std::to_string(run.at("iterations").get<long long>()),
-                          run.value("termination", std::string()),
-                          format_number(run.at("wall_seconds"))});
+                          ended, format_number(run.at("wall_seconds"))});
   }
   return table;
 }

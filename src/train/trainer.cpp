@@ -19,11 +19,13 @@ TrainingSummary TrainingRun::run() {
   // Ranks stop together at an iteration boundary (requests()); none may leave a step alone.
   std::optional<DeferStopPolls> ranks_stop_together;
   if (step_state_.shard.active()) ranks_stop_together.emplace();
+  started_ = std::chrono::steady_clock::now();
   update_.reset();
   phase_ = update_.phase();
   batch_size_ = batch_size_now();
   summary_.phases = {{0, batch_size_}};
   if (options_.resume != nullptr) restore(*options_.resume);
+  wall_before_ = summary_.wall_seconds;
   describe_run();
   if (options_.resume == nullptr && evaluate() && phase_changed()) begin_phase();
   last_checkpoint_iteration_ = summary_.iterations;
@@ -54,10 +56,15 @@ TrainingSummary TrainingRun::run() {
         end_by_limit(TrainingTermination::kMaxIterations);
       } else if (pending.time_out) {
         end_by_limit(TrainingTermination::kTimeBudget);
+      } else if (pending.overrun) {
+        end_by_limit(TrainingTermination::kTimeBudget, overrun_message(pending.spent));
       }
       if (ended()) break;
       try {
-        if (!step(batch(order, std::min(batch_size_, n_ - batch_start_)))) break;
+        const auto step_start = std::chrono::steady_clock::now();
+        const bool stepped = step(batch(order, std::min(batch_size_, n_ - batch_start_)));
+        step_cost_ = seconds_since(step_start);
+        if (!stepped) break;
       } catch (const StopRequested&) {  // train_step() left θ as it was before the step
         return interrupted("stopped on request during iteration " +
                            std::to_string(summary_.iterations + 1) + " (not applied)");
@@ -81,7 +88,15 @@ TrainingSummary TrainingRun::run() {
     }
   }
   if (!evaluated_) evaluate();
+  summary_.wall_seconds = wall_now();
   return summary_;
+}
+
+std::string TrainingRun::overrun_message(double spent) const {
+  return "time limit: next step would overrun (" + report_number(spent) + " of " +
+         report_number(*options_.time_budget_seconds) + " s spent; the last step, evaluation " +
+         "and checkpoint took " + report_number(step_cost_) + ", " +
+         report_number(evaluation_cost_) + " and " + report_number(checkpoint_cost_) + " s)";
 }
 
 void TrainingRun::begin_phase() {
@@ -95,6 +110,14 @@ void TrainingRun::begin_phase() {
 // θ restored to the last evaluated parameters (the untrained network's is an Error: nothing to
 // go back to).
 bool TrainingRun::evaluate() {
+  const auto start = std::chrono::steady_clock::now();
+  const bool finite = evaluate_now();
+  evaluation_cost_ = seconds_since(start);
+  summary_.wall_seconds = wall_now();
+  return finite;
+}
+
+bool TrainingRun::evaluate_now() {
   TrainingRecord record;
   record.iteration = summary_.iterations;
   record.epoch = epochs_done(summary_);
@@ -171,15 +194,17 @@ void TrainingRun::stop_for_numbers(const std::string& message) {
   summary_.message += (summary_.message.empty() ? "" : "; then ") + message;
 }
 
-void TrainingRun::end_by_limit(TrainingTermination limit) {
+void TrainingRun::end_by_limit(TrainingTermination limit, const std::string& why) {
   if (!evaluated_ && !evaluate()) return;
   const double start = summary_.history.front().train_loss;
   const double end = summary_.history.back().train_loss;
   summary_.termination = limit;
+  summary_.message = why;
   if (end > start) {
     summary_.termination = TrainingTermination::kDiverged;
     summary_.message = "reached " + to_string(limit) + " with the training loss " +
-                       report_number(end) + " above its start " + report_number(start);
+                       report_number(end) + " above its start " + report_number(start) +
+                       (why.empty() ? "" : "; " + why);
   }
 }
 

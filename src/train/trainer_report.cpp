@@ -109,6 +109,7 @@ std::string full_report(const TrainingSummary& s) {
   out += report_row("inversion", report_number(s.inversion_seconds));
   out += report_row("rest of the update", report_number(s.update_seconds));
   out += report_row("training", report_number(s.train_seconds));
+  out += report_row("run (with evaluations)", report_number(s.wall_seconds));
   out += "\nTermination: " +
          (s.termination ? to_string(*s.termination) : std::string("in progress")) +
          (s.message.empty() ? "" : " (" + s.message + ")") + "\n";

@@ -79,6 +79,7 @@ nlohmann::json training_summary_to_json(const TrainingSummary& s) {
           {"message", s.message},
           {"iterations", s.iterations},
           {"train_seconds", s.train_seconds},
+          {"wall_seconds", s.wall_seconds},
           {"forward_seconds", s.forward_seconds},
           {"derivative_seconds", s.derivative_seconds},
           {"inversion_seconds", s.inversion_seconds},
@@ -115,6 +116,14 @@ TrainingSummary training_summary_from_json(const nlohmann::json& document) {
     *time = real_from_json(document, key);
     if (!(*time >= 0) || !std::isfinite(*time)) {
       throw Error(std::string("checkpoint field '") + key + "': must be a finite time ≥ 0");
+    }
+  }
+  // Absent from files of earlier versions: their runs counted training time alone.
+  summary.wall_seconds = summary.train_seconds;
+  if (document.contains("wall_seconds")) {
+    summary.wall_seconds = real_from_json(document, "wall_seconds");
+    if (!(summary.wall_seconds >= 0) || !std::isfinite(summary.wall_seconds)) {
+      throw Error("checkpoint field 'wall_seconds': must be a finite time ≥ 0");
     }
   }
   summary.step_halvings = integer_from_json(document, "step_halvings");

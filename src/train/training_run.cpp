@@ -130,21 +130,42 @@ TrainingRun::Requests TrainingRun::requests() const {
   const bool evaluation_due =
       options_.eval_seconds && !evaluated_ &&
       summary_.train_seconds - summary_.history.back().train_seconds >= *options_.eval_seconds;
-  double flags[3] = {
+  // A run makes at least one update; after that the budget bounds its wall time.
+  bool time_out = false, overrun = false;
+  const double spent = wall_now();
+  if (options_.time_budget_seconds && summary_.iterations > 0) {
+    const double budget = *options_.time_budget_seconds;
+    const double due_before = (evaluation_due ? evaluation_cost_ : 0.0) +
+                              (checkpoint_due() ? checkpoint_cost_ : 0.0);
+    time_out = spent >= budget;
+    overrun = !time_out && step_cost_ > 0 && spent + next_step_cost(due_before) > budget;
+  }
+  double flags[4] = {
       (options_.stop != nullptr && options_.stop->load()) || stop_requested() ? 1.0 : 0.0,
-      options_.time_budget_seconds && summary_.train_seconds >= *options_.time_budget_seconds
-          ? 1.0
-          : 0.0,
-      evaluation_due ? 1.0 : 0.0};
-  step_state_.shard.sum(flags, 3);
-  return {flags[0] > 0, flags[1] > 0, flags[2] > 0};
+      time_out ? 1.0 : 0.0, overrun ? 1.0 : 0.0, evaluation_due ? 1.0 : 0.0};
+  step_state_.shard.sum(flags, 4);
+  return {flags[0] > 0, flags[1] > 0, flags[2] > 0 && !(flags[1] > 0), flags[3] > 0, spent};
+}
+
+double TrainingRun::next_step_cost(double due_before) const {
+  const long long next = summary_.iterations + 1;
+  const bool checkpoint_after = options_.on_checkpoint && options_.checkpoint_every &&
+                                next % *options_.checkpoint_every == 0;
+  return due_before + step_cost_ + evaluation_cost_ + (checkpoint_after ? checkpoint_cost_ : 0.0);
 }
 
 bool TrainingRun::checkpoint_due() const {
   if (!options_.on_checkpoint || summary_.iterations == last_checkpoint_iteration_) return false;
+  // A run limited by time spends at most a tenth of its wall time on checkpoints: the next one
+  // waits until nine times the last one's cost has passed since it.
+  constexpr double kCheckpointShare = 0.1;
+  const double since = seconds_since(last_checkpoint_time_);
+  if (options_.time_budget_seconds &&
+      checkpoint_cost_ > kCheckpointShare * (checkpoint_cost_ + since)) {
+    return false;
+  }
   return (options_.checkpoint_every && summary_.iterations % *options_.checkpoint_every == 0) ||
-         (options_.checkpoint_seconds &&
-          seconds_since(last_checkpoint_time_) >= *options_.checkpoint_seconds);
+         (options_.checkpoint_seconds && since >= *options_.checkpoint_seconds);
 }
 
 void TrainingRun::describe_run() {
@@ -163,6 +184,8 @@ void TrainingRun::describe_run() {
 }
 
 void TrainingRun::checkpoint() {
+  const auto start = std::chrono::steady_clock::now();
+  summary_.wall_seconds = wall_now();
   if (options_.on_checkpoint) {
     TrainerState state;
     state.epoch = epoch_;
@@ -175,6 +198,7 @@ void TrainingRun::checkpoint() {
     state.summary = summary_;
     options_.on_checkpoint(state);
   }
+  checkpoint_cost_ = seconds_since(start);
   last_checkpoint_time_ = std::chrono::steady_clock::now();
   last_checkpoint_iteration_ = summary_.iterations;
 }

@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "physgrad/timing.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad::training {
@@ -49,11 +50,21 @@ class TrainingRun {
   // rank's counts), so that every rank stops and evaluates at the same iteration.
   struct Requests {
     bool stop = false;
-    bool time_out = false;
+    bool time_out = false;  // the budget is spent
+    bool overrun = false;   // the next step would take the run past it (next_step_cost())
     bool evaluate = false;
+    double spent = 0;  // the run's wall time when this rank judged the budget
   };
   Requests requests() const;
+  // What the next step would add to the run's wall time as last measured: the evaluation and
+  // checkpoint due before it (`due_before`), the step, the evaluation after it (by the
+  // schedule, or the run's last) and the checkpoint after it when checkpoint_every asks for one.
+  double next_step_cost(double due_before) const;
+  // The run's wall time so far: the resumed state's and this process's since run() began.
+  double wall_now() const { return wall_before_ + seconds_since(started_); }
+  // Times the evaluation (evaluation_cost_) and keeps the run's wall time in the summary.
   bool evaluate();
+  bool evaluate_now();
   Dataset batch(const std::vector<Index>& order, Index count) const;
   bool step(const Dataset& batch);
   void stop_for_numbers(const std::string& message);
@@ -62,7 +73,10 @@ class TrainingRun {
   // Sets what ran in the summary: the rule, its settings, the problem's size and the limits.
   void describe_run();
   // A limit ended the run: kDiverged instead when its training loss ended above its start.
-  void end_by_limit(TrainingTermination limit);
+  // `why` becomes the message (with the divergence's, when there is one).
+  void end_by_limit(TrainingTermination limit, const std::string& why = "");
+  // "time limit: next step would overrun (…)", with the budget and the costs it was judged by.
+  std::string overrun_message(double spent) const;
   // Saves a checkpoint and ends with kInterrupted and `message`.
   TrainingSummary interrupted(std::string message);
   bool ended() const { return summary_.termination.has_value(); }
@@ -86,6 +100,12 @@ class TrainingRun {
   bool evaluated_ = false;  // θ is the one of the last history record
   std::chrono::steady_clock::time_point last_checkpoint_time_ = std::chrono::steady_clock::now();
   long long last_checkpoint_iteration_ = 0;
+  std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();
+  double wall_before_ = 0;  // the resumed state's wall time
+  // Wall seconds of the last step, evaluation and checkpoint (0 until one is measured).
+  double step_cost_ = 0;
+  double evaluation_cost_ = 0;
+  double checkpoint_cost_ = 0;
 };
 
 // Throws Error naming the first option out of range, or a run without a limit.

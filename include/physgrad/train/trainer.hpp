@@ -18,7 +18,8 @@ namespace physgrad {
 enum class TrainingTermination {
   kMaxIterations,     // TrainerOptions::max_iterations updates were made
   kMaxEpochs,         // max_epochs epochs were completed
-  kTimeBudget,        // time_budget_seconds of training time were spent
+  kTimeBudget,        // time_budget_seconds of the run's wall time were spent, or the next
+                      // step would have overrun them (the message says which)
   kNumericalFailure,  // a step or an evaluation was not finite (see train())
   kInterrupted,       // a stop was requested (TrainerOptions::stop); continue with `resume`
   kDiverged,          // a limit ended the run with its training loss above its start
@@ -50,7 +51,10 @@ struct TrainingSummary {
   std::optional<TrainingTermination> termination;  // unset while training goes on
   std::string message;
   long long iterations = 0;             // updates made
-  double train_seconds = 0;
+  double train_seconds = 0;             // the steps' time, evaluations and checkpoints excluded
+  // The run's wall time so far: steps, evaluations and checkpoints (what time_budget_seconds
+  // bounds), kept in checkpoints so that a resumed run goes on counting.
+  double wall_seconds = 0;
   // Time per part of all steps: network+physics forward and loss, the stacked Jacobian or
   // gradient, the inversion inside the update, and the rest of the update.
   double forward_seconds = 0;
@@ -108,7 +112,15 @@ struct TrainerOptions {
   // Stop after any of these; at least one must be set.
   std::optional<long long> max_iterations;
   std::optional<long long> max_epochs;
-  std::optional<double> time_budget_seconds;  // training time, evaluations excluded
+  // Wall time of the run (TrainingSummary::wall_seconds): steps, evaluations and checkpoints.
+  // The run ends once it is spent, or before a step whose cost — the last step's, plus the
+  // evaluation and checkpoint due after it, as last measured — would take the run past it;
+  // the first step after a start or a resume is taken unmeasured (and the first of a rule's
+  // next part is judged by its last part's step), so the run ends within the budget plus one
+  // step with its evaluation and checkpoint, and makes at least one update. A run limited by
+  // time writes its checkpoints no more often than keeps them to a tenth of its wall time
+  // (checkpoint_every and checkpoint_seconds are then the shortest spacing).
+  std::optional<double> time_budget_seconds;
   // Evaluate every this many iterations; unset: at the start and after every epoch.
   std::optional<long long> eval_every;
   // Also evaluate once this much training time has passed since the last evaluation (all
