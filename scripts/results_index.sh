@@ -16,8 +16,10 @@ for name in "$@"; do
   echo '```'
   grep -v '^report:' "$dir/$name.txt"
   echo '```'
-  # <figure id="FILE"> … <figcaption>CAPTION</figcaption>, one figure after another.
+  # The message (<p class="message"> on a line of its own), then <figure id="FILE"> …
+  # <figcaption>CAPTION</figcaption>, one figure after another.
   awk -v name="$name" '
+    /^<p class="message">.*<\/p>$/ { printf "\n%s\n", $0 }
     match($0, /<figure id="[^"]*">/) {
       file = substr($0, RSTART + 12, RLENGTH - 14)
     }

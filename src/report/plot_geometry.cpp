@@ -173,11 +173,27 @@ double distance_to_segment(const Point& p, const Point& a, const Point& b) {
   return std::hypot(p.x - (a.x + t * dx), p.y - (a.y + t * dy));
 }
 
+// Whether `lines` reach more than `near` pixels from their first point: a curve, not a point
+// (or a few points on one spot).
+bool spans(const std::vector<Polyline>& lines, double near) {
+  const Point* first = nullptr;
+  for (const Polyline& part : lines) {
+    for (const Point& p : part) {
+      if (first == nullptr) first = &p;
+      if (std::hypot(p.x - first->x, p.y - first->y) > near) return true;
+    }
+  }
+  return false;
+}
+
 // True when every point of `hidden` lies within 1.5 pixels of the lines of `over`: drawn over it,
-// `over` (about 2 pixels wide) would hide it. Each point is first tried against the segments
-// near the one the point before lay on, so that two series along each other take linear time.
+// `over` (about 2 pixels wide) would hide it. Both must be curves (spans): a single point is not
+// a curve that another coincides with, nor one that coincides with a curve (it keeps its marker).
+// Each point is first tried against the segments near the one the point before lay on, so that
+// two series along each other take linear time.
 bool covers(const std::vector<Polyline>& over, const std::vector<Polyline>& hidden) {
   constexpr double kNear = 1.5;
+  if (!spans(over, kNear) || !spans(hidden, kNear)) return false;
   const auto near_segment = [&](const Point& p, std::size_t piece, std::size_t i) {
     const Polyline& line = over[piece];
     return distance_to_segment(p, line[i], line[i + 1 < line.size() ? i + 1 : i]) <= kNear;

@@ -62,7 +62,7 @@ struct LinePlotOptions {
 // axis' lower edge with a ▼ and the legend says where the series reaches it; on a log x axis
 // such points are skipped. The legend goes where no data is (else below the plot, which makes
 // the figure taller). A series drawn over earlier ones that it would hide (every point of theirs
-// within 1.5 pixels of its line) gets a dash pattern and a marker shape of its own, its markers
+// within 1.5 pixels of its line; both curves, not a lone point) gets a dash pattern and a marker shape of its own, its markers
 // set off from theirs, and its legend entry says "coincides with" them; a series with no point to
 // draw says so in its legend entry ("not drawn: …"). Each point has a hover title with its x and
 // y (at most 60 a series). Each series is a <g class="series" data-label="…"> holding its line

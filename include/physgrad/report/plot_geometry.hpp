@@ -40,7 +40,8 @@ std::string band_path(const std::vector<double>& x, const std::vector<double>& l
 
 // The positions in `earlier` of the series `pieces` retraces (empty: none): those whose every
 // point inside `bounds` lies within 1.5 pixels of its lines there, so that drawn over them it
-// would hide them.
+// would hide them. Only curves count, on both sides: lines that stay within 1.5 pixels of their
+// first point (a series of one point) retrace nothing and are retraced by nothing.
 std::vector<std::size_t> retraced(const std::vector<Polyline>& pieces,
                                   const std::vector<std::vector<Polyline>>& earlier,
                                   const Box& bounds);
