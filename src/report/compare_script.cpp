@@ -11,7 +11,7 @@ var box = document.getElementById('pg-compare');
 var block = document.getElementById('pg-compare-data');
 if (!box || !block) return;
 var data = JSON.parse(block.textContent), runs = data.runs;
-var W = 760, H = 380, L = 64, R = 12, T = 12, B = 44;
+var W = 760, H = 360, L = 64, R = 12, T = 12, B = 44;
 var st = {metric: '', x: 'iteration', log: false, smooth: 0, view: null,
   on: runs.map(function (r, i) { return i < 12; }), hidden: runs.map(function () { return false; })};
 function el(tag, text, cls) {
@@ -99,6 +99,9 @@ var cur = {b: null, data: {}};
 function px(x) { var b = cur.b; return L + (x - b[0]) / (b[1] - b[0]) * (W - L - R); }
 function py(y) { var b = cur.b; return H - B - (ty(y) - b[2]) / (b[3] - b[2]) * (H - T - B); }
 function draw() {
+  // The plot's width in user units follows its box, so that its text stays 12 px at any width.
+  W = Math.max(300, Math.min(900, box.clientWidth || 760));
+  svg.setAttribute('viewBox', '0 0 ' + W + ' ' + H);
   while (svg.firstChild) svg.removeChild(svg.firstChild);
   while (legend.firstChild) legend.removeChild(legend.firstChild);
   var vis = shown(), all = [];
