@@ -18,7 +18,7 @@ TEST(CompareView, JsonForScriptEscapesWhatCouldCloseTheBlockAndStaysTheSameJson)
       "\xe2\x80\xa8\xe2\x80\xa9 é";
   const std::string text = nlohmann::json{{"l", hostile}}.dump();
   const std::string escaped = physgrad::json_for_script(text);
-  for (const char* banned : {"<", ">", "&", "\xe2\x80\xa8", "\xe2\x80\xa9"}) {
+  for (const char* banned : {"<", ">", "&", "=", "\xe2\x80\xa8", "\xe2\x80\xa9"}) {
     EXPECT_EQ(escaped.find(banned), std::string::npos) << banned << " in " << escaped;
   }
   EXPECT_NE(escaped.find("\\u003c/script\\u003e"), std::string::npos) << escaped;

@@ -90,6 +90,8 @@ std::string json_for_script(std::string_view json_text) {
       out += "\\u003e";
     } else if (c == '&') {
       out += "\\u0026";
+    } else if (c == '=') {
+      out += "\\u003d";
     } else if (c == '\xE2' && k + 2 < json_text.size() && json_text[k + 1] == '\x80' &&
                (json_text[k + 2] == '\xA8' || json_text[k + 2] == '\xA9')) {
       out += json_text[k + 2] == '\xA8' ? "\\u2028" : "\\u2029";

@@ -7,6 +7,7 @@
 
 #include "physgrad/io/csv.hpp"
 #include "physgrad/report/compare_view.hpp"
+#include "physgrad/text.hpp"
 
 namespace physgrad::run {
 
@@ -90,12 +91,15 @@ std::string compare_runs_json(const std::string& group, std::string_view csv_tex
         compare_cell_number(csv.rows[run.rows[k]][c], v);
         values.push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr));
       }
-      columns[csv.columns[c]] = std::move(values);
+      columns[shown_text(csv.columns[c])] = std::move(values);
     }
-    const nlohmann::json object = {{"g", group}, {"l", run.label}, {"s", run.seed},
+    // Names as the page's text shows them (U+FFFD for what is hidden), every non-ASCII
+    // character a \u escape.
+    const nlohmann::json object = {{"g", shown_text(group)}, {"l", shown_text(run.label)},
+                                   {"s", shown_text(run.seed)},
                                    {"c", std::move(columns)}};
     if (!out.empty()) out += ',';
-    out += json_for_script(object.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+    out += json_for_script(object.dump(-1, ' ', true, nlohmann::json::error_handler_t::replace));
   }
   return out;
 }

@@ -13,9 +13,10 @@ namespace physgrad {
 // #pg-compare with DOM calls and textContent only.
 extern const std::string_view kCompareScript;
 
-// JSON text made safe inside <script type="application/json">: '<', '>', '&' and U+2028/U+2029
-// written as \u003c, \u003e, \u0026, \u2028, \u2029 — valid JSON only (these characters occur
-// in JSON text only inside strings), so that no value can close the block or open a comment.
+// JSON text made safe inside <script type="application/json">: '<', '>', '&', '=' and
+// U+2028/U+2029 written as \u003c, \u003e, \u0026, \u003d, \u2028, \u2029 — for valid JSON only
+// (these characters occur in JSON text only inside strings), so that no value can close the
+// block, open a comment or read as an attribute.
 std::string json_for_script(std::string_view json_text);
 
 // The SHA-256 digest of `text`, base64-encoded (RFC 4648, with padding).
