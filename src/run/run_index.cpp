@@ -230,7 +230,9 @@ struct IndexPage {
     std::vector<std::pair<std::string, std::string>> contents;
     if (!notes.empty()) contents.emplace_back("Left out", "Left out");
     for (const ExperimentSection& e : experiments) contents.emplace_back(e.name, e.name);
-    contents.emplace_back("Interactive comparison", "Interactive comparison");
+    if (!compare_data.empty()) {
+      contents.emplace_back("Interactive comparison", "Interactive comparison");
+    }
     contents.emplace_back("Every run", "Every run");
     contents.emplace_back("Commands", "Commands");
     sink(html_contents(contents));
@@ -250,11 +252,13 @@ struct IndexPage {
       }
       sink(kHtmlSectionClose);
     }
-    sink(compare_section_open("Interactive comparison", kCompareText));
-    sink("{\"runs\":[");
-    copy(compare_data);
-    sink("]}");
-    sink(compare_section_close());
+    if (!compare_data.empty()) {  // folders without metrics.csv have no curves to compare
+      sink(compare_section_open("Interactive comparison", kCompareText));
+      sink("{\"runs\":[");
+      copy(compare_data);
+      sink("]}");
+      sink(compare_section_close());
+    }
     sink(html_section_open({"Every run", "", {}, {}, {}, "Every run"}));
     sink(html_table_open(every_run_header));
     copy(every_run);
