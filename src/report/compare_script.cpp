@@ -61,6 +61,7 @@ runs.forEach(function (r, i) {
   if (!groups[r.g]) { groups[r.g] = el('fieldset'); groups[r.g].appendChild(el('legend', r.g));
     picker.appendChild(groups[r.g]); }
   var c = el('input'); c.type = 'checkbox'; c.checked = st.on[i]; c.className = 'pg-pick';
+  c.setAttribute('data-run', i);
   c.onchange = function () { st.on[i] = c.checked; st.view = null; draw(); };
   groups[r.g].appendChild(lab(r.l + (r.s !== '' ? ' seed ' + r.s : ''), c));
 });
@@ -141,7 +142,7 @@ function draw() {
     if (!o) return;
     var e = el('span', runs[i].g + ': ' + runs[i].l + (runs[i].s !== '' ? ' seed ' + runs[i].s : ''),
       'pg-entry' + (st.hidden[i] ? ' pg-off' : ''));
-    e.style.borderColor = colours[i % 10];
+    e.style.borderColor = colours[i % 10]; e.setAttribute('data-run', i);
     e.onclick = function () { st.hidden[i] = !st.hidden[i]; draw(); };
     legend.appendChild(e);
   });
@@ -179,9 +180,9 @@ svg.addEventListener('mousemove', function (ev) {
 });
 function quote(t) { t = String(t); return /[",\n\r]/.test(t) ? '"' + t.replace(/"/g, '""') + '"' : t; }
 function csv() {
-  var lines = ['group,label,seed,' + quote(st.x) + ',' + quote(st.metric)];
+  var lines = ['group,label,seed,run,' + quote(st.x) + ',' + quote(st.metric)];
   shown().forEach(function (i) { series(i).forEach(function (q) {
-    lines.push([quote(runs[i].g), quote(runs[i].l), quote(runs[i].s), q[0], q[1]].join(','));
+    lines.push([quote(runs[i].g), quote(runs[i].l), quote(runs[i].s), i, q[0], q[1]].join(','));
   }); });
   return lines.join('\n') + '\n';
 }
