@@ -204,14 +204,16 @@ struct IndexPage {
   void add_compare_data(const IndexedFolder& folder, const fs::path& path) {
     std::vector<std::string> left_out;
     std::string runs;
+    const fs::path file = path / "metrics.csv";
+    std::error_code error;
     try {
-      if (fs::exists(path / "metrics.csv")) {
+      if (fs::exists(fs::symlink_status(file, error))) {
         runs = compare_runs_json(folder.name + " (" + folder.experiment + ")",
-                                 read_regular_file(path / "metrics.csv", std::size_t{32} << 20),
-                                 left_out);
+                                 read_regular_file(file, std::size_t{32} << 20), left_out);
       }
     } catch (const Error& e) {
-      left_out.push_back(std::string(e.what()) + "; not in the interactive comparison");
+      left_out.push_back(in_quotes(file.string()) + ": " + e.what() +
+                         "; not in the interactive comparison");
     }
     if (!runs.empty()) spool.append(compare_data, (compare_data.empty() ? "" : ",") + runs);
     for (const std::string& text : left_out) note(text);
