@@ -43,6 +43,11 @@ std::vector<std::size_t> compare_thinned(std::size_t n) {
 std::string compare_runs_json(const std::string& group, std::string_view csv_text,
                               std::vector<std::string>& notes) {
   const CsvData csv = parse_csv(csv_text, {{}, 200000});
+  if (csv.rows_left_out > 0) {
+    notes.push_back(std::to_string(csv.rows.size() + csv.rows_left_out) +
+                    " rows, only the first " + std::to_string(csv.rows.size()) +
+                    " are in the interactive comparison");
+  }
   const std::size_t n = csv.columns.size(), label = csv.column("label"),
                     seed = csv.column("seed"), iteration = csv.column("iteration");
   std::vector<bool> numeric(n, true);
@@ -75,9 +80,9 @@ std::string compare_runs_json(const std::string& group, std::string_view csv_tex
     if (has_it) runs[at->second].last_iteration = it;
   }
   if (left_out > 0) {
-    notes.push_back(group + ": more than " + std::to_string(kCompareMaxRuns) +
-                    " runs in metrics.csv; " + std::to_string(left_out) +
-                    " rows are left out of the interactive comparison");
+    notes.push_back("more than " + std::to_string(kCompareMaxRuns) + " runs, the " +
+                    std::to_string(left_out) + " rows of the others are not in the interactive "
+                    "comparison");
   }
   std::string out;
   for (const CompareRun& run : runs) {

@@ -216,7 +216,10 @@ struct IndexPage {
                          "; not in the interactive comparison");
     }
     if (!runs.empty()) spool.append(compare_data, (compare_data.empty() ? "" : ",") + runs);
-    for (const std::string& text : left_out) note(text);
+    for (const std::string& text : left_out) {
+      note(text.rfind(in_quotes(file.string()), 0) == 0 ? text
+                                                        : in_quotes(file.string()) + ": " + text);
+    }
   }
 
   // The page, part by part: the notes, per experiment its sentences and per metric its table

@@ -16,7 +16,8 @@ inline constexpr std::size_t kCompareMaxRuns = 256;
 
 // The runs of `csv_text` as JSON objects {"g": group, "l": label, "s": seed, "c": {column:
 // [values]}} (non-finite values null), comma-separated, each through json_for_script; empty
-// when the text holds no run. What is left out (runs beyond kCompareMaxRuns) goes to `notes`.
+// when the text holds no run. What is left out (runs beyond kCompareMaxRuns) goes to `notes`
+// ("more than 256 runs, …", for the caller to name the file).
 // Throws Error (from parse_csv) on a ragged file.
 std::string compare_runs_json(const std::string& group, std::string_view csv_text,
                               std::vector<std::string>& notes);
