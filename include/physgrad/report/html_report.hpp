@@ -1,5 +1,6 @@
 // html_report — one self-contained HTML5 page of sections with text, links, captioned tables and
-// inline SVG figures; no external resources and no script. Readable down to phone widths: a
+// inline SVG figures; no external resources and no script of its own (a page may add the
+// interactive comparison of compare_view.hpp under its policy). Readable down to phone widths: a
 // figure scales with the page down to the width w·11/s at which its smallest text (s px) is
 // 11 px, and one with a narrow layout (svg::responsive) switches to it below that; tables become
 // one block per row ("header: value" lines) below 700 px, and what is still wider scrolls in
