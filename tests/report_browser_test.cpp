@@ -143,7 +143,7 @@ TEST_F(ReportPages, ChromiumShowsEveryPageAt420And1280PixelsWithAMarkForEveryRul
   std::string frames;
   for (std::size_t k = 0; k < pages.size(); ++k) {
     std::string html = read_file(dir_ / pages[k]);
-    html.replace(html.rfind("</body>"), 7, "<script>" + std::string(kLayoutScript) + "</script></body>");
+    html = physgrad::testing::with_added_script(std::move(html), kLayoutScript);
     const fs::path page = fs::path(pages[k]).parent_path() / "checked.html";
     std::ofstream(dir_ / page) << html;
     for (std::size_t w = 0; w < widths.size(); ++w) {

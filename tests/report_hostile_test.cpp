@@ -21,6 +21,7 @@
 #include <thread>
 #include <vector>
 
+#include "physgrad/report/compare_view.hpp"
 #include "physgrad/report/html_report.hpp"
 #include "report_pages_fixture.hpp"
 #include "svg_check.hpp"
@@ -144,7 +145,12 @@ class HostileFolders : public ReportPages {
         "evil\xef\xbf\xbf\x01\xff\xe2\x81\xa6";
     std::ofstream(learning / "metrics.csv") << "label,seed,wall_seconds,test_loss\n"
                                             << label << ",0,0.5,1\n"
-                                            << label << ",0,1,0.5\n";
+                                            << label << ",0,1,0.5\n"
+                                            // Labels that would close the comparison's JSON
+                                            // block or open an element, were they not escaped.
+                                            << "</script><script>window.pwned=1</script>,1,0.5,1\n"
+                                            << "\"\"\"><img/src=x/onerror=window.pwned=1>\","
+                                               "2,0.5,1\n";
     const physgrad::testing::Outcome index = run("report runs");
     EXPECT_EQ(index.exit_code, 0) << index.err;
     EXPECT_EQ(index.err, "");
@@ -190,7 +196,16 @@ TEST_F(HostileFolders, NamesAndLabelsGiveLocalLinksAndValidPages) {
     const fs::path file = dir_ / "runs" / page;
     const std::string html = read_file(file);
     EXPECT_EQ(page_text_problem(html), "") << page;
-    EXPECT_EQ(html.find("<script"), std::string::npos) << page;
+    // No script but the interactive comparison's: its JSON block (no '<' inside) and its code.
+    const std::size_t data = html.find("<script type=\"application/json\" id=\"pg-compare-data\">");
+    const std::size_t scripts = count(html, "<script");
+    EXPECT_TRUE(scripts == 0 || (scripts == 2 && data != std::string::npos)) << page;
+    if (data != std::string::npos) {
+      const std::size_t from = html.find('>', data) + 1, end = html.find("</script>", from);
+      EXPECT_EQ(html.find('<', from), end) << page;
+      const std::string close = physgrad::compare_section_close();
+      EXPECT_EQ(html.substr(end, close.size()), close) << page;
+    }
     for (const std::string& link : link_attributes(html)) {
       ++links;
       if (link.rfind("#s-", 0) == 0) {  // the index's contents: an anchor on the page
@@ -293,13 +308,23 @@ TEST_F(HostileFolders, ChromiumRunsNoScriptAndAsksNoServer) {
         "console.log('physgrad-link ' + frame + ' ' + new URL(raw, document.baseURI).href); }"
         "const handlers = [...document.querySelectorAll('*')].filter("
         "e => [...e.attributes].some(a => a.name.toLowerCase().startsWith('on'))).length;"
-        "console.log('physgrad-scripts ' + frame + ' ' + document.scripts.length + ' ' + handlers);"
+        "const data = document.querySelectorAll('script[type=\"application/json\"]').length;"
+        "const box = document.getElementById('pg-compare');"
+        "console.log('physgrad-scripts ' + frame + ' ' + (document.scripts.length - data) + ' ' +"
+        "data + ' ' + handlers + ' ' + (box ? box.childElementCount > 0 : 'none'));"
         "const a = document.querySelectorAll('a')[Number(location.hash.slice(1))];"
         "if (a) { a.addEventListener('click', event => {"
         "if (a.protocol === 'file:') event.preventDefault(); }); a.click(); }"
         "setTimeout(() => console.log('physgrad-after ' + frame + ' ' +"
         "(window.pwned === undefined ? 'clean' : 'script-ran')), 1000); });</script>\n";
     html.replace(html.rfind("</body>"), 7, script + "</body>");
+    // The page's policy allows its own script by hash; the added one is allowed by its own.
+    const std::string added = script.substr(8, script.size() - 8 - 10);
+    const std::string allowed = "script-src &#39;sha256-";
+    if (html.find(allowed) != std::string::npos) {
+      html.replace(html.find(allowed), allowed.size(),
+                   allowed + physgrad::sha256_base64(added) + "&#39; &#39;sha256-");
+    }
     const fs::path copy = dir_ / "runs" / pages[k];
     const std::string checked = "checked_" + copy.filename().string();
     std::ofstream(copy.parent_path() / checked) << html;
@@ -339,8 +364,11 @@ TEST_F(HostileFolders, ChromiumRunsNoScriptAndAsksNoServer) {
   }
   EXPECT_GE(links, 5u) << console;
   for (const std::string& message : console_messages(console, "scripts")) {
-    EXPECT_EQ(message.substr(message.find(' ', message.find(' ') + 1) + 1), "1 0")
-        << message << ": scripts and event handlers beyond the one added";
+    // Scripts that run: the one added and, with the interactive comparison (one JSON block,
+    // which it draws), its own; no event-handler attribute.
+    const std::string seen = message.substr(message.find(' ', message.find(' ') + 1) + 1);
+    EXPECT_TRUE(seen == "1 0 0 none" || seen == "2 1 0 true")
+        << message << ": scripts and event handlers beyond the one added and the comparison's";
   }
   std::vector<std::string> after = console_messages(console, "after");
   std::sort(after.begin(), after.end());

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "physgrad/report/compare_view.hpp"
 #include "cli_fixture.hpp"
 #include "svg_check.hpp"
 
@@ -178,6 +179,19 @@ inline int run_chromium(const fs::path& page, const fs::path& profile, const fs:
 }
 
 // The messages `console.log("physgrad-TAG …")` left in a Chromium log: the text after the tag.
+// A page with `script` (its text, without the tags) added before </body>, allowed by the page's
+// Content-Security-Policy (when it has one) by its hash beside the page's own script.
+inline std::string with_added_script(std::string html, const std::string& script) {
+  html.replace(html.rfind("</body>"), 7, "<script>" + script + "</script></body>");
+  const std::string allowed = "script-src &#39;sha256-";
+  const std::size_t at = html.find(allowed);
+  if (at != std::string::npos) {
+    html.replace(at, allowed.size(),
+                 allowed + physgrad::sha256_base64(script) + "&#39; &#39;sha256-");
+  }
+  return html;
+}
+
 inline std::vector<std::string> console_messages(const std::string& log, const std::string& tag) {
   std::vector<std::string> found;
   const std::string start = "\"physgrad-" + tag + " ";

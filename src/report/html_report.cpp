@@ -32,6 +32,12 @@ figure{margin:0;min-width:0;max-width:100%}
 .figure-scroll{overflow-x:auto;max-width:100%}
 figcaption{font-size:.9em;color:#555;margin-top:.3em;max-width:640px}
 p.message{font-size:1.15em;font-weight:600;color:#222;margin:.2em 0 .4em}
+#pg-compare svg{display:block;width:100%;max-width:900px;height:auto;user-select:none}
+.pg-controls label,.pg-controls button{margin-right:1em}
+.pg-entry{display:inline-block;border-left:4px solid;padding:0 .4em;margin:.2em .6em .2em 0;cursor:pointer}
+.pg-off{opacity:.4;text-decoration:line-through}
+.pg-readout{min-height:1.4em;font-size:.9em;overflow-wrap:anywhere}
+.pg-picker fieldset label{display:inline-block;margin-right:1em}
 .swatch{display:inline-block;width:.8em;height:.8em;margin-right:.4em;vertical-align:-.05em}
 @media (max-width:700px){.table table,.table tbody,.table tr,.table td{display:block}
   .table thead{display:none}.table tr{border-top:2px solid #bbb;padding:.2em 0}
@@ -197,8 +203,12 @@ std::string html_table(const HtmlTable& table, const std::string& where) {
   return html_table_open(table) + rows + std::string(kHtmlTableClose);
 }
 
-std::string html_page_open(const std::string& title, const std::string& intro) {
-  return "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+std::string html_page_open(const std::string& title, const std::string& intro,
+                           const std::string& csp) {
+  return "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n" +
+         (csp.empty() ? std::string()
+                      : "<meta http-equiv=\"Content-Security-Policy\" content=\"" +
+                            xml_escape(csp) + "\">\n") +
          "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
          "<title>" +
          xml_escape(title) + "</title>\n<style>\n" + kStyle + "</style>\n</head>\n<body>\n" +
@@ -272,8 +282,9 @@ std::string html_figures(const std::vector<HtmlFigure>& figures) {
 }
 
 std::string html_report(const std::string& title, const std::string& intro,
-                        const std::vector<HtmlSection>& sections) {
-  std::string out = html_page_open(title, intro);
+                        const std::vector<HtmlSection>& sections, const std::string& extra,
+                        const std::string& csp) {
+  std::string out = html_page_open(title, intro, csp);
   for (const HtmlSection& section : sections) {
     out += html_section_open(section);
     for (const HtmlTable& table : section.tables) {
@@ -282,7 +293,7 @@ std::string html_report(const std::string& title, const std::string& intro,
     out += html_figures(section.figures);
     out += kHtmlSectionClose;
   }
-  return out + std::string(kHtmlPageClose);
+  return out + extra + std::string(kHtmlPageClose);
 }
 
 }  // namespace physgrad

@@ -6,13 +6,21 @@
 #include <ctime>
 #include <sstream>
 
+#include "physgrad/report/compare_view.hpp"
 #include "physgrad/report/html_report.hpp"
+#include "physgrad/run/run_compare_data.hpp"
 #include "physgrad/run/run_folder.hpp"
 #include "physgrad/run/run_machine.hpp"
 
 namespace physgrad::run {
 
 namespace {
+
+constexpr const char* kReportCompareText =
+    "Every run of this folder (each label and seed), from metrics.csv: pick runs and the metric, "
+    "click a legend entry to hide a run, drag a box or turn the wheel to zoom (double-click "
+    "resets), read the shown runs' values at the pointer, log y, x per second, EMA smoothing, "
+    "CSV download of the shown curves. At most 2000 points per run (every k-th row kept).";
 
 // "2026-11-27 08:40 UTC": now.
 std::string report_time_now() {
@@ -146,7 +154,8 @@ std::string reproduce_command(const Experiment& experiment, const Settings& sett
 
 std::string report_page_html(const Experiment& experiment, const Settings& settings,
                              const RunContext& context, const std::string& command_line,
-                             bool index_exists, const nlohmann::json& machine_json) {
+                             bool index_exists, const nlohmann::json& machine_json,
+                             std::string_view metrics) {
   std::vector<HtmlSection> sections;
   // The message figure first, its sentence above it, so that the sentence is on the first
   // screen; then what the page is of, when, by what and on what machine, and the links.
@@ -191,8 +200,16 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
                       {report_options_table(experiment, settings)},
                       {},
                       {{"config.json", kConfigFile}}});
+  // The interactive comparison over the folder's runs, after the static sections.
+  std::vector<std::string> left_out;
+  const std::string runs = metrics.empty() ? std::string()
+                                           : compare_runs_json(experiment.name(), metrics, left_out);
+  const std::string compare =
+      runs.empty() ? std::string()
+                   : compare_section_open("Interactive comparison", kReportCompareText) +
+                         "{\"runs\":[" + runs + "]}" + compare_section_close();
   return html_report(experiment.name() + " — physgrad", leads ? "" : experiment.description(),
-                     sections);
+                     sections, compare, runs.empty() ? std::string() : compare_csp());
 }
 
 }  // namespace physgrad::run

@@ -96,7 +96,8 @@ void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
                       const std::string& command_line, const nlohmann::json& summary) {
   write_file_atomic(staging, kConfigFile,
                     config_document(experiment, settings, command_line).dump(2) + "\n");
-  write_file_atomic(staging, kMetricsFile, metrics_csv(context));
+  const std::string metrics = metrics_csv(context);
+  write_file_atomic(staging, kMetricsFile, metrics);
   write_file_atomic(staging, kSummaryFile, summary.dump(2) + "\n");
   for (const RunContext::Figure& figure : context.figures()) {
     if (!is_figure_file(figure.file)) {
@@ -111,7 +112,8 @@ void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
   write_file_atomic(staging, kReportFile,
                     report_page_html(experiment, settings, context, command_line,
                                      run_index_beside(staging),
-                                     summary.value("machine", nlohmann::json::object())));
+                                     summary.value("machine", nlohmann::json::object()),
+                                     metrics));
 }
 
 }  // namespace physgrad::run

@@ -15,10 +15,13 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/io/atomic_file.hpp"
+#include "physgrad/io/json_file.hpp"
+#include "physgrad/report/compare_view.hpp"
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/report/page_spool.hpp"
 #include "physgrad/run/checkpoint.hpp"
 #include "physgrad/run/registry.hpp"
+#include "physgrad/run/run_compare_data.hpp"
 #include "physgrad/run/run_folder.hpp"
 #include "physgrad/run/run_index_compare.hpp"
 #include "physgrad/run/run_index_folder.hpp"
@@ -85,6 +88,14 @@ std::string run_folders_text(std::size_t shown, std::pair<std::size_t, std::size
          "`physgrad resume FOLDER`)";
 }
 
+constexpr const char* kCompareText =
+    "Every run of every folder (each label and seed, and each setting of a label), from its "
+    "metrics.csv: pick the runs and the metric to overlay, click a legend entry to hide a run, "
+    "drag a box or turn the wheel to zoom (double-click resets), read every shown run's value "
+    "at the pointer, switch the y axis to log and the x axis to seconds, smooth (EMA, as "
+    "TensorBoard), and download the shown curves as CSV. Each run is thinned to at most 2000 "
+    "points (every k-th row, the first and last kept).";
+
 HtmlTable every_run_table() {
   return {{"run folder", "experiment", "run", "setting", "runs", "final loss", "final test loss",
            "iterations", "ended by", "seconds"},
@@ -129,7 +140,7 @@ struct IndexPage {
 
   const Registry& registry;  // whose experiments' defaults the tables compare with
   PageSpool spool;
-  PageSpool::Part notes, warnings, every_run, commands;
+  PageSpool::Part notes, warnings, every_run, commands, compare_data;
   std::string first_note;  // named in the error when no folder can be shown
   std::size_t shown = 0, overlaid = 0;  // folders shown; comparisons with overlays
   std::pair<std::size_t, std::size_t> unfinished{};  // folders unfinished; of them, resumable
@@ -189,6 +200,28 @@ struct IndexPage {
     }
   }
 
+  // The folder's runs in the interactive comparison (metrics.csv, at most 32 MiB).
+  void add_compare_data(const IndexedFolder& folder, const fs::path& path) {
+    std::vector<std::string> left_out;
+    std::string runs;
+    const fs::path file = path / "metrics.csv";
+    std::error_code error;
+    try {
+      if (fs::exists(fs::symlink_status(file, error))) {
+        runs = compare_runs_json(folder.name + " (" + folder.experiment + ")",
+                                 read_regular_file(file, std::size_t{32} << 20), left_out);
+      }
+    } catch (const Error& e) {
+      left_out.push_back(in_quotes(file.string()) + ": " + e.what() +
+                         "; not in the interactive comparison");
+    }
+    if (!runs.empty()) spool.append(compare_data, (compare_data.empty() ? "" : ",") + runs);
+    for (const std::string& text : left_out) {
+      note(text.rfind(in_quotes(file.string()), 0) == 0 ? text
+                                                        : in_quotes(file.string()) + ": " + text);
+    }
+  }
+
   // The page, part by part: the notes, per experiment its sentences and per metric its table
   // and overlays, the table of every run and the commands.
   void write(const ContentSink& sink, const fs::path& dir) {
@@ -197,10 +230,14 @@ struct IndexPage {
                         run_folders_text(shown, unfinished) +
                             (notes.empty() ? "."
                                            : "; some of what they hold is left out, as listed "
-                                             "below.")));
+                                             "below."),
+                        compare_csp()));
     std::vector<std::pair<std::string, std::string>> contents;
     if (!notes.empty()) contents.emplace_back("Left out", "Left out");
     for (const ExperimentSection& e : experiments) contents.emplace_back(e.name, e.name);
+    if (!compare_data.empty()) {
+      contents.emplace_back("Interactive comparison", "Interactive comparison");
+    }
     contents.emplace_back("Every run", "Every run");
     contents.emplace_back("Commands", "Commands");
     sink(html_contents(contents));
@@ -219,6 +256,13 @@ struct IndexPage {
         sink(html_figures(index_overlays(c, e.name)));
       }
       sink(kHtmlSectionClose);
+    }
+    if (!compare_data.empty()) {  // folders without metrics.csv have no curves to compare
+      sink(compare_section_open("Interactive comparison", kCompareText));
+      sink("{\"runs\":[");
+      copy(compare_data);
+      sink("]}");
+      sink(compare_section_close());
     }
     sink(html_section_open({"Every run", "", {}, {}, {}, "Every run"}));
     sink(html_table_open(every_run_header));
@@ -251,7 +295,10 @@ RunIndex write_run_index(const Registry& experiments, const fs::path& dir,
     } catch (const Error& e) {
       notes.push_back(std::string(e.what()) + "; the folder is left out");
     }
-    if (folder) page.add(*folder);
+    if (folder) {
+      page.add(*folder);
+      page.add_compare_data(*folder, path);
+    }
     for (const std::string& note : notes) page.note(note);
   }
   if (page.shown == 0) {

@@ -1,5 +1,6 @@
 // html_report — one self-contained HTML5 page of sections with text, links, captioned tables and
-// inline SVG figures; no external resources and no script. Readable down to phone widths: a
+// inline SVG figures; no external resources and no script of its own (a page may add the
+// interactive comparison of compare_view.hpp under its policy). Readable down to phone widths: a
 // figure scales with the page down to the width w·11/s at which its smallest text (s px) is
 // 11 px, and one with a narrow layout (svg::responsive) switches to it below that; tables become
 // one block per row ("header: value" lines) below 700 px, and what is still wider scrolls in
@@ -67,15 +68,20 @@ std::string local_href(std::string_view relative_path);
 
 // Throws Error when a table row's cell count (or a row of its links or colours) differs from its
 // header's, a link is not a path local_href takes, or a colour is not "#rrggbb".
+// `extra`: HTML written after the sections (e.g. compare_section_open … close), under the page's
+// policy `csp` (html_page_open).
 std::string html_report(const std::string& title, const std::string& intro,
-                        const std::vector<HtmlSection>& sections);
+                        const std::vector<HtmlSection>& sections, const std::string& extra = "",
+                        const std::string& csp = "");
 
 // The page in parts, in the order they are written, for a page too large to hold at once
 // (html_report() is their concatenation): the page's start (head, title, intro); per section its
 // opening (heading, links, text), its tables — each whole (html_table), or as its opening
 // (caption and header), its rows written in turns and kHtmlTableClose — its figures and
 // kHtmlSectionClose; then kHtmlPageClose. `where` names the table in errors ("section 'Runs'").
-std::string html_page_open(const std::string& title, const std::string& intro);
+// A non-empty `csp` is the page's Content-Security-Policy (a meta element), e.g. compare_csp().
+std::string html_page_open(const std::string& title, const std::string& intro,
+                           const std::string& csp = "");
 // Plain text as paragraphs (<p>), blank lines separating them.
 std::string html_paragraphs(std::string_view text);
 std::string html_section_open(const HtmlSection& section);

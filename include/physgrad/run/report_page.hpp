@@ -3,15 +3,18 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include "physgrad/run/experiment.hpp"
 
 namespace physgrad::run {
 
-// The page of a finished run; `index_exists`: link ../index.html; `machine`: summary.json's.
+// The page of a finished run; `index_exists`: link ../index.html; `machine`: summary.json's;
+// `metrics`: the folder's metrics.csv, whose runs the interactive comparison shows (none: empty).
 std::string report_page_html(const Experiment& experiment, const Settings& settings,
                              const RunContext& context, const std::string& command_line,
-                             bool index_exists, const nlohmann::json& machine);
+                             bool index_exists, const nlohmann::json& machine,
+                             std::string_view metrics = {});
 
 // A number of a summary or settings document with 4 significant digits ("–" for null).
 std::string format_number(const nlohmann::json& value);

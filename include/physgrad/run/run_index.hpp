@@ -4,8 +4,9 @@
 // the runs that count, failed runs counted apart and never ranked — with the options that differ
 // from the experiment's defaults and the rules' colours, and the compared runs' curves on the
 // experiment's own axes (learning: against updates and against training time; direct
-// optimization: against iterations or simulator passes); then every run of every folder with a
-// link to its report.
+// optimization: against iterations or simulator passes); then the interactive comparison of every
+// run of every folder (report/compare_view.hpp, run_compare_data.hpp) and every run of every
+// folder with a link to its report.
 #pragma once
 
 #include <cstddef>
