@@ -178,6 +178,28 @@ TEST(ConvFactors, KfacIsTheExactStepOnOneConvLayerWithIdentityPhysics) {
   }
 }
 
+// The checkpoint state keeps each conv layer's layout: a rule restored from it makes the same
+// next step (between refreshes, from the saved factors) as the one that saved it.
+TEST(ConvFactors, KfacStateKeepsTheConvLayerLayout) {
+  const SingleConvLayer s(5, 3);
+  auto cache = s.network.new_cache();
+  const BatchState jacobian =
+      evaluate_batch(s.network, s.problem, s.data, UpdateNeed::kStackedJacobian, *cache);
+  KroneckerHigUpdate first({.lr = 0.5, .refresh = 4});
+  first.step(jacobian);
+  const nlohmann::json state = first.state();
+  EXPECT_TRUE(state.at("layers").at(0).at("transposed").get<bool>());
+  KroneckerHigUpdate second({.lr = 0.5, .refresh = 4});
+  second.restore(state, s.network.num_parameters());
+  const BatchState gradient =
+      evaluate_batch(s.network, s.problem, s.data, UpdateNeed::kGradient, *cache);
+  EXPECT_EQ(second.need(), UpdateNeed::kGradient);
+  EXPECT_EQ(second.step(gradient).delta, first.step(gradient).delta);
+  nlohmann::json bad = state;
+  bad["layers"][0]["transposed"] = "yes";
+  EXPECT_THROW(second.restore(bad, s.network.num_parameters()), Error);
+}
+
 // A 1-D conv stack through identity physics with 2 samples of 4 outputs: 8 rows of J, so 8
 // Lanczos products span J Jᵀ's Krylov space and give the exact step on its Gram path.
 TEST(ConvFactors, LanczosWithAsManyProductsAsRowsIsTheExactStep) {
