@@ -220,6 +220,11 @@ TEST_F(Hostile, LearningStepsAndEvaluationsBeyondTimeOrMemoryAreRefused) {
                           "Jacobian rows of 37249 weights)");
   expect_refused_promptly("run heat-inverse --optimizers adam,hig",
                           "--optimizers: 'hig' needs per-sample Jacobians, which batch norm");
+  // The structured rules need the per-sample cotangents too (factors, J w products).
+  for (const std::string id : {"kfac-hig", "lanczos-hig"}) {
+    expect_refused_promptly("run heat-inverse --optimizers adam," + id,
+                            "--optimizers: '" + id + "' needs per-sample Jacobians");
+  }
   // Rules without a Jacobian take any batch the samples allow.
   const Outcome adam = run("run heat-inverse --network mlp --dims 1 --optimizers adam --batch "
                            "4096 --iters 1 --train-size 16 --test-size 8 --data fixed --out adam");
