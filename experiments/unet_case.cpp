@@ -1,5 +1,6 @@
 #include "unet_case.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "physgrad/catalogue.hpp"
@@ -51,12 +52,24 @@ void check_unet(const run::Settings& settings, int dims, Index n) {
                 std::to_string(levels - 1) + " times, so n must be a multiple of " +
                 std::to_string(factor) + "; n is " + std::to_string(n));
   }
-  if (settings.text("batch-norm") != "on") return;
-  // An Adam→rule twin (--pretrain) exists only beside a rule refused here.
+  // An Adam→rule twin (--pretrain) exists only beside a rule checked here.
   for (const std::string& id : settings.texts("optimizers")) {
-    if (make_learning_update(id)->need() == UpdateNeed::kStackedJacobian) {
+    if (make_learning_update(id)->need() != UpdateNeed::kStackedJacobian) continue;
+    if (settings.text("batch-norm") == "on") {
       throw Error("--optimizers: '" + id + "' needs per-sample Jacobians, which batch norm " +
                   "(the batch's own statistics) does not have; run it with --batch-norm off");
+    }
+    if (settings.has("batch")) {
+      // The output cotangents of every physics output (one per cell) for every sample, twice:
+      // a 64×64 kfac-hig run at batch 128 (17 GB of cotangents) was killed at 24 GB.
+      const double cells = std::pow(static_cast<double>(n), dims);
+      const long long batch = settings.integer("batch");
+      const double samples = std::min(static_cast<double>(batch),
+                                      static_cast<double>(settings.integer("train-size")));
+      require_memory(2 * 8.0 * cells * cells * samples,
+                     "--batch: " + std::to_string(batch) + " (the stacked Jacobian of '" + id +
+                         "' holds " + std::to_string(static_cast<long long>(cells)) +
+                         " output cotangents of every sample's field)");
     }
   }
 }

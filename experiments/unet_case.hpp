@@ -21,7 +21,9 @@ UNetOptions unet_of(const run::Settings& settings, int dims, Index n);
 // Throws Error when one sample's activations exceed the memory, unless n is a multiple of
 // 2^(levels − 1) (each level halves the grid), and when batch norm is on while a selected rule (or the Adam→rule twin of --pretrain) needs per-sample
 // Jacobians: batch norm normalises with the batch's own statistics, so one sample's output depends
-// on the others and J of per-sample rows is not defined; those rules need --batch-norm off.
+// on the others and J of per-sample rows is not defined; those rules need --batch-norm off. With
+// --batch given, also when twice such a rule's output cotangents (cells² doubles a sample) exceed
+// the memory.
 void check_unet(const run::Settings& settings, int dims, Index n);
 
 // Throws Error when batch norm is on and the run's batches are shared among several processes

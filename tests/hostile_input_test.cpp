@@ -222,6 +222,17 @@ TEST_F(Hostile, LearningStepsAndEvaluationsBeyondTimeOrMemoryAreRefused) {
                           "Jacobian rows of 37249 weights)");
   expect_refused_promptly("run heat-inverse --optimizers adam,hig",
                           "--optimizers: 'hig' needs per-sample Jacobians, which batch norm");
+  // The structured rules need the per-sample cotangents too (factors, J w products).
+  for (const std::string id : {"kfac-hig", "lanczos-hig"}) {
+    expect_refused_promptly("run heat-inverse --optimizers adam," + id,
+                            "--optimizers: '" + id + "' needs per-sample Jacobians");
+  }
+  // They hold the 4096 output cotangents of each sample's 64×64 field, 2^30 doubles per 8
+  // samples (a batch counts up to the training set's size), twice counted: ~1 TiB here.
+  expect_refused_promptly("run heat-inverse --batch-norm off --optimizers kfac-hig --batch 4096 "
+                          "--train-size 4096",
+                          "--batch: 4096 (the stacked Jacobian of 'kfac-hig' holds 4096 output "
+                          "cotangents of every sample's field) needs ");
   // Rules without a Jacobian take any batch the samples allow.
   const Outcome adam = run("run heat-inverse --network mlp --dims 1 --optimizers adam --batch "
                            "4096 --iters 1 --train-size 16 --test-size 8 --data fixed --out adam");

@@ -40,6 +40,27 @@ Matrix kronecker_factor_power(const Matrix& m, double p, double rcond, double da
   return vectors * weights.asDiagonal() * vectors.transpose();
 }
 
+// The layer's block of v as the outputs × (inputs + 1) matrix [W b].
+Matrix kronecker_block(const KroneckerHigUpdate::Layer& layer, const Vector& v) {
+  const Index in = layer.inputs, out = layer.outputs;
+  if (!layer.transposed) return Eigen::Map<const Matrix>(v.data() + layer.offset, out, in + 1);
+  Matrix block(out, in + 1);
+  block.leftCols(in) = Eigen::Map<const Matrix>(v.data() + layer.offset, in, out).transpose();
+  block.col(in) = v.segment(layer.offset + in * out, out);
+  return block;
+}
+
+// Writes [W b] (outputs × (inputs + 1)) into the layer's entries of v.
+void set_kronecker_block(const KroneckerHigUpdate::Layer& layer, const Matrix& block, Vector& v) {
+  const Index in = layer.inputs, out = layer.outputs;
+  if (!layer.transposed) {
+    Eigen::Map<Matrix>(v.data() + layer.offset, out, in + 1) = block;
+    return;
+  }
+  Eigen::Map<Matrix>(v.data() + layer.offset, in, out) = block.leftCols(in).transpose();
+  v.segment(layer.offset + in * out, out) = block.col(in);
+}
+
 std::string layer_key(std::size_t l, const char* what) {
   return "layer " + std::to_string(l) + " " + what;
 }
@@ -128,13 +149,14 @@ Step KroneckerHigUpdate::step(const BatchState& batch) {
       const DenseLayerFactors& f = factors[l];
       Layer& layer = layers[l];
       if (weight > 0 && (layer.offset != f.offset || layer.outputs != f.outputs ||
-                         layer.inputs != f.inputs)) {
+                         layer.inputs != f.inputs || layer.transposed != f.transposed)) {
         throw Error(id() + ": dense layer " + std::to_string(l) +
                     " does not have the shape of its saved factors");
       }
       layer.offset = f.offset;
       layer.outputs = f.outputs;
       layer.inputs = f.inputs;
+      layer.transposed = f.transposed;
       const Matrix a = f.input_gram / batch_size;
       if (weight > 0) {
         layer.input_factor = weight * layer.input_factor + (1 - weight) * a;
@@ -171,10 +193,9 @@ Step KroneckerHigUpdate::step(const BatchState& batch) {
   step.delta = Vector::Zero(gradient.size());
   for (std::size_t l = 0; l < layers_.size(); ++l) {
     const Layer& layer = layers_[l];
-    const Eigen::Map<const Matrix> g(gradient.data() + layer.offset, layer.outputs,
-                                     layer.inputs + 1);
-    Eigen::Map<Matrix>(step.delta.data() + layer.offset, layer.outputs, layer.inputs + 1) =
-        -options_.lr * (cotangent_powers_[l] * g * input_powers_[l]);
+    const Matrix g = kronecker_block(layer, gradient);
+    set_kronecker_block(layer, -options_.lr * (cotangent_powers_[l] * g * input_powers_[l]),
+                        step.delta);
   }
   ++steps_;
   step.inversion_seconds = seconds_since(start);
@@ -188,6 +209,7 @@ nlohmann::json KroneckerHigUpdate::state() const {
     layers.push_back({{"offset", layer.offset},
                       {"outputs", layer.outputs},
                       {"inputs", layer.inputs},
+                      {"transposed", layer.transposed},
                       {"input_factor", vector_to_json(layer.input_factor.reshaped())},
                       {"cotangent_factor", vector_to_json(layer.cotangent_factor.reshaped())}});
   }
@@ -209,6 +231,13 @@ void KroneckerHigUpdate::restore(const nlohmann::json& state, Index parameter_co
     layer.offset = static_cast<Index>(integer_from_json(entry, "offset"));
     layer.outputs = static_cast<Index>(integer_from_json(entry, "outputs", 1));
     layer.inputs = static_cast<Index>(integer_from_json(entry, "inputs", 1));
+    if (entry.contains("transposed")) {  // absent in checkpoints of dense networks
+      if (!entry.at("transposed").is_boolean()) {
+        throw Error("checkpoint field '" + layer_key(l, "transposed") +
+                    "': expected true or false");
+      }
+      layer.transposed = entry.at("transposed").get<bool>();
+    }
     covered += layer.outputs * (layer.inputs + 1);
     if (layer.offset + layer.outputs * (layer.inputs + 1) > parameter_count) {
       throw Error("checkpoint field '" + layer_key(l, "offset") + "': the layer ends beyond the " +

@@ -18,14 +18,16 @@ void conv_sample_reverse(const ConvOp& op, const Vector& theta, const Matrix& x,
                          Matrix* gx) {
   const Index cells_out = op.grid_out.cells();
   const Index fan_in = op.channels_in * op.geometry->taps();
-  op.geometry->im2col(x.col(b).data(), op.channels_in, patches);
   const conv_ops::ConstMap gb(g.col(b).data(), cells_out, op.channels_out);
   const Index bias_at = conv_ops::conv_bias_offset(op);
+  if (total != nullptr || rows != nullptr) {
+    op.geometry->im2col(x.col(b).data(), op.channels_in, patches);
+  }
   if (total != nullptr) {
     conv_ops::conv_gemm(true, false, fan_in, op.channels_out, cells_out, 1.0, patches.data(),
                         cells_out, gb.data(), cells_out, 1.0, total->data() + op.offset, fan_in);
     total->segment(bias_at, op.channels_out) += gb.colwise().sum().transpose();
-  } else {
+  } else if (rows != nullptr) {
     const Matrix dw = patches.transpose() * gb;
     rows->row(b).segment(op.offset, dw.size()) = dw.reshaped().transpose();
     rows->row(b).segment(bias_at, op.channels_out) = gb.colwise().sum();
@@ -66,7 +68,7 @@ void conv_reverse(const ConvOp& op, const Vector& theta, const Matrix& x, const 
 }  // namespace
 
 void ConvNetwork::reverse(const ConvNetworkCache& cache, const Matrix& gy, Vector* total,
-                          StridedMatrixRef* rows) const {
+                          StridedMatrixRef* rows, std::vector<Matrix>* cotangent_grams) const {
   const Index batch = cache.values[0].cols();
   if (gy.rows() != output_dim_ || gy.cols() != batch) {
     throw Error("ConvNetwork: gy is " + std::to_string(gy.rows()) + "x" +
@@ -86,7 +88,12 @@ void ConvNetwork::reverse(const ConvNetworkCache& cache, const Matrix& gy, Vecto
     conv_ops::ensure_zero(gx, x.rows(), batch);
     switch (op.kind) {
       case ConvOpKind::kConv:
-        conv_reverse(op, theta_, x, g, total, rows, need_gx ? &gx : nullptr);
+        if (cotangent_grams != nullptr) {
+          conv_ops::conv_cotangent_gram_add(op, g, (*cotangent_grams)[i]);
+          if (need_gx) conv_reverse(op, theta_, x, g, nullptr, nullptr, &gx);
+        } else {
+          conv_reverse(op, theta_, x, g, total, rows, need_gx ? &gx : nullptr);
+        }
         break;
       case ConvOpKind::kActivation: {
         Eigen::ArrayXXd slope(x.rows(), batch);
@@ -162,12 +169,6 @@ Matrix ConvNetwork::per_sample_gram_columns(const NetworkCache& cache,
                                             const std::vector<Index>& selected) const {
   refuse_batch_norm("per_sample_gram_columns");
   return Network::per_sample_gram_columns(cache, cotangents, selected);
-}
-
-std::vector<DenseLayerFactors> ConvNetwork::dense_layer_factors(
-    const NetworkCache& cache, const std::vector<Matrix>& cotangents) const {
-  refuse_batch_norm("dense_layer_factors");
-  return Network::dense_layer_factors(cache, cotangents);
 }
 
 Matrix ConvNetwork::jvp(const NetworkCache& cache, Index batch, const Vector& v) const {

@@ -33,6 +33,11 @@ int for_sample_blocks(Index count, const std::function<void(Index, Index, int)>&
 // y = conv(x; W, b) sample by sample; with `add`, y += conv(x; W) (+ b when given).
 void conv_apply(const ConvOp& op, const Matrix& x, ConstMap w, const Vector* bias, bool add,
                 Matrix& y);
+// Σ_b Σ_p ā_bp ā_bpᵀ over the patches ā = [patch; 1] of every sample of x ((fan_in + 1)²).
+Matrix conv_input_gram(const ConvOp& op, const Matrix& x);
+// gram (channels_out²) += Σ_b Σ_p δ_bp δ_bpᵀ, δ_bp row p of sample b's cotangent G_b (cells_out ×
+// channels_out): Σ_b G_bᵀ G_b.
+void conv_cotangent_gram_add(const ConvOp& op, const Matrix& g, Matrix& gram);
 void batch_norm_forward(const ConvOp& op, const Vector& theta, const Matrix& x, Matrix& y,
                         Matrix& normalized, Vector& inv_std);
 // Adds ∂/∂x of the batch norm to gx and its [dγ, dβ] to grad (op.offset on).

@@ -227,7 +227,7 @@ TEST_F(MpiRun, UNetMatchesOneProcessAndBatchNormIsRefused) {
   const std::string unet =
       "run sip-poisson --n 8 --levels 3 --filters 4 --train-size 12 --test-size 6 --batch 6 "
       "--iters 4 --eval-every 2 ";
-  expect_same_losses(unet + "--batch-norm off --optimizers adam,sip,hig --pretrain 0",
+  expect_same_losses(unet + "--batch-norm off --optimizers adam,sip,hig,kfac-hig --pretrain 0",
                      2);
   std::string err;
   EXPECT_EQ(run(2, unet + "--batch-norm on --optimizers adam --out bn", &err), 2);

@@ -12,7 +12,9 @@ namespace physgrad {
 // The block of JᵀJ of a dense layer z = W a + b is Σ_{i,k} (ā_i ā_iᵀ) ⊗ (δ_ik δ_ikᵀ) (ā = [a; 1],
 // δ_ik the layer's output cotangent of row k·B + i of J); K-FAC's approximation is A ⊗ S with
 // A = (1/B) Σ_i ā_i ā_iᵀ and S = Σ_{i,k} δ_ik δ_ikᵀ — exact when δ_ik does not depend on the
-// sample (a single dense layer with identity physics: S = B·I). Then (A ⊗ S)^{−p} vec(G) =
+// sample (a single dense layer with identity physics: S = B·I). A convolution counts its P output
+// positions as extra samples (KFC): A = (1/B) Σ_{i,p} ā_ip ā_ipᵀ over its input patches,
+// S = (1/P) Σ_{i,k,p} δ_ikp δ_ikpᵀ (nn/network.hpp), the dense layer's for P = 1. Then (A ⊗ S)^{−p} vec(G) =
 // vec(S^{−p} G A^{−p}), each factor taking the whole exponent p = (1+κ)/2 of the exact step
 // Δθ = −η (JᵀJ)^{−p} ∇θL, and every layer is updated on its own (blocks between layers dropped).
 // Each factor's eigenvalues λ ≤ τ²λ_max are dropped (τ as HIG's cut on σ) and the others damped,
@@ -51,9 +53,11 @@ class KroneckerHigUpdate final : public LearningUpdate {
   nlohmann::json state() const override;
   void restore(const nlohmann::json& state, Index parameter_count) override;
 
-  // One layer's running factors A, S and where its weights lie in θ.
+  // One layer's running factors A, S and where its weights lie in θ ([vec(W), b], or
+  // [vec(Wᵀ), b] when transposed, as DenseLayerFactors).
   struct Layer {
     Index offset = 0, outputs = 0, inputs = 0;
+    bool transposed = false;
     Matrix input_factor, cotangent_factor;  // A, S
   };
 

@@ -108,6 +108,10 @@ class ConvNetwork final : public Network {
                                  const std::vector<Index>& selected) const override;
   // The tangent of every slot propagated through the tape (forward mode).
   Matrix jvp(const NetworkCache& cache, Index batch, const Vector& v) const override;
+  // Every conv layer as a dense layer at each output position p (KFC): input_gram =
+  // Σ_{b,p} ā_bp ā_bpᵀ over the im2col patches with the bias's 1, cotangent_gram =
+  // (1/P) Σ_{c,p} δ_cp δ_cpᵀ, θ blocks [vec(Wᵀ), b] (transposed); one reverse sweep per cotangent
+  // matrix. Throws Error with batch norm.
   std::vector<DenseLayerFactors> dense_layer_factors(
       const NetworkCache& cache, const std::vector<Matrix>& cotangents) const override;
 
@@ -124,9 +128,10 @@ class ConvNetwork final : public Network {
   Index slot_rows(int slot) const;
   const ConvNetworkCache& checked_cache(const NetworkCache& cache) const;
   void refuse_batch_norm(const std::string& member) const;
-  // ∇θ: summed into *total, or sample b's into row b of *rows.
+  // ∇θ: summed into *total, or sample b's into row b of *rows; or, with `cotangent_grams` (one
+  // matrix per op), Σ_{b,p} δ_bp δ_bpᵀ of each conv op's output cotangents added to its entry.
   void reverse(const ConvNetworkCache& cache, const Matrix& gy, Vector* total,
-               StridedMatrixRef* rows) const;
+               StridedMatrixRef* rows, std::vector<Matrix>* cotangent_grams = nullptr) const;
 
   std::string name_;
   std::vector<ConvOp> ops_;

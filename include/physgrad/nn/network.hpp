@@ -23,11 +23,14 @@ class NetworkCache {
 // parameters lie in θ — [vec(W), b] from `offset`, which is the out × (in + 1) matrix [W b] stored
 // column by column — and the two factors of its block Σ_c (ā āᵀ) ⊗ (δ_c δ_cᵀ) of JᵀJ, with
 // ā = [a; 1] the layer's input (and the bias's 1) of the sample of cotangent column c and δ_c its
-// output cotangent ∂/∂z.
+// output cotangent ∂/∂z. A convolution is such a layer at every output position p (a = the input
+// patch there): its factors sum over the positions too, Σ_p ā_p ā_pᵀ and (1/P) Σ_{c,p} δ_cp δ_cpᵀ,
+// and its θ block is [vec(Wᵀ), b] (`transposed`).
 struct DenseLayerFactors {
-  Index offset = 0;   // first entry of [vec(W), b] in θ
+  Index offset = 0;   // first entry of [vec(W), b] (or [vec(Wᵀ), b]) in θ
   Index outputs = 0;  // rows of W, entries of b
   Index inputs = 0;   // columns of W
+  bool transposed = false;  // θ holds Wᵀ (inputs × outputs, column by column), then b
   Matrix input_gram;      // Σ_b ā_b ā_bᵀ over the batch's samples, (inputs + 1)²
   Matrix cotangent_gram;  // Σ_c δ_c δ_cᵀ over every given cotangent column, outputs²
 };

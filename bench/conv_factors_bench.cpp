@@ -1,0 +1,126 @@
+// The Kronecker-factored rules on ConvNetwork's U-net of heat-inverse (64×64 cells, 4 levels, 16
+// filters, no batch norm): the conv layers' factor statistics against the network's own gradient
+// for the same K cotangents per sample, and a kfac-hig update (refreshing, and between refreshes)
+// against an Adam update. Args: batch B, cotangents per sample K (the physics outputs m a refresh
+// sweeps; heat-inverse has m = 4096, here K random output directions stand in for them).
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <vector>
+
+#include "physgrad/catalogue.hpp"
+#include "physgrad/learn/stacked_jacobian.hpp"
+#include "physgrad/nn/conv_net.hpp"
+#include "physgrad/physics/diagonal_scale.hpp"
+#include "single_thread_main.hpp"
+
+namespace physgrad {
+namespace {
+
+// The U-net at initialisation, a batch of B inputs in [0, 1) and forward() run on it.
+struct UNetBatch {
+  ConvNetwork net = ConvNetwork::unet(UNetOptions{});
+  Matrix x;
+  std::unique_ptr<NetworkCache> cache = net.new_cache();
+  Matrix output;
+
+  explicit UNetBatch(Index batch) {
+    net.initialize(1);
+    x = (Matrix::Random(net.input_dim(), batch).array() + 1.0) / 2.0;
+    output = net.forward(x, *cache);
+  }
+  // K cotangent matrices at the output (output_dim × B each).
+  std::vector<Matrix> cotangents(Index count) const {
+    std::vector<Matrix> out;
+    for (Index k = 0; k < count; ++k) out.push_back(Matrix::Random(net.output_dim(), x.cols()));
+    return out;
+  }
+};
+
+Index bench_batch(const benchmark::State& state) { return state.range(0); }
+Index bench_cotangents(const benchmark::State& state) { return state.range(1); }
+
+// K backward sweeps of the cached batch: the network's gradient for each cotangent matrix.
+void BM_UNetGradients(benchmark::State& state) {
+  const UNetBatch u(bench_batch(state));
+  const std::vector<Matrix> gys = u.cotangents(bench_cotangents(state));
+  for (auto _ : state) {
+    for (const Matrix& gy : gys) benchmark::DoNotOptimize(u.net.backward(*u.cache, gy));
+  }
+}
+
+// The factors of every conv layer for the same K cotangent matrices.
+void BM_UNetFactors(benchmark::State& state) {
+  const UNetBatch u(bench_batch(state));
+  const std::vector<Matrix> gys = u.cotangents(bench_cotangents(state));
+  for (auto _ : state) benchmark::DoNotOptimize(u.net.dense_layer_factors(*u.cache, gys));
+}
+
+// One Adam update: forward, backward of the loss cotangent, the rule's step.
+void BM_UNetAdamUpdate(benchmark::State& state) {
+  UNetBatch u(bench_batch(state));
+  const Matrix gy = u.cotangents(1).front();
+  auto adam = make_learning_update("adam");
+  BatchState batch;
+  batch.batch_size = u.x.cols();
+  for (auto _ : state) {
+    u.net.forward(u.x, *u.cache);
+    batch.gradient = u.net.backward(*u.cache, gy);
+    benchmark::DoNotOptimize(adam->step(batch).delta);
+  }
+}
+
+// One kfac-hig update that refreshes the factors: forward, ∇θ, the factors for K output
+// directions, their eigendecompositions and the two products per layer.
+void BM_UNetKfacHigRefresh(benchmark::State& state) {
+  UNetBatch u(bench_batch(state));
+  const Index count = bench_cotangents(state);
+  const DiagonalScale directions(Vector::Ones(count));  // only its output count is used
+  auto rule = make_learning_update("kfac-hig", {{"refresh", 1}});
+  BatchState batch;
+  batch.batch_size = u.x.cols();
+  batch.loss_gradient_y = Vector::Random(count * u.x.cols());
+  for (auto _ : state) {
+    u.output = u.net.forward(u.x, *u.cache);
+    batch.jacobian = std::make_shared<LocalJacobian>(u.net, *u.cache, directions, u.output,
+                                                     u.cotangents(count));
+    benchmark::DoNotOptimize(rule->step(batch).delta);
+  }
+}
+
+// One kfac-hig update between refreshes: forward, backward, the two products per layer.
+void BM_UNetKfacHigBetween(benchmark::State& state) {
+  UNetBatch u(bench_batch(state));
+  const DiagonalScale directions(Vector::Ones(1));
+  auto rule = make_learning_update("kfac-hig", {{"refresh", 1000000}});
+  BatchState first;
+  first.batch_size = u.x.cols();
+  first.loss_gradient_y = Vector::Random(u.x.cols());
+  first.jacobian = std::make_shared<LocalJacobian>(u.net, *u.cache, directions, u.output,
+                                                   u.cotangents(1));
+  rule->step(first);  // the factors, once
+  const Matrix gy = u.cotangents(1).front();
+  BatchState batch;
+  batch.batch_size = u.x.cols();
+  for (auto _ : state) {
+    u.net.forward(u.x, *u.cache);
+    batch.gradient = u.net.backward(*u.cache, gy);
+    benchmark::DoNotOptimize(rule->step(batch).delta);
+  }
+}
+
+constexpr int kRepeats = 2;
+BENCHMARK(BM_UNetGradients)->Args({32, 1})->Args({32, 16})->Unit(benchmark::kMillisecond)
+    ->Iterations(kRepeats);
+BENCHMARK(BM_UNetFactors)->Args({32, 1})->Args({32, 16})->Unit(benchmark::kMillisecond)
+    ->Iterations(kRepeats);
+BENCHMARK(BM_UNetAdamUpdate)->Args({32, 0})->Unit(benchmark::kMillisecond)->Iterations(kRepeats);
+BENCHMARK(BM_UNetKfacHigBetween)->Args({32, 0})->Unit(benchmark::kMillisecond)
+    ->Iterations(kRepeats);
+BENCHMARK(BM_UNetKfacHigRefresh)->Args({32, 1})->Args({32, 16})->Unit(benchmark::kMillisecond)
+    ->Iterations(kRepeats);
+
+}  // namespace
+}  // namespace physgrad
+
+int main(int argc, char** argv) { return physgrad::bench::run_single_thread_benchmarks(argc, argv); }
