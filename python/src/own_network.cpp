@@ -11,6 +11,7 @@
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
+#include "physgrad/learn/kronecker_hig.hpp"
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/nn/mlp.hpp"
@@ -267,15 +268,22 @@ run::LearningExperiment::Shape OwnNetwork::shape(Index outputs) const {
 
 void OwnNetwork::check_rules(const std::vector<std::string>& optimizers,
                              const std::string& prefix) const {
-  if (!batch_norm()) return;
+  if (!widths_.empty()) return;
   for (const std::string& id : optimizers) {
+    std::unique_ptr<LearningUpdate> update;
     try {
-      if (make_learning_update(id)->need() != UpdateNeed::kStackedJacobian) continue;
+      update = make_learning_update(id);
     } catch (const Error& e) {
       throw Error(prefix + e.what());
     }
-    throw Error(prefix + "'" + id + "' needs per-sample Jacobians, which batch norm (the " +
-                "batch's own statistics) does not have; give the network batch_norm=False");
+    if (dynamic_cast<const KroneckerHigUpdate*>(update.get()) != nullptr) {
+      throw Error(prefix + "'" + id + "' needs each dense layer's Kronecker factors " +
+                  "(dense_layer_factors), which a ConvNetwork does not give; choose another rule");
+    }
+    if (batch_norm() && update->need() == UpdateNeed::kStackedJacobian) {
+      throw Error(prefix + "'" + id + "' needs per-sample Jacobians, which batch norm (the " +
+                  "batch's own statistics) does not have; give the network batch_norm=False");
+    }
   }
 }
 

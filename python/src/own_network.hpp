@@ -39,8 +39,9 @@ class OwnNetwork {
   double sample_bytes(Index data_values) const;
   // What LearningExperiment's size checks need, for `outputs` physics outputs per sample.
   run::LearningExperiment::Shape shape(Index outputs) const;
-  // Throws Error, `prefix` first, naming the first of `optimizers` that needs per-sample
-  // Jacobians when the network has batch norm (whose batch statistics tie the samples together).
+  // Throws Error, `prefix` first, naming the first of `optimizers` a ConvNetwork cannot be
+  // trained by: a Kronecker-factored rule (it needs dense layers), or, with batch norm (whose
+  // batch statistics tie the samples together), one that needs per-sample Jacobians.
   void check_rules(const std::vector<std::string>& optimizers, const std::string& prefix) const;
 
  private:

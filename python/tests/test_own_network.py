@@ -174,3 +174,14 @@ def test_a_resume_with_a_changed_network_is_refused(tmp_path):
     spelt_out = dict(UNET, in_channels=1, out_channels=1, activation="relu", padding="zero")
     assert physgrad.resume_experiment(str(stopped), progress=None,
                                       experiments=[experiment(spelt_out)]).finished
+
+
+def test_the_kronecker_factored_rules_are_refused_before_anything_runs(tmp_path):
+    # They need dense layers' factors, which a ConvNetwork does not give: refused by name when
+    # the experiment is made and when a run names them, not after the runs before them.
+    with pytest.raises(physgrad.Error, match=r"optimizers: 'kfac-hig' needs each dense layer's"):
+        experiment(optimizers=["adam", "kfac-hig"])
+    with pytest.raises(physgrad.Error, match=r"--optimizers: 'kfac' needs each dense layer's"):
+        physgrad.run_experiment("own-unet", {"optimizers": ["adam", "kfac"]},
+                                str(tmp_path / "k"), progress=None, experiments=[experiment()])
+    assert not (tmp_path / "k").exists()
