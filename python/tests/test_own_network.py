@@ -185,3 +185,39 @@ def test_the_kronecker_factored_rules_are_refused_before_anything_runs(tmp_path)
         physgrad.run_experiment("own-unet", {"optimizers": ["adam", "kfac"]},
                                 str(tmp_path / "k"), progress=None, experiments=[experiment()])
     assert not (tmp_path / "k").exists()
+
+
+class Interrupting(Smooth):
+    """Smooth, whose forward raises KeyboardInterrupt once, at its call number `at` (as Ctrl-C
+    arriving there would)."""
+
+    def __init__(self, at=None):
+        super().__init__()
+        self.calls, self.at = 0, at
+
+    def forward(self, y):
+        self.calls += 1
+        if self.calls == self.at:
+            raise KeyboardInterrupt
+        return super().forward(y)
+
+
+def test_a_stopped_unet_run_resumes_to_the_uninterrupted_result(tmp_path):
+    options = {"optimizers": ["adam", "hig"], "checkpoint-every": 5}
+    whole = physgrad.run_experiment("own-unet", options, str(tmp_path / "whole"), progress=None,
+                                    experiments=[experiment(simulator=Interrupting())])
+    part = str(tmp_path / "part")
+    with pytest.raises(KeyboardInterrupt, match="resume_experiment"):
+        physgrad.run_experiment("own-unet", options, part, progress=None,
+                                experiments=[experiment(simulator=Interrupting(at=300))])
+    assert (tmp_path / "part" / "checkpoint.pgc").exists()
+    assert not (tmp_path / "part" / "summary.json").exists()
+    resumed = physgrad.resume_experiment(part, progress=None,
+                                         experiments=[experiment(simulator=Interrupting())])
+    assert resumed.finished
+    finals = [[run["final"]["test_loss"] for run in outcome.summary["runs"]]
+              for outcome in (whole, resumed)]
+    assert finals[0] == finals[1]
+    networks = [json.loads((tmp_path / name / "networks.json").read_text())
+                for name in ("whole", "part")]
+    assert networks[0] == networks[1]  # every θ bit for bit
