@@ -1,7 +1,8 @@
 // A Python script's own learning experiment through the experiment framework (run/): a network
 // (an MLP of `widths`, or a U-net or convolution stack, own_network.hpp) maps inputs x to the
-// simulator's inputs, trained through the simulator with L = ½‖P(f(x)) − ŷ‖² on samples (x, ŷ) = data(count, seed), by each rule of
-// --optimizers; run folders, checkpoints, resume and the index as for the reference experiments.
+// simulator's inputs, trained through the simulator with L = ½‖P(f(x)) − ŷ‖² on samples
+// (x, ŷ) = data(count, seed), by each rule of --optimizers; run folders, checkpoints, resume and
+// the index as for the reference experiments.
 #include <pybind11/stl.h>
 
 #include <algorithm>

@@ -114,7 +114,8 @@ def test_a_bad_network_option_is_refused_naming_it(change, match):
 @pytest.mark.parametrize("network, match", [
     ({"n": 8}, r"network needs 'kind'"),
     ({"kind": "unet"}, r"network needs 'n'"),
-    ({"kind": "conv", "n": 8, "channels": [1]}, r"network\['channels'\] is \[1\], expected at least 2"),
+    ({"kind": "conv", "n": 8, "channels": [1]},
+     r"network\['channels'\] is \[1\], expected at least 2"),
     ({"kind": "conv", "n": 8, "channels": [1, 1], "kernel": 2}, r"network\['kernel'\] is 2"),
     ({"kind": "conv", "n": 8, "channels": [1, 1], "levels": 2}, r"network: unknown key 'levels'"),
     ({"kind": "unet", "n": 8, 3: 1}, r"network key 3 is not a string"),
