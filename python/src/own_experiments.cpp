@@ -1,7 +1,8 @@
 // A Python script's own learning experiment through the experiment framework (run/): a network
-// of `widths` (tanh between layers) maps inputs x to the simulator's inputs, trained through the
-// simulator with L = ½‖P(f(x)) − ŷ‖² on samples (x, ŷ) = data(count, seed), by each rule of
-// --optimizers; run folders, checkpoints, resume and the index as for the reference experiments.
+// (an MLP of `widths`, or a U-net or convolution stack, own_network.hpp) maps inputs x to the
+// simulator's inputs, trained through the simulator with L = ½‖P(f(x)) − ŷ‖² on samples
+// (x, ŷ) = data(count, seed), by each rule of --optimizers; run folders, checkpoints, resume and
+// the index as for the reference experiments.
 #include <pybind11/stl.h>
 
 #include <algorithm>
@@ -19,6 +20,7 @@
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/run/learning_experiment.hpp"
 #include "physgrad/text.hpp"
+#include "own_network.hpp"
 #include "python_simulator.hpp"
 #include "registry.hpp"
 
@@ -31,13 +33,16 @@ namespace ex = physgrad::run;
 class PythonLearningExperiment final : public ex::LearningExperiment {
  public:
   // Holds the GIL: asks the simulator for its output size (output_dim, else one forward pass).
+  // Exactly one of `widths` and `network` (OwnNetwork).
   PythonLearningExperiment(std::string name, std::string description, py::object simulator,
-                           std::vector<Index> widths, py::object data,
+                           const std::optional<std::vector<Index>>& widths, py::object data,
                            std::vector<std::string> optimizers, long long iterations,
-                           const py::dict& rules, Index train_size, Index test_size)
+                           const py::dict& rules, Index train_size, Index test_size,
+                           const py::object& network)
       : LearningExperiment({.eval_every = std::to_string(std::max(1LL, iterations / 10))}),
         name_(std::move(name)), description_(std::move(description)),
-        simulator_(std::move(simulator)), widths_(std::move(widths)), data_(std::move(data)),
+        simulator_(std::move(simulator)),
+        network_(widths, network, "LearningExperiment " + name_), data_(std::move(data)),
         optimizers_(std::move(optimizers)), iterations_(iterations),
         train_size_(train_size), test_size_(test_size) {
     if (name_.empty()) throw Error("LearningExperiment: the name is empty");
@@ -46,13 +51,6 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
         name_.find("..") != std::string::npos || name_.find('\0') != std::string::npos) {
       throw Error("LearningExperiment: the name '" + name_ +
                   "' holds '/', '\\' or '..' (it names run folders)");
-    }
-    if (widths_.size() < 2) {
-      throw Error("LearningExperiment " + name_ + ": widths needs at least two layers, got " +
-                  std::to_string(widths_.size()));
-    }
-    for (const Index w : widths_) {
-      if (w < 1) throw Error("LearningExperiment " + name_ + ": a width is " + std::to_string(w));
     }
     if (iterations_ < 1) {
       throw Error("LearningExperiment " + name_ + ": iterations must be ≥ 1, got " +
@@ -63,13 +61,14 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
     }
     CallbackErrors errors;
     try {
-      outputs_ = PythonSimulator(simulator_, widths_.back(), -1,
-                                 Vector::Zero(widths_.back()), errors)
+      outputs_ = PythonSimulator(simulator_, network_.output_dim(), -1,
+                                 Vector::Zero(network_.output_dim()), errors)
                      .output_dim();
     } catch (const CallbackFailed&) {
       raise_kept(errors, "LearningExperiment " + name_);
     }
     read_rules(rules);
+    network_.check_rules(optimizers_, "LearningExperiment " + name_ + ": optimizers: ");
     definition_ = definition_text();
   }
 
@@ -100,8 +99,8 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
       errors = &this->errors();
       *errors = CallbackErrors{};
       errors->stop_on_interrupt = true;  // Ctrl-C stops the run in order, keeping its checkpoint
-      physics.emplace(simulator_, widths_.back(), outputs_, Vector::Zero(widths_.back()),
-                      *errors);
+      physics.emplace(simulator_, network_.output_dim(), outputs_,
+                      Vector::Zero(network_.output_dim()), *errors);
     }
     const L2Loss loss;
     const LearningProblem problem{&*physics, &loss};
@@ -110,9 +109,8 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
     const Dataset test_set = samples(settings.integer("test-size"), 2 * seed + 1, *errors);
     ex::LearningSweep sweep(settings, context, rules_);
     for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
-      Mlp network(widths_, Activation::kTanh);
-      network.initialize(seed);
-      sweep.run(id, name_, {{"seed", seed}}, network, problem, train_set, &test_set);
+      const std::unique_ptr<Network> network = network_.build(seed);
+      sweep.run(id, name_, {{"seed", seed}}, *network, problem, train_set, &test_set);
     }
     sweep.add_loss_figures(context, name_, "run");
     sweep.set_time_message(name_, "run");
@@ -128,21 +126,24 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
                   "started (" + definition_change(recorded, definition_) +
                   "); continue it with the definition it started with, or start a new run");
     }
+    network_.check_rules(settings.texts("optimizers"), "--optimizers: ");
   }
 
   std::vector<ex::OptionSpec> own_options() const override {
     const auto bytes_each = [this](const ex::Settings&) {
-      return ex::sample_bytes(widths_, widths_.front() + outputs_);
+      return network_.sample_bytes(network_.input_dim() + outputs_);
     };
     return {ex::sample_count_option("train-size", std::to_string(train_size_),
                                     "training samples", "16", bytes_each),
             ex::sample_count_option("test-size", std::to_string(test_size_), "test samples",
                                     "8", bytes_each),
             ex::text_option("definition", definition_,
-                            "what the script defines (widths, simulator, data, rules), which "
-                            "a resume must find unchanged")};
+                            "what the script defines (widths or network, simulator, data, "
+                            "rules), which a resume must find unchanged")};
   }
-  Shape shape(const ex::Settings& /*settings*/) const override { return {outputs_, widths_}; }
+  Shape shape(const ex::Settings& /*settings*/) const override {
+    return network_.shape(outputs_);
+  }
 
  private:
   // rules {id: {option: value}}, each a learning rule's id with options it takes, in range:
@@ -183,8 +184,9 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
     }
   }
 
-  // The definition as "part=value; …": widths, outputs, the simulator's and data's kinds, and
-  // each rule's options (the options of the run are recorded as settings of their own).
+  // The definition as "part=value; …": widths or network, outputs, the simulator's and data's
+  // kinds, and each rule's options (the options of the run are recorded as settings of their
+  // own).
   std::string definition_text() const {
     const auto kind = [](const py::object& o) {
       const py::object type = py::type::of(o);
@@ -192,11 +194,7 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
       if (py::hasattr(o, "name")) text += " " + std::string(py::str(py::repr(o.attr("name"))));
       return text;
     };
-    std::string text = "widths=";
-    for (std::size_t i = 0; i < widths_.size(); ++i) {
-      if (i > 0) text += ',';
-      text += std::to_string(widths_[i]);
-    }
+    std::string text = network_.definition();
     text += "; outputs=" + std::to_string(outputs_) + "; simulator=" + kind(simulator_) +
             "; data=" + kind(data_);
     for (const auto& [id, options] : rule_texts_) text += "; rules[" + id + "]=" + options;
@@ -234,7 +232,8 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
     return change.empty() ? "'" + before + "' → '" + now + "'" : change;
   }
 
-  // data(count, seed) as a Dataset: its inputs (count, widths[0]) and targets (count, outputs).
+  // data(count, seed) as a Dataset: its inputs (count, the network's input size) and targets
+  // (count, outputs).
   Dataset samples(Index count, std::uint64_t seed, CallbackErrors& errors) const {
     return call_python(errors, "data", [&] {
       const py::object pair = data_(count, seed);
@@ -246,13 +245,14 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
       const std::string who = "LearningExperiment " + name_ + ": data";
       Dataset d{to_columns(pair[py::int_(0)], who, "inputs"),
                 to_columns(pair[py::int_(1)], who, "targets"), Matrix()};
-      if (d.inputs.rows() != widths_.front() || d.inputs.cols() != count ||
+      const Index inputs = network_.input_dim();
+      if (d.inputs.rows() != inputs || d.inputs.cols() != count ||
           d.targets.rows() != outputs_ || d.targets.cols() != count) {
         throw Error(who + " gave inputs (" + std::to_string(d.inputs.cols()) + ", " +
                     std::to_string(d.inputs.rows()) + ") and targets (" +
                     std::to_string(d.targets.cols()) + ", " + std::to_string(d.targets.rows()) +
-                    "), expected (" + std::to_string(count) + ", " +
-                    std::to_string(widths_.front()) + ") and (" + std::to_string(count) + ", " +
+                    "), expected (" + std::to_string(count) + ", " + std::to_string(inputs) +
+                    ") and (" + std::to_string(count) + ", " +
                     std::to_string(outputs_) + ")");
       }
       return d;
@@ -261,7 +261,7 @@ class PythonLearningExperiment final : public ex::LearningExperiment {
 
   std::string name_, description_;
   py::object simulator_;
-  std::vector<Index> widths_;
+  OwnNetwork network_;
   py::object data_;
   std::vector<std::string> optimizers_;
   long long iterations_;
@@ -358,17 +358,21 @@ void raise_own_callback_error(const py::object& own, const std::string& context)
 void bind_own_experiments(py::module_& m) {
   py::class_<PythonLearningExperiment, std::shared_ptr<PythonLearningExperiment>>(
       m, "LearningExperiment",
-      "A learning experiment of one's own: a network of `widths` (tanh between layers) trained "
+      "A learning experiment of one's own: a network — `widths` (an MLP, tanh between layers) "
+      "or `network` (a dict: {'kind': 'unet' or 'conv', 'n': cells per axis, ...}) — trained "
       "through `simulator` (an object with forward(x), as minimize() takes it) on samples "
-      "data(count, seed) -> (inputs (count, widths[0]), targets (count, m)), by each rule of "
-      "`optimizers`; run, resume and index it with run_experiment, resume_experiment and "
+      "data(count, seed) -> (inputs (count, network inputs), targets (count, m)), by each rule "
+      "of `optimizers`; run, resume and index it with run_experiment, resume_experiment and "
       "write_index, giving it in `experiments`.")
-      .def(py::init<std::string, std::string, py::object, std::vector<Index>, py::object,
-                    std::vector<std::string>, long long, const py::dict&, Index, Index>(),
-           py::arg("name"), py::arg("description"), py::arg("simulator"), py::arg("widths"),
-           py::arg("data"), py::arg("optimizers") = std::vector<std::string>{"adam", "hig"},
+      .def(py::init<std::string, std::string, py::object, const std::optional<std::vector<Index>>&,
+                    py::object, std::vector<std::string>, long long, const py::dict&, Index,
+                    Index, const py::object&>(),
+           py::arg("name"), py::arg("description"), py::arg("simulator"),
+           py::arg("widths") = py::none(), py::arg("data") = py::none(),
+           py::arg("optimizers") = std::vector<std::string>{"adam", "hig"},
            py::arg("iterations") = 200, py::arg("rules") = py::dict(),
-           py::arg("train_size") = 256, py::arg("test_size") = 64)
+           py::arg("train_size") = 256, py::arg("test_size") = 64, py::kw_only(),
+           py::arg("network") = py::none())
       .def_property_readonly("name", &PythonLearningExperiment::name)
       .def("__repr__", [](const PythonLearningExperiment& e) {
         return "LearningExperiment(" + e.name() + ")";
