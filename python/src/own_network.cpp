@@ -11,7 +11,6 @@
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
-#include "physgrad/learn/kronecker_hig.hpp"
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/nn/mlp.hpp"
@@ -275,10 +274,6 @@ void OwnNetwork::check_rules(const std::vector<std::string>& optimizers,
       update = make_learning_update(id);
     } catch (const Error& e) {
       throw Error(prefix + e.what());
-    }
-    if (dynamic_cast<const KroneckerHigUpdate*>(update.get()) != nullptr) {
-      throw Error(prefix + "'" + id + "' needs each dense layer's Kronecker factors " +
-                  "(dense_layer_factors), which a ConvNetwork does not give; choose another rule");
     }
     if (batch_norm() && update->need() == UpdateNeed::kStackedJacobian) {
       throw Error(prefix + "'" + id + "' needs per-sample Jacobians, which batch norm (the " +

@@ -177,15 +177,16 @@ def test_a_resume_with_a_changed_network_is_refused(tmp_path):
                                       experiments=[experiment(spelt_out)]).finished
 
 
-def test_the_kronecker_factored_rules_are_refused_before_anything_runs(tmp_path):
-    # They need dense layers' factors, which a ConvNetwork does not give: refused by name when
-    # the experiment is made and when a run names them, not after the runs before them.
-    with pytest.raises(physgrad.Error, match=r"optimizers: 'kfac-hig' needs each dense layer's"):
-        experiment(optimizers=["adam", "kfac-hig"])
-    with pytest.raises(physgrad.Error, match=r"--optimizers: 'kfac' needs each dense layer's"):
-        physgrad.run_experiment("own-unet", {"optimizers": ["adam", "kfac"]},
-                                str(tmp_path / "k"), progress=None, experiments=[experiment()])
-    assert not (tmp_path / "k").exists()
+def test_the_kronecker_factored_rules_train_a_unet_without_batch_norm(tmp_path):
+    # A ConvNetwork gives each convolution's Kronecker factors (spatial positions as samples);
+    # with batch norm they are refused as every rule needing per-sample cotangents is.
+    rules = {"kfac-hig": {"batch": 16, "lr": 0.1, "refresh": 1}}
+    result = physgrad.run_experiment("own-unet", {"optimizers": ["kfac-hig"], "iters": 5},
+                                     str(tmp_path / "k"), progress=None,
+                                     experiments=[experiment(rules=rules)])
+    assert result.finished
+    with pytest.raises(physgrad.Error, match=r"optimizers: 'kfac' needs per-sample Jacobians"):
+        experiment(dict(UNET, batch_norm=True), optimizers=["adam", "kfac"])
 
 
 class Interrupting(Smooth):

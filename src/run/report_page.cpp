@@ -6,6 +6,7 @@
 #include <ctime>
 #include <sstream>
 
+#include "physgrad/error.hpp"
 #include "physgrad/report/compare_view.hpp"
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/run/run_compare_data.hpp"
@@ -201,9 +202,15 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
                       {},
                       {{"config.json", kConfigFile}}});
   // The interactive comparison over the folder's runs, after the static sections.
+  // A metrics.csv beyond the comparison's limits (e.g. a header of 2·10⁵ columns) leaves the
+  // page without it: the run's results are written either way.
   std::vector<std::string> left_out;
-  const std::string runs = metrics.empty() ? std::string()
-                                           : compare_runs_json(experiment.name(), metrics, left_out);
+  std::string runs;
+  try {
+    if (!metrics.empty()) runs = compare_runs_json(experiment.name(), metrics, left_out);
+  } catch (const Error&) {
+    runs.clear();
+  }
   const std::string compare =
       runs.empty() ? std::string()
                    : compare_section_open("Interactive comparison", kReportCompareText) +
