@@ -2,42 +2,33 @@
 // the solve against the stencil, the inverse against the forward, and the shape checks.
 #include <gtest/gtest.h>
 
-#include <random>
-
 #include "physgrad/autodiff/finite_difference.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/physics/poisson_solve.hpp"
+#include "test_problems.hpp"
 
 namespace physgrad {
 namespace {
 
-Vector random_field(std::mt19937_64& rng, Index size) {
-  std::normal_distribution<double> normal;
-  Vector v(size);
-  for (Index i = 0; i < size; ++i) v(i) = normal(rng);
-  return v;
-}
-
 TEST(PoissonSolve, DerivativesMatchFiniteDifferences) {
-  std::mt19937_64 rng(3);
   for (const Index n : {1, 4, 8}) {
     const PoissonSolve physics(n);
-    const DerivativeCheck check = check_derivatives(physics, random_field(rng, n * n));
+    const DerivativeCheck check =
+        check_derivatives(physics, testing::random_normal(n * n, 1, 3).col(0));
     EXPECT_TRUE(check.passed) << "n " << n << ": " << check.report();
   }
 }
 
 TEST(PoissonSolve, ForwardSolvesTheStencilAndInverseUndoesIt) {
-  std::mt19937_64 rng(4);
   for (const Index n : {8, 64}) {
     const PoissonSolve physics(n);
     const Poisson stencil(n);
-    const Matrix x(random_field(rng, n * n));
+    const Matrix x = testing::random_normal(n * n, 1, 4);
     const Matrix y = physics.forward_batch(x, Matrix());
     // laplace(P(x)) = x: the solve is exact to round-off.
     EXPECT_LT((stencil.forward_batch(y, Matrix()) - x).norm() / x.norm(), 1e-12) << "n " << n;
     // P(P⁻¹(y)) = y and P⁻¹(P(x)) = x.
-    const Vector target = random_field(rng, n * n);
+    const Vector target = testing::random_normal(n * n, 1, 5).col(0);
     EXPECT_LT(inverse_residual(physics, target, Vector::Zero(n * n)), 1e-10) << "n " << n;
     EXPECT_LT((physics.inverse(y.col(0), x.col(0)) - x.col(0)).norm() / x.norm(), 1e-12);
   }

@@ -3,6 +3,10 @@
 // each experiment exists for.
 #include <gtest/gtest.h>
 
+#include <string>
+#include <utility>
+#include <vector>
+
 #include "registry.hpp"
 #include "physgrad/run/experiment.hpp"
 #include "experiment_runs.hpp"
@@ -67,16 +71,15 @@ TEST(HeatExperiment, SipReconstructsTheInitialStateBetterThanAdam) {
   EXPECT_LT(sip, 0.9 * adam);
 }
 
-// The default heat-inverse on a U-net, shrunk to 16×16 cells and 4 filters: fresh batches, both rules lower the reconstruction error, and the report carries the table
-// beside the published values.
+// The U-net experiments shrunk to 16×16 cells and 4 filters, 20 updates on fresh batches of 8.
+const std::vector<std::pair<std::string, std::string>> kSmallUNet = {
+    {"n", "16"},         {"filters", "4"},  {"iters", "20"}, {"eval-every", "10"},
+    {"train-size", "16"}, {"test-size", "8"}, {"batch", "8"}};
+
+// The default heat-inverse on a small U-net: both rules lower the reconstruction error, and the
+// report carries the table beside the published values.
 TEST(HeatExperiment, UNetRunsLowerTheReconstructionErrorOfBothRules) {
-  const RunContext context = run_experiment("heat-inverse", {{"n", "16"},
-                                                  {"filters", "4"},
-                                                  {"iters", "20"},
-                                                  {"eval-every", "10"},
-                                                  {"train-size", "16"},
-                                                  {"test-size", "8"},
-                                                  {"batch", "8"}});
+  const RunContext context = run_experiment("heat-inverse", kSmallUNet);
   for (const std::string id : {"sip", "adam"}) {
     const auto [start, end] = first_and_last(context, id);
     EXPECT_EQ(end["iteration"], 20) << id;
@@ -90,15 +93,9 @@ TEST(HeatExperiment, UNetRunsLowerTheReconstructionErrorOfBothRules) {
   EXPECT_TRUE(reference);
 }
 
-// sip-poisson shrunk to 16×16 cells: both rules bring x nearer x* (Σ|x − x*|).
+// sip-poisson on a small U-net: both rules bring x nearer x* (Σ|x − x*|).
 TEST(SipPoissonExperiment, BothRulesBringTheSolutionNearerTheTruth) {
-  const RunContext context = run_experiment("sip-poisson", {{"n", "16"},
-                                                 {"filters", "4"},
-                                                 {"iters", "20"},
-                                                 {"eval-every", "10"},
-                                                 {"train-size", "16"},
-                                                 {"test-size", "8"},
-                                                 {"batch", "8"}});
+  const RunContext context = run_experiment("sip-poisson", kSmallUNet);
   for (const std::string id : {"sip", "adam"}) {
     const auto [start, end] = first_and_last(context, id);
     EXPECT_EQ(end["iteration"], 20) << id;
