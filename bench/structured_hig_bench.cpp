@@ -136,9 +136,12 @@ const ReferenceCase& pool_case(std::int64_t which) {
   const auto found = cases.find(which);
   if (found != cases.end()) return found->second;
   const CaseSpec& spec = case_spec(which);
-  return cases.emplace(which, experiments::builtin_registry().reference(spec.experiment,
-                                                                kPoolBatches * spec.batch))
-      .first->second;
+  const auto& registry = experiments::builtin_registry();
+  ReferenceCase pool = registry.reference(spec.experiment, kPoolBatches * spec.batch);
+  // The rules' settings are those of one batch of B (poisson's step grows with the batch), not
+  // of the pool's kPoolBatches·B samples.
+  pool.defaults = registry.reference(spec.experiment, spec.batch).defaults;
+  return cases.emplace(which, std::move(pool)).first->second;
 }
 
 // point 0: the initial network; point 1: after Adam.
