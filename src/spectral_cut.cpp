@@ -128,8 +128,9 @@ const OptionDescription& kappa_option_description() {
 const OptionDescription& rcond_option_description() {
   static const OptionDescription description{
       "rcond", fraction(),
-      "relative cut τ: directions with singular value σ ≤ τ·σ_max of the inverted matrix are "
-      "dropped (eigenvalues λ = σ² ≤ τ²λ_max)"};
+      "relative cut τ on singular values σ of J, with λ = σ² for a curvature (JᵀJ, J Jᵀ, a "
+      "Kronecker factor, the Hessian's |λ|): directions with σ ≤ τ·σ_max (λ ≤ τ²λ_max) are "
+      "dropped"};
   return description;
 }
 
