@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "physgrad/error.hpp"
+#include "physgrad/spectral_cut.hpp"
 #include "physgrad/text.hpp"
 #include "symmetric_spectrum.hpp"
 
@@ -45,14 +46,6 @@ constexpr NameTable<PinvEigensolver, 4> kEigensolverNames{{
     {PinvEigensolver::kTridiagonal, "tridiagonal"},
 }};
 
-void check_rcond(double rcond) {
-  if (!(rcond >= 0 && rcond < 1)) {
-    std::ostringstream msg;
-    msg << "rcond must be in [0, 1), got " << rcond;
-    throw Error(msg.str());
-  }
-}
-
 void check_operands(const Matrix& a, const Vector& g, const char* what) {
   if (a.rows() != g.size()) {
     std::ostringstream msg;
@@ -65,8 +58,8 @@ void check_operands(const Matrix& a, const Vector& g, const char* what) {
 }
 
 // Thin SVD J = U Σ Vᵀ by divide and conquer (dgesdd, which overwrites `a` = J), then V Σ^{−κ} Uᵀ g
-// over the kept σ, which are the leading ones (dgesdd sorts σ descending).
-Vector svd_apply(Matrix& a, const Vector& g, double kappa, PowerPinvInfo& info) {
+// over the σ the cut keeps.
+Vector svd_apply(Matrix& a, const Vector& g, const SpectralCut& cut, PowerPinvInfo& info) {
   const lapack_int m = lapack_dim(a.rows());
   const lapack_int n = lapack_dim(a.cols());
   const lapack_int k = std::min(m, n);
@@ -76,14 +69,16 @@ Vector svd_apply(Matrix& a, const Vector& g, double kappa, PowerPinvInfo& info) 
   check_lapack(LAPACKE_dgesdd(LAPACK_COL_MAJOR, 'S', m, n, a.data(), m, sigma.data(), u.data(), m,
                               vt.data(), k),
                "dgesdd");
-  info.sigma_max = sigma(0);
-  if (!std::isfinite(info.sigma_max)) {
+  if (!std::isfinite(sigma(0))) {
     throw NumericalError("power_pinv_apply: the largest singular value of J overflows");
   }
-  info.rank = (sigma.array() > info.rcond_used * info.sigma_max).count();
-  info.sigma_min_kept = info.rank > 0 ? sigma(info.rank - 1) : 0.0;
+  const CutSpectrum kept = cut_singular_values(cut, sigma);
+  info.sigma_max = kept.sigma_max;
+  info.rank = kept.kept;
+  info.sigma_min_kept = kept.sigma_min_kept;
+  // dgesdd sorts σ descending: the kept ones lead.
   Vector c = u.leftCols(info.rank).transpose() * g;
-  c.array() *= sigma.head(info.rank).array().pow(-kappa);
+  c.array() *= kept.weights.head(info.rank).array();
   return vt.topRows(info.rank).transpose() * c;
 }
 
@@ -100,46 +95,39 @@ bool tries_float(const PowerPinvOptions& options) {
   return options.previous == nullptr || options.previous->float_resolves;
 }
 
-// W Σ^{−1−κ} Wᵀ x for the symmetric w = W Σ² Wᵀ (lower triangle used, consumed) over the kept
-// σ > rcond·σ_max.
-Vector eigen_apply(Matrix& w, const Vector& x, const PowerPinvOptions& options,
-                   PowerPinvInfo& info) {
+// W Σ^{−1−κ} Wᵀ x for the symmetric w = W Σ² Wᵀ (lower triangle used, consumed) over the σ the
+// cut keeps.
+Vector eigen_apply(Matrix& w, const Vector& x, const SpectralCut& cut,
+                   const PowerPinvOptions& options, PowerPinvInfo& info) {
   if (!all_finite(w) || !all_finite(x)) {
     throw NumericalError("power_pinv_apply: J Jᵀ, JᵀJ or Jᵀg overflows (non-finite entry)");
   }
   const Index n = w.rows();
-  const double rcond = info.rcond_used;
   const PinvEigensolver eigensolver = chosen_eigensolver(options, n);
-  // Below a lower bound of the cut² = rcond²·λ_max, with room to spare: the pairs dsyevr finds
-  // include every kept one.
+  // Below a lower bound of the cut on λ, with room to spare: the pairs dsyevr finds include every
+  // kept one.
   const double vl = eigensolver == PinvEigensolver::kSubset
-                        ? 0.5 * rcond * rcond * lambda_max_lower_bound(w)
+                        ? 0.5 * cut.lambda_cut(lambda_max_lower_bound(w))
                         : 0.0;
   std::optional<Spectrum> spectrum;
   if (tries_float(options)) {
-    spectrum = solve_spectrum<float>(w, eigensolver, vl, rcond);
+    spectrum = solve_spectrum<float>(w, eigensolver, vl, cut);
     if (options.precision == PinvPrecision::kAuto && !spectrum->float_resolves) {
       info.float_rejected = true;
       spectrum.reset();
     }
   }
-  if (!spectrum) spectrum = solve_spectrum<double>(w, eigensolver, vl, rcond);
+  if (!spectrum) spectrum = solve_spectrum<double>(w, eigensolver, vl, cut);
   info.precision = spectrum->precision;
   info.eigensolver = spectrum->eigensolver;
   info.float_resolves = spectrum->float_resolves;
   if (spectrum->lambda.size() == 0) return Vector::Zero(n);  // λ_max = 0: nothing above the cut
-  // Rounding can leave λ slightly < 0.
-  const Vector sigma = spectrum->lambda.cwiseMax(0.0).cwiseSqrt();
-  info.sigma_max = sigma.maxCoeff();
-  Vector weights = Vector::Zero(sigma.size());
-  for (Index i = 0; i < sigma.size(); ++i) {
-    if (!(sigma(i) > rcond * info.sigma_max)) continue;
-    weights(i) = std::pow(sigma(i), -1 - options.kappa);
-    info.sigma_min_kept = info.rank == 0 ? sigma(i) : std::min(info.sigma_min_kept, sigma(i));
-    ++info.rank;
-  }
+  const CutSpectrum kept = cut_squared(cut, spectrum->lambda);
+  info.sigma_max = kept.sigma_max;
+  info.rank = kept.kept;
+  info.sigma_min_kept = kept.sigma_min_kept;
   if (info.rank == 0) return Vector::Zero(n);
-  return spectrum->apply(weights, x);
+  return spectrum->apply(kept.weights, x);
 }
 
 // A Aᵀ (gram = true) or Aᵀ A by dsyrk: the lower triangle, the upper left zero.
@@ -152,14 +140,6 @@ Matrix squared(const Matrix& a, bool gram) {
                 lapack_dim(a.rows()), 0.0, w.data(), n);
   }
   return w;
-}
-
-void check_kappa(double kappa) {
-  if (!std::isfinite(kappa)) {
-    std::ostringstream msg;
-    msg << "power_pinv_apply: kappa must be finite, got " << kappa;
-    throw Error(msg.str());
-  }
 }
 
 // work(), with its duration added to `seconds`.
@@ -205,12 +185,23 @@ PinvEigensolver parse_pinv_eigensolver(const std::string& name) {
 }
 
 double kept_condition(const PowerPinvInfo& info) {
-  return info.rank > 0 && info.sigma_min_kept > 0 ? info.sigma_max / info.sigma_min_kept : 0.0;
+  CutSpectrum kept;
+  kept.kept = info.rank;
+  kept.sigma_max = info.sigma_max;
+  kept.sigma_min_kept = info.sigma_min_kept;
+  return kept.condition();
+}
+
+SpectralCut pinv_cut(PinvBackend backend, const PowerPinvOptions& options) {
+  return {.kappa = options.kappa,
+          .rcond = options.rcond,
+          .floor = backend == PinvBackend::kSvd ? 0.0 : kMinGramRcond};
 }
 
 bool float_resolves_spectrum(const Vector& lambda, Index n, double rcond) {
   if (lambda.size() == 0) return true;
-  return inversion_detail::FloatBounds(n, lambda.maxCoeff(), rcond).resolves(lambda);
+  return inversion_detail::FloatBounds(n, lambda.maxCoeff(), SpectralCut{.rcond = rcond})
+      .resolves(lambda);
 }
 
 PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions& options) {
@@ -237,16 +228,15 @@ Vector power_pinv_apply(const JacobianOperator& j, const Vector& g,
                 " rows but the vector has " + std::to_string(g.size()) + " entries");
   }
   if (!all_finite(g)) throw NumericalError("power_pinv_apply: non-finite entry in the vector");
-  check_rcond(options.rcond);
-  check_kappa(options.kappa);
+  SpectralCut{.kappa = options.kappa, .rcond = options.rcond}.check("power_pinv_apply");
   PowerPinvInfo local_info;
   PowerPinvInfo& out = info != nullptr ? *info : local_info;
   PowerPinvTiming local_timing;
   PowerPinvTiming& time = timing != nullptr ? *timing : local_timing;
   out = {};
   out.backend = resolve_pinv_backend(j.rows(), j.cols(), options);
-  out.rcond_used =
-      out.backend == PinvBackend::kSvd ? options.rcond : std::max(options.rcond, kMinGramRcond);
+  const SpectralCut cut = pinv_cut(out.backend, options);
+  out.rcond_used = cut.cutoff();
   if (j.rows() == 0 || j.cols() == 0) return Vector::Zero(j.cols());
 
   switch (out.backend) {
@@ -257,20 +247,20 @@ Vector power_pinv_apply(const JacobianOperator& j, const Vector& g,
       Matrix gram = timed(time.forming_seconds, [&] { return j.gram(); });
       check_square(gram, "J Jᵀ");
       return timed(time.inversion_seconds, [&] {
-        return j.apply_transpose(eigen_apply(gram, g, options, out));
+        return j.apply_transpose(eigen_apply(gram, g, cut, options, out));
       });
     }
     case PinvBackend::kNormal: {
       JacobianOperator::Normal normal = timed(time.forming_seconds, [&] { return j.normal(g); });
       check_square(normal.matrix, "JᵀJ");
       return timed(time.inversion_seconds,
-                   [&] { return eigen_apply(normal.matrix, normal.rhs, options, out); });
+                   [&] { return eigen_apply(normal.matrix, normal.rhs, cut, options, out); });
     }
     default: {
       Matrix formed = timed(time.forming_seconds, [&] { return j.materialize(); });
       check_operands(formed, g, "power_pinv_apply");
       return timed(time.inversion_seconds,
-                   [&] { return svd_apply(formed, g, options.kappa, out); });
+                   [&] { return svd_apply(formed, g, cut, out); });
     }
   }
 }
@@ -283,18 +273,14 @@ Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions
 
 Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, double rcond) {
   check_operands(a, g, "symmetric_pinv_apply");
-  check_rcond(rcond);
+  const SpectralCut cut{.kappa = 1.0, .rcond = rcond};
+  cut.check("symmetric_pinv_apply");
   if (a.rows() != a.cols()) throw Error("symmetric_pinv_apply: matrix is not square");
   if (a.size() == 0) return Vector::Zero(0);
 
   const Eigen::SelfAdjointEigenSolver<Matrix> eig(0.5 * (a + a.transpose()));
-  const Vector& lambda = eig.eigenvalues();  // ascending
-  const double cutoff = rcond * lambda.cwiseAbs().maxCoeff();
   Vector coefficients = eig.eigenvectors().transpose() * g;
-  for (Index i = 0; i < lambda.size(); ++i) {
-    coefficients(i) = std::abs(lambda(i)) > cutoff && lambda(i) != 0 ? coefficients(i) / lambda(i)
-                                                                     : 0.0;
-  }
+  cut_symmetric(cut, eig.eigenvalues(), coefficients);
   return eig.eigenvectors() * coefficients;
 }
 

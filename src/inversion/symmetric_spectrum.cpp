@@ -97,7 +97,7 @@ lapack_int sytrd(lapack_int n, float* a, float* d, float* e, float* tau) {
 }  // namespace
 
 template <typename Scalar>
-Spectrum solve_spectrum(Matrix& w, PinvEigensolver eigensolver, double vl, double rcond) {
+Spectrum solve_spectrum(Matrix& w, PinvEigensolver eigensolver, double vl, const SpectralCut& cut) {
   using ScalarMatrix = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
   using ScalarVector = Eigen::Matrix<Scalar, Eigen::Dynamic, 1>;
   constexpr bool kIsFloat = std::is_same_v<Scalar, float>;
@@ -153,7 +153,7 @@ Spectrum solve_spectrum(Matrix& w, PinvEigensolver eigensolver, double vl, doubl
   }
   // Eigenvalues ≤ vl that a subset left out must lie clearly below the cut for the check.
   if (out.lambda.size() > 0) {
-    const FloatBounds bounds(n, out.lambda.maxCoeff(), rcond);
+    const FloatBounds bounds(n, out.lambda.maxCoeff(), cut);
     const bool complete = out.lambda.size() == n || vl <= bounds.dropped_below;
     out.float_resolves = complete && bounds.resolves(out.lambda);
   }
@@ -175,7 +175,7 @@ double lambda_max_lower_bound(const Matrix& w) {
   return bound;
 }
 
-template Spectrum solve_spectrum<double>(Matrix&, PinvEigensolver, double, double);
-template Spectrum solve_spectrum<float>(Matrix&, PinvEigensolver, double, double);
+template Spectrum solve_spectrum<double>(Matrix&, PinvEigensolver, double, const SpectralCut&);
+template Spectrum solve_spectrum<float>(Matrix&, PinvEigensolver, double, const SpectralCut&);
 
 }  // namespace physgrad::inversion_detail

@@ -19,10 +19,10 @@ void check_lapack(lapack_int status, const char* routine);
 // eigenvalue error δ, the smallest clearly kept value and the largest clearly dropped one.
 struct FloatBounds {
   double kept_from, dropped_below;
-  FloatBounds(Index n, double lambda_max, double rcond) {
+  FloatBounds(Index n, double lambda_max, const SpectralCut& cut) {
     const double delta = std::sqrt(static_cast<double>(n)) *
                          std::numeric_limits<float>::epsilon() * lambda_max;
-    const double cut2 = rcond * rcond * lambda_max;
+    const double cut2 = cut.lambda_cut(lambda_max);
     kept_from = std::max(kFloatAccuracy * delta, cut2 + delta);
     dropped_below = cut2 - delta;
   }
@@ -47,9 +47,11 @@ struct Spectrum {
 // work in place on `w`; the others on copies. The tridiagonal form of a float solve is kept in
 // double (its reflectors and T rounded to float), so only the reduction runs in float.
 template <typename Scalar>
-Spectrum solve_spectrum(Matrix& w, PinvEigensolver eigensolver, double vl, double rcond);
-extern template Spectrum solve_spectrum<double>(Matrix&, PinvEigensolver, double, double);
-extern template Spectrum solve_spectrum<float>(Matrix&, PinvEigensolver, double, double);
+Spectrum solve_spectrum(Matrix& w, PinvEigensolver eigensolver, double vl, const SpectralCut& cut);
+extern template Spectrum solve_spectrum<double>(Matrix&, PinvEigensolver, double,
+                                                const SpectralCut&);
+extern template Spectrum solve_spectrum<float>(Matrix&, PinvEigensolver, double,
+                                               const SpectralCut&);
 
 // A lower bound of λ_max of the symmetric positive semi-definite w (lower triangle): the
 // largest of its diagonal entries and of the Rayleigh quotients of a few power iterations.

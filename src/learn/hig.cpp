@@ -1,6 +1,7 @@
 #include "physgrad/learn/hig.hpp"
 
 #include "physgrad/error.hpp"
+#include "physgrad/spectral_cut.hpp"
 #include "physgrad/io/serialize.hpp"
 
 namespace physgrad {
@@ -8,10 +9,8 @@ namespace physgrad {
 const OptionList<HigOptions>& HigOptions::descriptors() {
   static const OptionList<HigOptions> options = {
       rule_option("lr", &HigOptions::lr, positive(), "step size η"),
-      rule_option("kappa", &HigOptions::kappa, any_finite(),
-                  "exponent κ of J^{−κ}: ½ HIG, 1 Gauss-Newton"),
-      rule_option("rcond", &HigOptions::rcond, fraction(),
-                  "relative truncation τ: singular values σ ≤ τσ_max of J are dropped"),
+      kappa_option(&HigOptions::kappa),
+      rcond_option(&HigOptions::rcond),
       rule_option("backend", &HigOptions::backend,
                   {PinvBackend::kAuto, PinvBackend::kSvd, PinvBackend::kGram, PinvBackend::kNormal},
                   "how J^{−κ} is computed (inversion/power_pinv.hpp)"),

@@ -9,15 +9,16 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/io/serialize.hpp"
+#include "physgrad/spectral_cut.hpp"
 #include "physgrad/timing.hpp"
 
 namespace physgrad {
 
 namespace {
 
-// V f(Λ) Vᵀ for the symmetric positive semi-definite `m` = V Λ Vᵀ, f(λ) = (λ + damping·λ_max)^{−p}
-// for λ > rcond²·λ_max and 0 otherwise (a zero matrix gives zero).
-Matrix kronecker_factor_power(const Matrix& m, double p, double rcond, double damping) {
+// V f(Λ) Vᵀ for the symmetric positive semi-definite `m` = V Λ Vᵀ, the cut's weights on λ = σ²:
+// f(λ) = (λ + damping·λ_max)^{−(1+κ)/2} for σ > rcond·σ_max, 0 otherwise (a zero matrix gives zero).
+Matrix kronecker_factor_power(const Matrix& m, const SpectralCut& cut) {
   const Index n = m.rows();
   Matrix vectors = m;
   Vector lambda(n);
@@ -28,15 +29,7 @@ Matrix kronecker_factor_power(const Matrix& m, double p, double rcond, double da
     throw NumericalError("kronecker factor: LAPACK dsyevd failed (info = " +
                          std::to_string(info) + ")");
   }
-  const double largest = lambda.maxCoeff();
-  Vector weights = Vector::Zero(n);
-  if (largest > 0) {
-    for (Index i = 0; i < n; ++i) {
-      if (lambda(i) > rcond * rcond * largest) {
-        weights(i) = std::pow(lambda(i) + damping * largest, -p);
-      }
-    }
-  }
+  const Vector weights = cut_squared(cut, lambda).weights;
   return vectors * weights.asDiagonal() * vectors.transpose();
 }
 
@@ -70,12 +63,9 @@ std::string layer_key(std::size_t l, const char* what) {
 const OptionList<KroneckerHigOptions>& KroneckerHigOptions::descriptors() {
   static const OptionList<KroneckerHigOptions> options = {
       rule_option("lr", &KroneckerHigOptions::lr, positive(), "step size η"),
-      rule_option("kappa", &KroneckerHigOptions::kappa, any_finite(),
-                  "exponent κ: each factor inverted to the power (1+κ)/2, ½ HIG, 1 K-FAC"),
-      rule_option("rcond", &KroneckerHigOptions::rcond, fraction(),
-                  "relative truncation τ: factor eigenvalues λ ≤ τ²λ_max are dropped"),
-      rule_option("damping", &KroneckerHigOptions::damping, non_negative(),
-                  "added to each kept factor eigenvalue, relative to the factor's largest"),
+      kappa_option(&KroneckerHigOptions::kappa),
+      rcond_option(&KroneckerHigOptions::rcond),
+      damping_option(&KroneckerHigOptions::damping),
       rule_option("refresh", &KroneckerHigOptions::refresh, integer_at_least(1),
                   "steps from one refresh of the Kronecker factors to the next"),
       rule_option("factor_decay", &KroneckerHigOptions::factor_decay, fraction(),
@@ -108,95 +98,115 @@ void KroneckerHigUpdate::reset() {
 }
 
 void KroneckerHigUpdate::refresh_powers() {
-  const double p = 0.5 * (1.0 + options_.kappa);
+  // Each factor takes the whole exponent (1+κ)/2 on its λ = σ².
+  const SpectralCut cut{
+      .kappa = options_.kappa, .rcond = options_.rcond, .damping = options_.damping};
   std::vector<Matrix> inputs, cotangents;
   for (const Layer& layer : layers_) {
-    inputs.push_back(
-        kronecker_factor_power(layer.input_factor, p, options_.rcond, options_.damping));
-    cotangents.push_back(
-        kronecker_factor_power(layer.cotangent_factor, p, options_.rcond, options_.damping));
+    inputs.push_back(kronecker_factor_power(layer.input_factor, cut));
+    cotangents.push_back(kronecker_factor_power(layer.cotangent_factor, cut));
   }
   input_powers_ = std::move(inputs);
   cotangent_powers_ = std::move(cotangents);
 }
 
-Step KroneckerHigUpdate::step(const BatchState& batch) {
-  using Clock = std::chrono::steady_clock;
-  const bool refreshing = need() == UpdateNeed::kStackedJacobian;
-  if (refreshing && batch.jacobian == nullptr) {
-    throw Error(id() + ": this step refreshes the Kronecker factors and needs the stacked Jacobian");
+Vector KroneckerHigUpdate::parameter_gradient(const BatchState& batch) const {
+  if (batch.gradient.size() != 0) return batch.gradient;
+  if (batch.jacobian == nullptr) throw Error(id() + ": the batch has neither ∇θ nor a Jacobian");
+  return batch.jacobian->apply_transpose(batch.loss_gradient_y);
+}
+
+void KroneckerHigUpdate::average_factors(Layer& layer, const DenseLayerFactors& f, double weight,
+                                         double batch_size, std::size_t l) const {
+  if (weight > 0 && (layer.offset != f.offset || layer.outputs != f.outputs ||
+                     layer.inputs != f.inputs || layer.transposed != f.transposed)) {
+    throw Error(id() + ": dense layer " + std::to_string(l) +
+                " does not have the shape of its saved factors");
   }
-  Vector gradient = batch.gradient;
-  if (gradient.size() == 0) {
-    if (batch.jacobian == nullptr) throw Error(id() + ": the batch has neither ∇θ nor a Jacobian");
-    gradient = batch.jacobian->apply_transpose(batch.loss_gradient_y);
+  layer.offset = f.offset;
+  layer.outputs = f.outputs;
+  layer.inputs = f.inputs;
+  layer.transposed = f.transposed;
+  const Matrix a = f.input_gram / batch_size;
+  if (weight > 0) {
+    layer.input_factor = weight * layer.input_factor + (1 - weight) * a;
+    layer.cotangent_factor = weight * layer.cotangent_factor + (1 - weight) * f.cotangent_gram;
+  } else {
+    layer.input_factor = a;
+    layer.cotangent_factor = f.cotangent_gram;
   }
-  Step step;
-  // The refreshed factors in locals first: nothing changes when something below throws.
-  std::vector<Layer> layers;
-  if (refreshing) {
-    layers = layers_;
-    const auto start = Clock::now();
-    const std::vector<DenseLayerFactors> factors = batch.jacobian->dense_layer_factors();
-    const double weight = layers.empty() ? 0.0 : options_.factor_decay;
-    if (!layers.empty() && layers.size() != factors.size()) {
-      throw Error(id() + ": the network has " + std::to_string(factors.size()) +
-                  " dense layers, the saved factors " + std::to_string(layers.size()));
-    }
-    layers.resize(factors.size());
-    const auto batch_size = static_cast<double>(batch.jacobian->batch());
-    for (std::size_t l = 0; l < factors.size(); ++l) {
-      const DenseLayerFactors& f = factors[l];
-      Layer& layer = layers[l];
-      if (weight > 0 && (layer.offset != f.offset || layer.outputs != f.outputs ||
-                         layer.inputs != f.inputs || layer.transposed != f.transposed)) {
-        throw Error(id() + ": dense layer " + std::to_string(l) +
-                    " does not have the shape of its saved factors");
-      }
-      layer.offset = f.offset;
-      layer.outputs = f.outputs;
-      layer.inputs = f.inputs;
-      layer.transposed = f.transposed;
-      const Matrix a = f.input_gram / batch_size;
-      if (weight > 0) {
-        layer.input_factor = weight * layer.input_factor + (1 - weight) * a;
-        layer.cotangent_factor = weight * layer.cotangent_factor + (1 - weight) * f.cotangent_gram;
-      } else {
-        layer.input_factor = a;
-        layer.cotangent_factor = f.cotangent_gram;
-      }
-      if (!all_finite(layer.input_factor) || !all_finite(layer.cotangent_factor)) {
-        throw NumericalError(id() + ": non-finite Kronecker factor of dense layer " +
-                             std::to_string(l));
-      }
-    }
-    step.jacobian_seconds = seconds_since(start);
+  if (!all_finite(layer.input_factor) || !all_finite(layer.cotangent_factor)) {
+    throw NumericalError(id() + ": non-finite Kronecker factor of dense layer " +
+                         std::to_string(l));
   }
+}
+
+std::vector<KroneckerHigUpdate::Layer> KroneckerHigUpdate::refreshed_layers(
+    const StackedJacobian& jacobian) const {
+  std::vector<Layer> layers = layers_;
+  const std::vector<DenseLayerFactors> factors = jacobian.dense_layer_factors();
+  const double weight = layers.empty() ? 0.0 : options_.factor_decay;
+  if (!layers.empty() && layers.size() != factors.size()) {
+    throw Error(id() + ": the network has " + std::to_string(factors.size()) +
+                " dense layers, the saved factors " + std::to_string(layers.size()));
+  }
+  layers.resize(factors.size());
+  const auto batch_size = static_cast<double>(jacobian.batch());
+  for (std::size_t l = 0; l < factors.size(); ++l) {
+    average_factors(layers[l], factors[l], weight, batch_size, l);
+  }
+  return layers;
+}
+
+void KroneckerHigUpdate::check_covers(const std::vector<Layer>& layers, Index parameters) const {
   Index covered = 0;
-  for (const Layer& layer : refreshing ? layers : layers_) {
-    covered += layer.outputs * (layer.inputs + 1);
-  }
-  if (covered != gradient.size()) {
+  for (const Layer& layer : layers) covered += layer.outputs * (layer.inputs + 1);
+  if (covered != parameters) {
     throw Error(id() + ": the dense layers hold " + std::to_string(covered) + " of the " +
-                std::to_string(gradient.size()) + " parameters");
+                std::to_string(parameters) + " parameters");
   }
-  const auto start = Clock::now();
-  if (refreshing) std::swap(layers, layers_);
-  if (refreshing || input_powers_.size() != layers_.size()) {
-    try {
-      refresh_powers();
-    } catch (...) {
-      if (refreshing) std::swap(layers, layers_);
-      throw;
-    }
+}
+
+void KroneckerHigUpdate::install(std::vector<Layer>& refreshed, bool refreshing) {
+  if (refreshing) std::swap(refreshed, layers_);
+  if (!refreshing && input_powers_.size() == layers_.size()) return;
+  try {
+    refresh_powers();
+  } catch (...) {
+    if (refreshing) std::swap(refreshed, layers_);
+    throw;
   }
-  step.delta = Vector::Zero(gradient.size());
+}
+
+Vector KroneckerHigUpdate::preconditioned_step(const Vector& gradient) const {
+  Vector delta = Vector::Zero(gradient.size());
   for (std::size_t l = 0; l < layers_.size(); ++l) {
     const Layer& layer = layers_[l];
     const Matrix g = kronecker_block(layer, gradient);
     set_kronecker_block(layer, -options_.lr * (cotangent_powers_[l] * g * input_powers_[l]),
-                        step.delta);
+                        delta);
   }
+  return delta;
+}
+
+Step KroneckerHigUpdate::step(const BatchState& batch) {
+  const bool refreshing = need() == UpdateNeed::kStackedJacobian;
+  if (refreshing && batch.jacobian == nullptr) {
+    throw Error(id() + ": this step refreshes the Kronecker factors and needs the stacked Jacobian");
+  }
+  const Vector gradient = parameter_gradient(batch);
+  Step step;
+  // The refreshed factors in locals first: nothing changes when something below throws.
+  std::vector<Layer> layers;
+  if (refreshing) {
+    const auto start = std::chrono::steady_clock::now();
+    layers = refreshed_layers(*batch.jacobian);
+    step.jacobian_seconds = seconds_since(start);
+  }
+  check_covers(refreshing ? layers : layers_, gradient.size());
+  const auto start = std::chrono::steady_clock::now();
+  install(layers, refreshing);
+  step.delta = preconditioned_step(gradient);
   ++steps_;
   step.inversion_seconds = seconds_since(start);
   return step;

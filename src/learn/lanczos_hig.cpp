@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
+#include <utility>
 
 #include "physgrad/error.hpp"
+#include "physgrad/spectral_cut.hpp"
 #include "physgrad/inversion/lanczos.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
 #include "physgrad/memory.hpp"
@@ -15,10 +16,8 @@ namespace physgrad {
 const OptionList<LanczosHigOptions>& LanczosHigOptions::descriptors() {
   static const OptionList<LanczosHigOptions> options = {
       rule_option("lr", &LanczosHigOptions::lr, positive(), "step size η"),
-      rule_option("kappa", &LanczosHigOptions::kappa, any_finite(),
-                  "exponent κ: f(J Jᵀ) = (J Jᵀ)^{−(1+κ)/2}, ½ HIG, 1 Gauss-Newton"),
-      rule_option("rcond", &LanczosHigOptions::rcond, fraction(),
-                  "relative truncation τ: singular values σ ≤ τσ_max of J are dropped"),
+      kappa_option(&LanczosHigOptions::kappa),
+      rcond_option(&LanczosHigOptions::rcond),
       rule_option("products", &LanczosHigOptions::products, integer_at_least(1),
                   "J Jᵀ products (Lanczos steps) per update of the Krylov rules"),
   };
@@ -67,19 +66,13 @@ Step LanczosHigUpdate::step(const BatchState& batch) {
     product_seconds += seconds_since(begin);
     return out;
   };
-  const double cut = std::max(options_.rcond, kMinGramRcond);
-  const double power = -0.5 * (1.0 + options_.kappa);
+  // The Ritz values approximate λ = σ² of J Jᵀ: the Gram path's cut, floor included.
+  const SpectralCut cut{.kappa = options_.kappa, .rcond = options_.rcond, .floor = kMinGramRcond};
   Index kept = 0;
   const auto f = [&](const Vector& ritz) {
-    const double largest = ritz.size() > 0 ? ritz.maxCoeff() : 0.0;
-    Vector values = Vector::Zero(ritz.size());
-    for (Index i = 0; i < ritz.size(); ++i) {
-      if (largest > 0 && ritz(i) > cut * cut * largest) {
-        values(i) = std::pow(ritz(i), power);
-        ++kept;
-      }
-    }
-    return values;
+    CutSpectrum spectrum = cut_squared(cut, ritz);
+    kept = spectrum.kept;
+    return std::move(spectrum.weights);
   };
   const LanczosApproximation approximation = lanczos_function(multiply, g, q, f);
   Step step;

@@ -65,13 +65,13 @@ std::optional<Vector> ShardedJacobian::shared_gram_apply(const Vector& g,
   start = Clock::now();
   PowerPinvInfo out;
   out.backend = PinvBackend::kGram;
-  out.rcond_used = std::max(options.rcond, kMinGramRcond);
+  const SpectralCut cut = pinv_cut(PinvBackend::kGram, options);
+  out.rcond_used = cut.cutoff();
   // As the one-process tridiagonal eigensolver: J Jᵀ reduced, no eigenvector of it formed.
   out.eigensolver = PinvEigensolver::kTridiagonal;
   DistributedPowerInfo power;
   // U Σ^{−1−κ} Uᵀ g, the same bits on every rank.
-  const Vector x = distributed_truncated_power(*solver, std::move(columns), n, g, options.kappa,
-                                               out.rcond_used, &power);
+  const Vector x = distributed_truncated_power(*solver, std::move(columns), n, g, cut, &power);
   out.rank = power.kept;
   out.sigma_max = power.sigma_max;
   out.sigma_min_kept = power.sigma_min_kept;

@@ -1,14 +1,14 @@
 #include "physgrad/optim/gauss_newton.hpp"
 
 #include "physgrad/inversion/power_pinv.hpp"
+#include "physgrad/spectral_cut.hpp"
 
 namespace physgrad {
 
 const OptionList<GaussNewtonOptions>& GaussNewtonOptions::descriptors() {
   static const OptionList<GaussNewtonOptions> options = {
       rule_option("lr", &GaussNewtonOptions::lr, positive(), "step size η"),
-      rule_option("rcond", &GaussNewtonOptions::rcond, fraction(),
-                  "relative cutoff: eigenvalues of Jᵀ H_y J ≤ rcond·λ_max are dropped"),
+      rcond_option(&GaussNewtonOptions::rcond),
   };
   return options;
 }

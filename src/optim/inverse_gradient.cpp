@@ -2,6 +2,7 @@
 
 #include "physgrad/inversion/power_pinv.hpp"
 #include "physgrad/inversion/y_step.hpp"
+#include "physgrad/spectral_cut.hpp"
 
 namespace physgrad {
 
@@ -9,8 +10,7 @@ const OptionList<InverseGradientOptions>& InverseGradientOptions::descriptors() 
   static const OptionList<InverseGradientOptions> options = {
       rule_option("lr", &InverseGradientOptions::lr, positive(),
                   "step size η, the fraction of the y-space Newton step"),
-      rule_option("rcond", &InverseGradientOptions::rcond, fraction(),
-                  "relative truncation: singular values σ ≤ rcond·σ_max of J are dropped"),
+      rcond_option(&InverseGradientOptions::rcond),
   };
   return options;
 }

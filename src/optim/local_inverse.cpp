@@ -11,6 +11,7 @@
 #include "physgrad/optim/lbfgs.hpp"
 #include "physgrad/optim/minimize.hpp"
 #include "physgrad/physics/checked_simulator.hpp"
+#include "physgrad/spectral_cut.hpp"
 #include "physgrad/text.hpp"
 
 namespace physgrad {
@@ -164,8 +165,8 @@ const OptionList<LocalInverseOptions>& LocalInverseOptions::descriptors() {
                     "... or once a step changes ½‖P(x) − y‖² by ≤ this·its value (0: off)"),
         rule_option("inverse_iterations", &O::max_iterations, integer_at_least(1),
                     "iterations of the numerical inverse at most"),
-        rule_option("inverse_rcond", &O::rcond, fraction(),
-                    "ig: singular values σ ≤ rcond·σ_max of J are dropped"),
+        rule_option("inverse_rcond", &O::rcond, rcond_option_description().range,
+                    "ig: " + rcond_option_description().help),
     };
     // The numerical methods' settings mean nothing for the analytic and time-reversal inverses.
     for (RuleOption<O>& option : list) {

@@ -1,14 +1,14 @@
 #include "physgrad/optim/newton.hpp"
 
 #include "physgrad/inversion/power_pinv.hpp"
+#include "physgrad/spectral_cut.hpp"
 
 namespace physgrad {
 
 const OptionList<NewtonOptions>& NewtonOptions::descriptors() {
   static const OptionList<NewtonOptions> options = {
       rule_option("lr", &NewtonOptions::lr, positive(), "step size η"),
-      rule_option("rcond", &NewtonOptions::rcond, fraction(),
-                  "relative cutoff: Hessian eigenvalues ≤ rcond·|λ|max are dropped"),
+      rcond_option(&NewtonOptions::rcond),
   };
   return options;
 }

@@ -26,7 +26,7 @@ std::vector<Index> block_cyclic_columns(Index n, Index block, int rank, int size
 }
 
 Vector distributed_truncated_power(DistributedEigensolver& solver, Matrix local, Index n,
-                                   const Vector& g, double kappa, double rcond,
+                                   const Vector& g, const SpectralCut& cut,
                                    DistributedPowerInfo* info) {
   const auto columns =
       static_cast<Index>(block_cyclic_columns(n, solver.block(), solver.rank(), solver.size()).size());
@@ -40,7 +40,7 @@ Vector distributed_truncated_power(DistributedEigensolver& solver, Matrix local,
     throw NumericalError("distributed truncated power: non-finite entry in the matrix or the vector");
   }
   DistributedPowerInfo out;
-  Vector x = solver.truncated_power(std::move(local), n, g, kappa, rcond, &out);
+  Vector x = solver.truncated_power(std::move(local), n, g, cut, &out);
   if (info != nullptr) *info = out;
   return x;
 }

@@ -125,12 +125,12 @@ class WatchedEigensolver final : public DistributedEigensolver {
   Index block() const override { return inner_->block(); }
   int rank() const override { return inner_->rank(); }
   int size() const override { return inner_->size(); }
-  Vector truncated_power(Matrix local, Index n, const Vector& g, double kappa, double rcond,
+  Vector truncated_power(Matrix local, Index n, const Vector& g, const SpectralCut& cut,
                          DistributedPowerInfo* info) override {
     const auto count = static_cast<std::size_t>(local.size());
     join_(count);
     return watch_.run(
-        [&] { return inner_->truncated_power(std::move(local), n, g, kappa, rcond, info); },
+        [&] { return inner_->truncated_power(std::move(local), n, g, cut, info); },
         count);
   }
 

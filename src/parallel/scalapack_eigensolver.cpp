@@ -79,7 +79,7 @@ class ScalapackEigensolver final : public DistributedEigensolver {
   int rank() const override { return rank_; }
   int size() const override { return size_; }
 
-  Vector truncated_power(Matrix local, Index n, const Vector& g, double kappa, double rcond,
+  Vector truncated_power(Matrix local, Index n, const Vector& g, const SpectralCut& cut,
                          DistributedPowerInfo* info) override {
     Vector x = Vector::Zero(n);
     *info = {};
@@ -114,11 +114,12 @@ class ScalapackEigensolver final : public DistributedEigensolver {
     sum_everywhere(e);
     Vector lambda = d, scratch = e;
     check_lapack(LAPACKE_dsterf(order, lambda.data(), scratch.data()), "dsterf");  // ascending
-    const Vector sigma = lambda.cwiseMax(0.0).cwiseSqrt();  // rounding can leave λ slightly < 0
-    info->sigma_max = sigma(n - 1);
-    info->kept = (sigma.array() > rcond * info->sigma_max).count();
-    info->sigma_min_kept = info->kept > 0 ? sigma(n - info->kept) : 0.0;
+    const CutSpectrum kept = cut_squared(cut, lambda);  // the kept λ are the last ones
+    info->sigma_max = kept.sigma_max;
+    info->kept = kept.kept;
+    info->sigma_min_kept = kept.sigma_min_kept;
     if (info->kept == 0) return x;
+    const double lambda_max = std::max(lambda(n - 1), 0.0);
 
     // 3. h = Qᵀ g (on rank 0, which holds the one column of an n × 1 matrix), then to all.
     Vector h = g;
@@ -147,7 +148,7 @@ class ScalapackEigensolver final : public DistributedEigensolver {
       }
       Vector weights = s.transpose() * h;
       for (Index i = 0; i < weights.size(); ++i) {
-        weights(i) *= std::pow(std::sqrt(std::max(w(i), 0.0)), -1 - kappa);
+        weights(i) *= cut.lambda_weight(w(i), lambda_max);
       }
       y.noalias() += s * weights;
     }

@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
         local(columns[j], static_cast<physgrad::Index>(j)) = 1.0 + static_cast<double>(columns[j]);
       }
       physgrad::DistributedPowerInfo info;
-      solver->truncated_power(local, n, physgrad::Vector::Ones(n), 0.5, 1e-6, &info);
+      solver->truncated_power(local, n, physgrad::Vector::Ones(n), {.kappa = 0.5, .rcond = 1e-6}, &info);
       return 1;
     }
     std::vector<double> data(std::size_t{1} << 20, 1.0);

@@ -83,9 +83,9 @@ int main(int argc, char** argv) {
     Matrix local(c.n, static_cast<Index>(columns.size()));
     for (std::size_t s = 0; s < columns.size(); ++s) local.col(Index(s)) = a.col(columns[s]);
     physgrad::DistributedPowerInfo info;
-    const Vector x = physgrad::distributed_truncated_power(*solver, std::move(local), c.n, g,
-                                                           c.kappa, reference_info.rcond_used,
-                                                           &info);
+    const physgrad::SpectralCut cut{.kappa = c.kappa, .rcond = reference_info.rcond_used};
+    const Vector x =
+        physgrad::distributed_truncated_power(*solver, std::move(local), c.n, g, cut, &info);
     const double difference = (x - reference).norm() / reference.norm();
     const bool same_everywhere = physgrad::same_on_all_ranks(
         *communicator, physgrad::hash_doubles(x.data(), static_cast<std::size_t>(x.size())));

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "physgrad/inversion/jacobian_operator.hpp"
+#include "physgrad/spectral_cut.hpp"
 #include "physgrad/types.hpp"
 
 namespace physgrad {
@@ -104,6 +105,10 @@ struct PowerPinvTiming {
   double inversion_seconds = 0;  // the factorization and the products around it
 };
 
+// The cut of the path `backend` (spectral_cut.hpp): κ and rcond of `options`, floored at
+// kMinGramRcond on the Gram and normal paths.
+SpectralCut pinv_cut(PinvBackend backend, const PowerPinvOptions& options);
+
 // The path `options.backend` stands for on an r × c matrix: kAuto resolved as described above.
 PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions& options);
 
@@ -120,8 +125,9 @@ Vector power_pinv_apply(const JacobianOperator& j, const Vector& g,
 Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions& options = {},
                         PowerPinvInfo* info = nullptr);
 
-// Truncated pseudo-inverse of a symmetric positive semi-definite matrix applied to g:
-// A⁺ g over the eigenvalues λᵢ > rcond·λ_max (the normal-equation solve of Gauss-Newton).
+// Truncated pseudo-inverse of a symmetric matrix applied to g (the normal-equation solve of
+// Gauss-Newton, Newton's Hessian solve): A⁺ g over the eigenvalues |λᵢ| > rcond²·|λ|max, i.e.
+// rcond on σ = √|λ| as everywhere (cut_symmetric in spectral_cut.hpp).
 Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, double rcond);
 
 }  // namespace physgrad

@@ -62,6 +62,17 @@ class KroneckerHigUpdate final : public LearningUpdate {
   };
 
  private:
+  // The steps of step(): ∇θL of the batch (given, or Jᵀ ∂L/∂y); the layers with the batch's
+  // factors averaged in (one layer: average_factors); that they hold every parameter; the
+  // refreshed layers made current with their powers (nothing changes when this throws); the
+  // step −η S^{−p} ∇[W b] A^{−p} of every layer.
+  Vector parameter_gradient(const BatchState& batch) const;
+  void average_factors(Layer& layer, const DenseLayerFactors& f, double weight, double batch_size,
+                       std::size_t l) const;
+  std::vector<Layer> refreshed_layers(const StackedJacobian& jacobian) const;
+  void check_covers(const std::vector<Layer>& layers, Index parameters) const;
+  void install(std::vector<Layer>& refreshed, bool refreshing);
+  Vector preconditioned_step(const Vector& gradient) const;
   void refresh_powers();
 
   Options options_;

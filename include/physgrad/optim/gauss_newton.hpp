@@ -9,7 +9,9 @@ namespace physgrad {
 
 struct GaussNewtonOptions {
   double lr = 1.0;       // η > 0
-  double rcond = 1e-12;  // eigenvalues of Jᵀ H_y J ≤ rcond·λ_max are dropped, in [0, 1)
+  // Relative cut on σ, in [0, 1) (spectral_cut.hpp): the eigenvalues λ = σ² of Jᵀ H_y J with
+  // λ ≤ rcond²·λ_max are dropped (1e-6 on σ is 1e-12 on λ).
+  double rcond = 1e-6;
 
   // Each option once: name, member, range, help (params(), settings by name, validation).
   static const OptionList<GaussNewtonOptions>& descriptors();

@@ -1,5 +1,5 @@
 // Newton's method with the exact Hessian: Δx = −η (∂²L/∂x²)⁻¹ ∂L/∂x.
-// H = Jᵀ(∂²L/∂y²)J + Σₖ(∂L/∂yₖ)∂²Pₖ/∂x²; a singular H is pseudo-inverted (eigenvalues ≤ rcond·|λ|max dropped).
+// H = Jᵀ(∂²L/∂y²)J + Σₖ(∂L/∂yₖ)∂²Pₖ/∂x²; a singular H is pseudo-inverted (|λ| ≤ rcond²·|λ|max dropped).
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
@@ -9,7 +9,9 @@ namespace physgrad {
 
 struct NewtonOptions {
   double lr = 1.0;       // η > 0
-  double rcond = 1e-12;  // relative eigenvalue cutoff of the Hessian solve, in [0, 1)
+  // Relative cut on σ = √|λ| of the Hessian solve, in [0, 1) (spectral_cut.hpp): eigenvalues
+  // with |λ| ≤ rcond²·|λ|max are dropped (1e-6 on σ is 1e-12 on λ).
+  double rcond = 1e-6;
 
   // Each option once: name, member, range, help (params(), settings by name, validation).
   static const OptionList<NewtonOptions>& descriptors();

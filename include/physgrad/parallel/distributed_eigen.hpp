@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "physgrad/spectral_cut.hpp"
 #include "physgrad/types.hpp"
 
 namespace physgrad {
@@ -26,7 +27,8 @@ struct DistributedPowerInfo {
 // eigenvalues of T (dsterf) and the eigenvectors S of its share of the kept ones (dstemr), and
 // x = Q S σ^{−1−κ} Sᵀ Qᵀ g (pdormtr, one sum of n doubles). Neither U nor any n × n matrix
 // beyond each rank's own columns is held. Every rank calls truncated_power() with the same
-// n, g, κ and τ (a collective).
+// n, g and cut (a collective); the cut keeps and weighs the spectrum as every other path does
+// (cut_squared in spectral_cut.hpp: σ = √λ > τ·σ_max, weight σ^{−1−κ}).
 class DistributedEigensolver {
  public:
   virtual ~DistributedEigensolver() = default;
@@ -37,14 +39,14 @@ class DistributedEigensolver {
   // `local` holds this rank's columns block_cyclic_columns(n, block(), rank(), size()) of the
   // symmetric matrix (n × count, full columns; consumed). Returns x, the same bits on every
   // rank. Throws NumericalError when a ScaLAPACK or LAPACK routine fails.
-  virtual Vector truncated_power(Matrix local, Index n, const Vector& g, double kappa,
-                                 double rcond, DistributedPowerInfo* info) = 0;
+  virtual Vector truncated_power(Matrix local, Index n, const Vector& g, const SpectralCut& cut,
+                                 DistributedPowerInfo* info) = 0;
 };
 
 // solver.truncated_power() after checking the sizes (Error) and that `local` and `g` are finite
 // (NumericalError).
 Vector distributed_truncated_power(DistributedEigensolver& solver, Matrix local, Index n,
-                                   const Vector& g, double kappa, double rcond,
+                                   const Vector& g, const SpectralCut& cut,
                                    DistributedPowerInfo* info = nullptr);
 
 // From how many rows (B·m) a data-parallel Gram path hands its truncated power to the ranks'
