@@ -65,7 +65,8 @@ double eigendecomposition_seconds(Index n, long long repeats) {
 // about two more; a batch for which they cannot fit is refused before anything is allocated.
 Index bench_batch(const ex::ReferenceCase& single, const std::string& optimizer,
                   const std::string& given) {
-  const Index batch = given.empty() ? single.batch_size(optimizer) : read_integer("batch", given, 1);
+  const Index batch =
+      given.empty() ? single.batch_size(optimizer) : read_integer("batch", given, 1);
   const double order =
       static_cast<double>(batch) * static_cast<double>(single.physics->output_dim());
   char size[64];

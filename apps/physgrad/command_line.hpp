@@ -1,5 +1,5 @@
-// CommandLine — the subcommands of the physgrad command and the values they read: list,
-// describe, run (each experiment a subcommand whose options are read as text), resume, rules, bench and report.
+// CommandLine — the subcommands of the physgrad command and the values they read: list, describe,
+// run (each experiment a subcommand whose options are read as text), resume, rules, bench, report.
 #pragma once
 
 #include <CLI/CLI.hpp>

@@ -76,9 +76,9 @@ Matrix sip_y_targets(const Matrix& x, const Matrix& y, const Matrix& target,
 void answer_sip_inverses(PythonSimulator& simulator, const Matrix& y_targets, const Matrix& x,
                          const SipOptions& options, CallbackErrors& errors) {
   const InverseMethod how = options.inverse.method;
-  if (how != InverseMethod::kAnalytic && !(how == InverseMethod::kAuto && simulator.has_inverse())) {
-    return;
-  }
+  const bool analytic =
+      how == InverseMethod::kAnalytic || (how == InverseMethod::kAuto && simulator.has_inverse());
+  if (!analytic) return;
   const std::string batch = "the batch of " + std::to_string(x.cols());
   try {
     simulator.answer_inverses(y_targets, x);  // one batched call, when the object has one

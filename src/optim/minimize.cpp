@@ -283,7 +283,9 @@ void MinimizeRun::take_rejected(const Step& step) {
 // Moves to the trial's point unless its step or loss is not finite or it stays where it is,
 // then tests the stopping rules there.
 void MinimizeRun::take_accepted(const Trial& trial, const std::string& where) {
-  if (!all_finite(trial.step.delta)) return end_on(Termination::kNumericalFailure, where + "non-finite step");
+  if (!all_finite(trial.step.delta)) {
+    return end_on(Termination::kNumericalFailure, where + "non-finite step");
+  }
   const Vector dx = trial.x_next - summary_.x;
   const double step_norm = dx.norm();
   if (step_norm == 0.0) {
@@ -336,9 +338,10 @@ MinimizeSummary MinimizeRun::finish() {
   } else if (summary_.termination == Termination::kMaxIterations) {
     summary_.message = "max_iterations = " + std::to_string(options_.max_iterations) + " reached";
   } else if (converged(summary_.termination) && !(summary_.loss <= summary_.initial_loss)) {
-    end_on(Termination::kDiverged, to_string(summary_.termination) + " held (" + summary_.message +
-                                       "), but L = " + report_number(summary_.loss) +
-                                       " is above L(x₀) = " + report_number(summary_.initial_loss));
+    end_on(Termination::kDiverged,
+           to_string(summary_.termination) + " held (" + summary_.message + "), but L = " +
+               report_number(summary_.loss) +
+               " is above L(x₀) = " + report_number(summary_.initial_loss));
   }
   summary_.history.assign(std::make_move_iterator(history_.begin()),
                           std::make_move_iterator(history_.end()));

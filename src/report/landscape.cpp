@@ -163,7 +163,8 @@ std::string draw_path(const std::vector<Polyline>& pieces, const Trajectory& t,
   }
   if (!pieces.empty() && left_at.empty() && svg::inside(pieces[0].back(), f.bounds)) {
     const Point& p = pieces[0].back();
-    out += svg::rect({p.x - 4, p.y - 4, p.x + 4, p.y + 4}, "fill=\"" + color + "\" stroke=\"white\"");
+    out += svg::rect({p.x - 4, p.y - 4, p.x + 4, p.y + 4},
+                     "fill=\"" + color + "\" stroke=\"white\"");
   }
   return out;
 }

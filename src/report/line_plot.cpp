@@ -190,7 +190,8 @@ std::string draw_series_band(const Series& s, const LineFrame& f, const std::str
 
 // The series' dash pattern: its own, or where it retraces the series `under`, one none of them
 // has.
-int series_dash(const Series& s, const std::vector<std::size_t>& under, const LinePlotParts& parts) {
+int series_dash(const Series& s, const std::vector<std::size_t>& under,
+                const LinePlotParts& parts) {
   if (under.empty()) return s.dashed ? s.dash_pattern : -1;
   std::vector<int> taken;
   for (const std::size_t k : under) taken.push_back(parts.dashes_of[k]);
@@ -199,12 +200,14 @@ int series_dash(const Series& s, const std::vector<std::size_t>& under, const Li
 
 // The series' marker shape (-1: none): its own unless one it retraces has it; where it retraces
 // others and has none, a shape none of them has.
-int series_shape(const Series& s, const std::vector<std::size_t>& under, const LinePlotParts& parts) {
+int series_shape(const Series& s, const std::vector<std::size_t>& under,
+                 const LinePlotParts& parts) {
   int shape = s.markers ? s.shape : -1;
   for (const std::size_t k : under) {
     if (shape < 0 || shape == parts.shapes[k]) shape = -1;
   }
-  for (int candidate = 1; !under.empty() && candidate < plot::kShapes + 1 && shape < 0; ++candidate) {
+  if (under.empty()) return shape;
+  for (int candidate = 1; candidate < plot::kShapes + 1 && shape < 0; ++candidate) {
     const bool taken = std::any_of(under.begin(), under.end(),
                                    [&](std::size_t k) { return parts.shapes[k] == candidate; });
     if (!taken) shape = candidate;
@@ -224,8 +227,9 @@ std::string draw_series_markers(const Series& s, const LineFrame& f, int shape, 
                                                 : 1;
   every = std::min(every, std::max<std::size_t>(count, 1));
   const double size = shape == 0 ? (count <= 40 ? 5 : count <= 120 ? 3 : 2) : 7;
-  return plot::markers_svg(points, f.bounds, shape, size, color, every,
-                           static_cast<std::size_t>(retraced) * std::max<std::size_t>(1, every / 3));
+  const std::size_t offset =
+      static_cast<std::size_t>(retraced) * std::max<std::size_t>(1, every / 3);
+  return plot::markers_svg(points, f.bounds, shape, size, color, every, offset);
 }
 
 // Every point its values on hover, with the band's ends (e.g. the seeds' range) where drawn.
@@ -237,7 +241,8 @@ std::string series_hover(const Series& s, const LineFrame& f, const LinePlotOpti
     if (!(std::isfinite(p.x) && std::isfinite(p.y))) continue;
     targets.push_back({p, s.x[k], s.y[k], band ? s.band_low[k] : NAN, band ? s.band_high[k] : NAN});
   }
-  return plot::hover_targets(targets, f.box, s.label, options.x_label.empty() ? "x" : options.x_label,
+  return plot::hover_targets(targets, f.box, s.label,
+                             options.x_label.empty() ? "x" : options.x_label,
                              options.y_label.empty() ? "y" : options.y_label, targets.size());
 }
 
@@ -267,12 +272,15 @@ void draw_series_end(const Series& s, const LineTrace& t, const LineFrame& f,
   }
   const bool off_scale = !t.pieces.empty() && (t.pieces.back().back().y < box.top ||
                                                t.pieces.back().back().y > box.bottom);
-  if (off_scale) end = (end.empty() ? "" : end + ", ") + "ends off scale at " + short_number(t.last_value);
+  if (off_scale) {
+    end = (end.empty() ? "" : end + ", ") + "ends off scale at " + short_number(t.last_value);
+  }
   if (end.empty() || t.pieces.empty()) return;
   const Point last = t.pieces.back().back();
   Point at{std::clamp(last.x, box.left + 5, box.right - 5),
            std::clamp(last.y, box.top + 5, box.bottom - 5)};
-  parts.notes += off_scale ? plot::edge_arrow(at, last.y < box.top, color) : plot::cross_mark(at, color);
+  parts.notes +=
+      off_scale ? plot::edge_arrow(at, last.y < box.top, color) : plot::cross_mark(at, color);
   const double w = svg::text_width(end);
   const bool left_side = at.x > (box.left + box.right) / 2;
   double lx = left_side ? at.x - 8 - w : at.x + 8;
@@ -348,8 +356,8 @@ std::string draw_line_plot(const std::vector<Series>& series, const LinePlotOpti
   const LineFrame f = line_frame(series, options);
   LinePlotParts parts(f.box);
   for (std::size_t n = 0; n < series.size(); ++n) draw_series(series, n, f, options, parts);
-  const plot::LegendLayout legend = plot::legend(parts.entries, f.box, parts.occupied,
-                                                 options.height - 4.0, options.width, legend_inside);
+  const plot::LegendLayout legend = plot::legend(
+      parts.entries, f.box, parts.occupied, options.height - 4.0, options.width, legend_inside);
   const int height = options.height + static_cast<int>(std::ceil(legend.height_below));
   // The clip reaches a little past the frame, so that lines along the data range's ends
   // (which the axes end at) show in full.
