@@ -60,6 +60,52 @@ double eigendecomposition_seconds(Index n, long long repeats) {
   return median(times);
 }
 
+// The batch: the rule's own in the experiment (as `physgrad run NAME` uses it) unless `given`.
+// The reference eigendecomposition holds three B·m × B·m matrices and dsyevd's workspace of
+// about two more; a batch for which they cannot fit is refused before anything is allocated.
+Index bench_batch(const ex::ReferenceCase& single, const std::string& optimizer,
+                  const std::string& given) {
+  const Index batch =
+      given.empty() ? single.batch_size(optimizer) : read_integer("batch", given, 1);
+  const double order =
+      static_cast<double>(batch) * static_cast<double>(single.physics->output_dim());
+  char size[64];
+  std::snprintf(size, sizeof size, "%.0f × %.0f", order, order);
+  require_memory(5 * order * order * sizeof(double),
+                 "--batch: " + std::to_string(batch) +
+                     " (the reference eigendecomposition of a " + size + " matrix)");
+  return batch;
+}
+
+// The seconds of each timed step: in all, forming J, inverting, the rule's own work, the rest.
+struct StepTimes {
+  std::vector<double> total, jacobian, inverse, rule, other;
+};
+
+// `warmup` untimed steps, then `steps` timed ones; a step not applied is an Error naming `what`.
+StepTimes time_steps(ex::ReferenceCase& reference, LearningUpdate& update, long long warmup,
+                     long long steps, const std::string& what) {
+  const LearningProblem problem = reference.problem();
+  StepTimes times;
+  StepState step_state;
+  for (long long s = 0; s < warmup + steps; ++s) {
+    const StepReport report =
+        train_step(reference.network, update, problem, reference.batch, step_state);
+    if (!report.applied()) {
+      throw Error("bench: step " + std::to_string(s + 1) + " of " + what + ": " +
+                  describe_failure(report, s));
+    }
+    if (s < warmup) continue;
+    times.total.push_back(report.total_seconds);
+    times.jacobian.push_back(report.derivative_seconds);
+    times.inverse.push_back(report.inversion_seconds);
+    times.rule.push_back(report.update_seconds);
+    times.other.push_back(std::max(0.0, report.total_seconds - report.derivative_seconds -
+                                            report.inversion_seconds - report.update_seconds));
+  }
+  return times;
+}
+
 }  // namespace
 
 BenchCommand::BenchCommand(CLI::App& app)
@@ -99,41 +145,13 @@ void BenchCommand::run(std::ostream& out) const {
   }
   set_jacobian_threads(static_cast<int>(threads));
 
-  // The rule's own batch size, step size and τ in NAME, as `physgrad run NAME` uses them.
-  const Index batch = batch_.empty() ? single.batch_size(optimizer_)
-                                     : read_integer("batch", batch_, 1);
-  // The reference eigendecomposition holds three B·m × B·m matrices and dsyevd's workspace of
-  // about two more; refuse a batch for which they cannot fit before allocating anything.
-  const double order =
-      static_cast<double>(batch) * static_cast<double>(single.physics->output_dim());
-  char size[64];
-  std::snprintf(size, sizeof size, "%.0f × %.0f", order, order);
-  require_memory(5 * order * order * sizeof(double),
-                 "--batch: " + std::to_string(batch) +
-                     " (the reference eigendecomposition of a " + size + " matrix)");
+  const Index batch = bench_batch(single, optimizer_, batch_);
   ex::ReferenceCase reference = ex::builtin_registry().reference(name_, batch);
   const auto update = reference.update(optimizer_);
-  const LearningProblem problem = reference.problem();
-  Mlp& network = reference.network;
+  const Mlp& network = reference.network;
 
-  std::vector<double> total, jacobian, inverse, rule, other;
-  StepState step_state;
-  for (long long s = 0; s < warmup + steps; ++s) {
-    const StepReport report =
-        train_step(network, *update, problem, reference.batch, step_state);
-    if (!report.applied()) {
-      throw Error("bench: step " + std::to_string(s + 1) + " of " + optimizer_ + " on " + name_ +
-                  ": " + describe_failure(report, s));
-    }
-    if (s < warmup) continue;
-    total.push_back(report.total_seconds);
-    jacobian.push_back(report.derivative_seconds);
-    inverse.push_back(report.inversion_seconds);
-    rule.push_back(report.update_seconds);
-    other.push_back(std::max(0.0, report.total_seconds - report.derivative_seconds -
-                                      report.inversion_seconds - report.update_seconds));
-  }
-
+  const StepTimes times =
+      time_steps(reference, *update, warmup, steps, optimizer_ + " on " + name_);
   const Index rows = reference.batch.size() * reference.physics->output_dim();
   std::string backend = "none";
   nlohmann::json rank = nullptr;
@@ -145,7 +163,7 @@ void BenchCommand::run(std::ostream& out) const {
   }
   // At most 5 repeats: at B·m = 4096 one takes seconds.
   const double reference_seconds = eigendecomposition_seconds(rows, std::min(steps, 5LL));
-  const double per_step = median(total);
+  const double per_step = median(times.total);
   nlohmann::json line = {
       {"experiment", name_},
       {"optimizer", optimizer_},
@@ -156,10 +174,10 @@ void BenchCommand::run(std::ostream& out) const {
       {"blas_core", blas_core()},
       {"seconds_per_step", per_step},
       {"split",
-       {{"jacobian", median(jacobian)},
-        {"inverse", median(inverse)},
-        {"update", median(rule)},
-        {"other", median(other)}}},
+       {{"jacobian", median(times.jacobian)},
+        {"inverse", median(times.inverse)},
+        {"update", median(times.rule)},
+        {"other", median(times.other)}}},
       {"jacobian_shape", {rows, network.num_parameters()}},
       {"backend", backend},
       {"rank", rank},

@@ -18,7 +18,7 @@
 #include <new>
 #include <optional>
 
-#include "bench_command.hpp"
+#include "command_line.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
@@ -37,24 +37,6 @@ namespace ex = physgrad::experiments;
 namespace fs = std::filesystem;
 
 constexpr int kUsageError = 2;
-
-std::string type_name(const ex::OptionSpec& spec) {
-  switch (spec.kind) {
-    case ex::OptionSpec::Kind::kReal: return "NUMBER";
-    case ex::OptionSpec::Kind::kInteger: return "INT";
-    case ex::OptionSpec::Kind::kText: return "TEXT";
-    case ex::OptionSpec::Kind::kRealList: return "NUMBERS";
-    case ex::OptionSpec::Kind::kTextList: return "NAMES";
-  }
-  return "TEXT";
-}
-
-std::string option_help(const ex::OptionSpec& spec) {
-  std::string help = spec.help;
-  const std::string range = ex::describe_range(spec);
-  if (!range.empty()) help += " (" + range + ")";
-  return help;
-}
 
 // Every argument is a text value: refuse control characters (a NUL cuts a path short) and bytes
 // that are not UTF-8 (config.json could not hold them), naming the option they belong to.
@@ -226,142 +208,99 @@ int start_run(const ex::Experiment& experiment, const ex::Settings& settings,
       ex::Run::start(experiment, settings, out, cli_hooks(progress, command_line)));
 }
 
-// The command of this process: parses, checks that every rank was started alike, runs.
-int run_command(int argc, char** argv) {
-  std::string command_line;
-  for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
-
-  CLI::App app{"physgrad — inversion-based optimization for physics-based deep learning"};
-  app.require_subcommand(1);
-  CLI::App* list = app.add_subcommand("list", "list the experiments");
-  CLI::App* describe =
-      app.add_subcommand("describe", "show an experiment's options: kind, default, range");
-  std::string describe_name;
-  describe->add_option("NAME", describe_name, "experiment name (see list)")->required();
-  CLI::App* run = app.add_subcommand(
-      "run", "run an experiment: physgrad run NAME [--config FILE.json] [options]");
-  run->require_subcommand(1);
-  CLI::App* resume = app.add_subcommand(
-      "resume", "continue an interrupted run from the checkpoint in its folder");
-  std::string resume_folder;
-  resume->add_option("DIR", resume_folder, "the run folder (its --out)")->required();
-  CLI::App* rules =
-      app.add_subcommand("rules", "the update rules: id, update, options and their defaults");
-  bool rules_markdown = false;
-  rules->add_flag("--markdown", rules_markdown, "as the Markdown tables of docs/update_rules.md");
-  const physgrad::cli::BenchCommand bench(app);
-  CLI::App* report = app.add_subcommand(
-      "report", "write DIR/index.html over the run folders in DIR: every run's results and the "
-                "loss curves of all runs overlaid");
-  std::string report_folder;
-  report->add_option("DIR", report_folder, "a folder of run folders, e.g. runs")->required();
-
-  // Each experiment is a subcommand of `run` with its own options, all read as text and
-  // validated by the experiment framework so every bad value gets the same kind of message.
-  std::map<std::string, std::map<std::string, std::string>> texts;
-  std::map<std::string, std::vector<CLI::Option*>> cli_options;
-  std::map<std::string, std::string> config_files;
-  std::map<std::string, CLI::Option*> config_file_options;
-  for (const auto& experiment : ex::builtin_registry()) {
-    CLI::App* sub = run->add_subcommand(experiment->name(), experiment->description());
-    config_file_options[experiment->name()] =
-        sub->add_option("--config", config_files[experiment->name()],
-                        "read option values from a JSON file (keys: option names; flags win)")
-            ->type_name("FILE.json");
-    for (const ex::OptionSpec& spec : ex::all_options(*experiment)) {
-      CLI::Option* option =
-          sub->add_option("--" + spec.name, texts[experiment->name()][spec.name], option_help(spec));
-      option->default_str(spec.default_text)->type_name(type_name(spec));
-      cli_options[experiment->name()].push_back(option);
-    }
-  }
-
+// Parses the command line; a code to exit with when that ends the command (--help, a usage
+// error). An unknown subcommand or experiment is named explicitly instead of CLI11's generic
+// "A subcommand is required" or "not expected".
+std::optional<int> parse_command_line(physgrad::cli::CommandLine& command, int argc, char** argv) {
+  namespace cli = physgrad::cli;
   try {
     check_arguments(argc, argv);
-    // Name an unknown subcommand or experiment explicitly instead of CLI11's generic "A
-    // subcommand is required" or "not expected".
-    if (argc == 1 || argv[1][0] != '-') check_subcommand(app, argc > 1 ? argv[1] : "");
+    if (argc == 1 || argv[1][0] != '-') check_subcommand(command.app, argc > 1 ? argv[1] : "");
     if (argc > 2 && std::string(argv[1]) == "run" && argv[2][0] != '-') {
       ex::builtin_registry().find(argv[2]);
     }
-    app.parse(argc, argv);
+    command.app.parse(argc, argv);
   } catch (const CLI::Success& e) {  // --help: the ranks compare it too, then print it
-    namespace cli = physgrad::cli;
     const int code = cli::require_same_command(cli::rank_command(argc, argv, nullptr, nullptr));
-    return code != 0 ? code : app.exit(e);
+    return code != 0 ? code : command.app.exit(e);
   } catch (const std::exception& e) {
     return usage_error(e.what());
   }
+  return std::nullopt;
+}
 
+void print_experiments() {
+  std::size_t width = 0;
+  for (const auto& experiment : ex::builtin_registry()) {
+    width = std::max(width, experiment->name().size());
+  }
+  for (const auto& experiment : ex::builtin_registry()) {
+    std::cout << std::left << std::setw(static_cast<int>(width + 2)) << experiment->name()
+              << experiment->description() << '\n';
+  }
+}
+
+// Carries out the parsed subcommand: those that only print first, then the runs.
+int carry_out(const physgrad::cli::CommandLine& command, const physgrad::cli::ChosenRun& chosen,
+              const std::string& command_line) {
+  if (command.list->parsed()) {
+    print_experiments();
+    return 0;
+  }
+  if (command.rules->parsed()) {
+    print_rules(command.rules_markdown);
+    return 0;
+  }
+  if (command.bench->parsed()) {
+    reserve_blas_buffer();
+    command.bench->run(std::cout);
+    return 0;
+  }
+  if (command.report->parsed()) {
+    const ex::RunIndex index = ex::write_run_index(ex::builtin_registry(), command.report_folder);
+    std::cout << "index of " << index.folders << " run folders: " << index.page.string() << '\n';
+    return 0;
+  }
+  if (command.describe->parsed()) {
+    print_table(ex::options_table(ex::builtin_registry().find(command.describe_name)));
+    return 0;
+  }
+  reserve_blas_buffer();
+  ex::install_interrupt_handlers();
+  if (command.resume->parsed()) {
+    StderrProgress progress;
+    return report_outcome(ex::Run::resume(ex::builtin_registry(), command.resume_folder,
+                                          cli_hooks(progress, command_line)));
+  }
+  if (chosen.experiment != nullptr) {
+    return start_run(*chosen.experiment, *chosen.settings, chosen.given, command_line);
+  }
+  return 0;
+}
+
+// The command of this process: parses, checks that every rank was started alike, runs.
+int run_command(int argc, char** argv) {
+  namespace cli = physgrad::cli;
+  std::string command_line;
+  for (int i = 0; i < argc; ++i) command_line += (i ? " " : "") + std::string(argv[i]);
+  cli::CommandLine command;
+  if (const std::optional<int> code = parse_command_line(command, argc, argv)) return *code;
   try {
     // The run's experiment and settings first: the ranks compare them before anything is done.
-    const ex::Experiment* chosen = nullptr;
-    ex::OptionTexts given;
-    std::optional<ex::Settings> settings;
-    for (const auto& candidate : ex::builtin_registry()) {
-      if (!run->get_subcommand(candidate->name())->parsed()) continue;
-      chosen = candidate.get();
-      // File values first, so that flags given on the command line override them.
-      if (config_file_options[chosen->name()]->count() > 0) {
-        given = ex::read_config_file(*chosen, config_files[chosen->name()]);
-      }
-      for (CLI::Option* option : cli_options[chosen->name()]) {
-        if (option->count() == 0) continue;
-        const std::string name = option->get_name().substr(2);  // drop "--"
-        given.emplace_back(name, texts[chosen->name()][name]);
-      }
-      settings.emplace(ex::resolve_settings(*chosen, given));
-    }
-    if (const int code = physgrad::cli::require_same_command(
-            physgrad::cli::rank_command(argc, argv, chosen, settings ? &*settings : nullptr));
+    const cli::ChosenRun chosen = cli::chosen_run(command);
+    const auto* settings = chosen.settings ? &*chosen.settings : nullptr;
+    if (const int code =
+            cli::require_same_command(cli::rank_command(argc, argv, chosen.experiment, settings));
         code != 0) {
       return code;
     }
-    if (list->parsed()) {
-      std::size_t width = 0;
-      for (const auto& experiment : ex::builtin_registry()) {
-        width = std::max(width, experiment->name().size());
-      }
-      for (const auto& experiment : ex::builtin_registry()) {
-        std::cout << std::left << std::setw(static_cast<int>(width + 2)) << experiment->name()
-                  << experiment->description() << '\n';
-      }
-      return 0;
-    }
-    if (rules->parsed()) {
-      print_rules(rules_markdown);
-      return 0;
-    }
-    if (bench.parsed()) {
-      reserve_blas_buffer();
-      bench.run(std::cout);
-      return 0;
-    }
-    if (report->parsed()) {
-      const ex::RunIndex index = ex::write_run_index(ex::builtin_registry(), report_folder);
-      std::cout << "index of " << index.folders << " run folders: " << index.page.string()
-                << '\n';
-      return 0;
-    }
-    if (describe->parsed()) {
-      print_table(ex::options_table(ex::builtin_registry().find(describe_name)));
-      return 0;
-    }
-    reserve_blas_buffer();
-    ex::install_interrupt_handlers();
-    if (resume->parsed()) {
-      StderrProgress progress;
-      return report_outcome(ex::Run::resume(ex::builtin_registry(), resume_folder,
-                                            cli_hooks(progress, command_line)));
-    }
-    if (chosen != nullptr) return start_run(*chosen, *settings, given, command_line);
+    return carry_out(command, chosen, command_line);
   } catch (const std::bad_alloc&) {
     return usage_error("out of memory: a size given (samples, batch, grid, list) needs more than "
                        "this machine or its limits (ulimit -v) allow");
   } catch (const std::exception& e) {
     return usage_error(e.what());
   }
-  return 0;
 }
 
 }  // namespace

@@ -1,25 +1,19 @@
 // physgrad — the library in one include: every public header of the core library (the drawing of
 // report/, the experiment framework run/, the MPI communicator and the ScaLAPACK eigensolver are
-// libraries of their own).
+// libraries of their own; the private headers of cmake/private_headers.txt are not installed).
 #pragma once
 
 // A test reads this list against include/physgrad/ (tests/front_door_test.cpp).
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/rule_option.hpp"
+#include "physgrad/rule_step.hpp"
 #include "physgrad/stop.hpp"
 #include "physgrad/text.hpp"
 #include "physgrad/threads.hpp"
-#include "physgrad/timing.hpp"
 #include "physgrad/types.hpp"
 
-#include "physgrad/io/atomic_file.hpp"
-#include "physgrad/io/checkpoint_file.hpp"
-#include "physgrad/io/csv.hpp"
 #include "physgrad/io/folder_handle.hpp"
-#include "physgrad/io/hash.hpp"
-#include "physgrad/io/json_file.hpp"
-#include "physgrad/io/serialize.hpp"
 
 #include "physgrad/physics/checked_simulator.hpp"
 #include "physgrad/physics/comparison_toy.hpp"
@@ -37,7 +31,6 @@
 #include "physgrad/loss/loss.hpp"
 
 #include "physgrad/nn/activation.hpp"
-#include "physgrad/nn/checked_network.hpp"
 #include "physgrad/nn/conv_layers.hpp"
 #include "physgrad/nn/conv_net.hpp"
 #include "physgrad/nn/dense_layer_gram.hpp"
@@ -46,7 +39,6 @@
 #include "physgrad/nn/network.hpp"
 
 #include "physgrad/parallel/communicator.hpp"
-#include "physgrad/parallel/distributed_eigen.hpp"
 #include "physgrad/parallel/shard.hpp"
 
 #include "physgrad/autodiff/dual.hpp"
@@ -71,9 +63,7 @@
 #include "physgrad/optim/quasi_newton.hpp"
 
 #include "physgrad/inversion/jacobian_operator.hpp"
-#include "physgrad/inversion/lanczos.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
-#include "physgrad/inversion/tridiagonal_eigen.hpp"
 #include "physgrad/inversion/y_step.hpp"
 
 #include "physgrad/learn/adam.hpp"
@@ -84,7 +74,6 @@
 #include "physgrad/learn/mapped_jacobian.hpp"
 #include "physgrad/learn/schedule.hpp"
 #include "physgrad/learn/sgd.hpp"
-#include "physgrad/learn/sharded_jacobian.hpp"
 #include "physgrad/learn/sip.hpp"
 #include "physgrad/learn/stacked_jacobian.hpp"
 #include "physgrad/learn/switching.hpp"

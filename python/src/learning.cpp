@@ -22,12 +22,17 @@ namespace physgrad::python {
 
 namespace {
 
-// Δθ = −η J^{−κ} g for J given as an array of shape (B, m, P) or (B·m, P), C-contiguous: float64
-// is read where it lies; float32 is converted once into a double copy (the step is double).
-py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradient_y, double lr,
-                        double kappa, double rcond, const std::string& backend,
-                        const std::string& precision, const std::string& eigensolver,
-                        const py::object& previous) {
+// A Jacobian of shape (B, m, P) or (B·m, P), C-contiguous: float64 read where it lies, float32
+// converted once into a double copy (column-major P × B·m, the transpose of the given layout:
+// the same entries in the same order).
+struct JacobianArray {
+  Index batch = 0, outputs = 1, cols = 0;
+  const double* given = nullptr;  // float64 only
+  Matrix converted;               // float32 only
+  const double* data() const { return given != nullptr ? given : converted.data(); }
+};
+
+JacobianArray read_jacobian_array(const py::array& jacobian) {
   if (jacobian.ndim() != 2 && jacobian.ndim() != 3) {
     throw Error("jacobian_step: the Jacobian has " + std::to_string(jacobian.ndim()) +
                 " dimensions, expected (B, m, P) or (B·m, P)");
@@ -35,46 +40,85 @@ py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradie
   if (!(jacobian.flags() & py::array::c_style)) {
     throw Error("jacobian_step: the Jacobian is not C-contiguous (make it contiguous first)");
   }
-  const Index batch = jacobian.shape(0);
-  const Index outputs = jacobian.ndim() == 3 ? jacobian.shape(1) : 1;
-  const Index cols = jacobian.shape(jacobian.ndim() - 1);
-  const double* data = nullptr;
-  Matrix converted;  // float32 only
+  JacobianArray j;
+  j.batch = jacobian.shape(0);
+  j.outputs = jacobian.ndim() == 3 ? jacobian.shape(1) : 1;
+  j.cols = jacobian.shape(jacobian.ndim() - 1);
   if (py::isinstance<py::array_t<double>>(jacobian)) {
-    data = static_cast<const double*>(jacobian.data());
+    j.given = static_cast<const double*>(jacobian.data());
   } else if (py::isinstance<py::array_t<float>>(jacobian)) {
     using RowMajorFloat = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-    converted = Eigen::Map<const RowMajorFloat>(static_cast<const float*>(jacobian.data()),
-                                                batch * outputs, cols)
-                    .transpose()
-                    .cast<double>();
-    data = converted.data();
+    j.converted = Eigen::Map<const RowMajorFloat>(static_cast<const float*>(jacobian.data()),
+                                                  j.batch * j.outputs, j.cols)
+                      .transpose()
+                      .cast<double>();
   } else {
     throw Error("jacobian_step: the Jacobian's dtype is " +
                 std::string(py::str(jacobian.dtype())) + ", expected float64 or float32");
   }
-  // A NaN or Inf in J would only show as an overflow deep in the eigensolve: name it here.
-  const Eigen::Map<const Vector> entries(data, batch * outputs * cols);
-  if (!all_finite(entries)) {
-    Index first = 0;
-    while (std::isfinite(entries(first))) ++first;
-    // `data` is row-major (B·m × P) as given, or the converted copy, column-major (P × B·m).
-    const Index row = first / cols;  // row-major (B·m × P), also the converted copy
-    const Index column = first % cols;
-    throw NumericalError("jacobian_step: the Jacobian has " +
-                         std::to_string((!entries.array().isFinite()).count()) +
-                         " non-finite entries, the first " + report_number(entries(first)) +
-                         " at sample " + std::to_string(row / outputs) + ", output " +
-                         std::to_string(row % outputs) + ", parameter " + std::to_string(column));
-  }
+  return j;
+}
+
+// A NaN or Inf in J would only show as an overflow deep in the eigensolve: named here.
+void check_jacobian_finite(const JacobianArray& j) {
+  const Eigen::Map<const Vector> entries(j.data(), j.batch * j.outputs * j.cols);
+  if (all_finite(entries)) return;
+  Index first = 0;
+  while (std::isfinite(entries(first))) ++first;
+  // The entries in the given row-major order (B·m × P), also in the converted copy.
+  const Index row = first / j.cols;
+  const Index column = first % j.cols;
+  throw NumericalError("jacobian_step: the Jacobian has " +
+                       std::to_string((!entries.array().isFinite()).count()) +
+                       " non-finite entries, the first " + report_number(entries(first)) +
+                       " at sample " + std::to_string(row / j.outputs) + ", output " +
+                       std::to_string(row % j.outputs) + ", parameter " + std::to_string(column));
+}
+
+// ∂L/∂y, finite, one entry per row of J.
+Vector read_loss_gradient_y(const py::object& loss_gradient_y, Index rows) {
   const Vector g = to_vector(loss_gradient_y, "jacobian_step", "loss_gradient_y");
   if (!all_finite(g)) {
     throw NumericalError("jacobian_step: dL/dy has a non-finite entry");
   }
-  if (g.size() != batch * outputs) {
+  if (g.size() != rows) {
     throw Error("jacobian_step: dL/dy has " + std::to_string(g.size()) + " entries, the Jacobian " +
-                std::to_string(batch * outputs) + " rows");
+                std::to_string(rows) + " rows");
   }
+  return g;
+}
+
+// What the step did: the path and spectrum of the inversion, the rule's state for the next
+// step, where J was read and the times.
+py::dict jacobian_step_info(const HigUpdate& update, const MappedJacobian& mapped,
+                            const JacobianArray& j, const Step& step) {
+  py::dict info;
+  const PowerPinvInfo& last = update.last_info();
+  info["backend"] = to_string(last.backend);
+  info["rank"] = last.rank;
+  info["sigma_max"] = last.sigma_max;
+  info["sigma_min_kept"] = last.sigma_min_kept;
+  info["rcond_used"] = last.rcond_used;
+  info["precision"] = to_string(last.precision);
+  info["eigensolver"] = to_string(last.eigensolver);
+  info["float_rejected"] = last.float_rejected;
+  info["state"] = to_python(update.state());
+  info["data_address"] = reinterpret_cast<std::uintptr_t>(mapped.data());
+  info["converted"] = j.converted.size() != 0;
+  info["jacobian_seconds"] = step.jacobian_seconds;
+  info["inversion_seconds"] = step.inversion_seconds;
+  return info;
+}
+
+// Δθ = −η J^{−κ} g for J given as an array of shape (B, m, P) or (B·m, P), C-contiguous: float64
+// is read where it lies; float32 is converted once into a double copy (the step is double).
+py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradient_y, double lr,
+                        double kappa, double rcond, const std::string& backend,
+                        const std::string& precision, const std::string& eigensolver,
+                        const py::object& previous) {
+  const JacobianArray j = read_jacobian_array(jacobian);
+  check_jacobian_finite(j);
+  const Vector g = read_loss_gradient_y(loss_gradient_y, j.batch * j.outputs);
   HigUpdate update({.lr = lr,
                     .kappa = kappa,
                     .rcond = rcond,
@@ -84,11 +128,11 @@ py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradie
   if (!previous.is_none()) {
     // The previous step's info["state"]: its spectrum guides the auto choices of this one.
     const std::string text = py::str(py::module_::import("json").attr("dumps")(previous));
-    update.restore(nlohmann::json::parse(text), cols);
+    update.restore(nlohmann::json::parse(text), j.cols);
   }
-  const auto mapped = std::make_shared<MappedJacobian>(data, batch, outputs, cols);
+  const auto mapped = std::make_shared<MappedJacobian>(j.data(), j.batch, j.outputs, j.cols);
   BatchState state;
-  state.batch_size = batch;
+  state.batch_size = j.batch;
   state.jacobian = mapped;
   state.loss_gradient_y = g;
   Step step;
@@ -104,22 +148,7 @@ py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradie
                          std::to_string(step.delta.size()) +
                          " entries (lr too large for this J?); nothing was changed");
   }
-  py::dict info;
-  const PowerPinvInfo& last = update.last_info();
-  info["backend"] = to_string(last.backend);
-  info["rank"] = last.rank;
-  info["sigma_max"] = last.sigma_max;
-  info["sigma_min_kept"] = last.sigma_min_kept;
-  info["rcond_used"] = last.rcond_used;
-  info["precision"] = to_string(last.precision);
-  info["eigensolver"] = to_string(last.eigensolver);
-  info["float_rejected"] = last.float_rejected;
-  info["state"] = to_python(update.state());
-  info["data_address"] = reinterpret_cast<std::uintptr_t>(mapped->data());
-  info["converted"] = converted.size() != 0;
-  info["jacobian_seconds"] = step.jacobian_seconds;
-  info["inversion_seconds"] = step.inversion_seconds;
-  return py::make_tuple(to_numpy(step.delta), info);
+  return py::make_tuple(to_numpy(step.delta), jacobian_step_info(update, *mapped, j, step));
 }
 
 // Seconds per step of `repeats` steps made in one C++ loop on the same mapped J (no Python

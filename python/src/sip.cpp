@@ -31,6 +31,106 @@ py::object sip_params(const py::dict& settings) {
   return to_python(SipUpdate(sip_options(settings)).params());
 }
 
+// x (B, n), y and y* (B, m) as given, one sample a row (held one a column), with B ≥ 1.
+void check_sip_shapes(const Matrix& x, const Matrix& y, const Matrix& target) {
+  const Index count = x.cols();
+  if (y.cols() == count && target.rows() == y.rows() && target.cols() == count && count > 0) {
+    return;
+  }
+  const auto shape = [](const Matrix& m) {  // as given: one sample a row
+    return "(" + std::to_string(m.cols()) + ", " + std::to_string(m.rows()) + ")";
+  };
+  throw Error("sip: x has shape " + shape(x) + ", y " + shape(y) + " and the target y* " +
+              shape(target) + ", expected (B, n), (B, m) and (B, m) with B ≥ 1");
+}
+
+// "sip: sample I of B: ", the start of a message about one sample.
+std::string sip_sample(Index i, Index count) {
+  return "sip: sample " + std::to_string(i) + " of " + std::to_string(count) + ": ";
+}
+
+// y + Δy for each sample (one a column), Δy = y_step(L2, y, y*, η); a non-finite x, y or y* is
+// a NumericalError naming the sample.
+Matrix sip_y_targets(const Matrix& x, const Matrix& y, const Matrix& target,
+                     const SipOptions& options) {
+  const L2Loss loss;
+  const Index count = x.cols();
+  Matrix y_targets(y.rows(), count);
+  Index i = 0;
+  try {
+    for (; i < count; ++i) {
+      if (!all_finite(x.col(i))) throw NumericalError("the network output x is not finite");
+      if (!all_finite(y.col(i))) throw NumericalError("the simulator output y is not finite");
+      if (!all_finite(target.col(i))) throw NumericalError("the target y* is not finite");
+      const Vector yi = y.col(i);
+      y_targets.col(i) = yi + y_step(loss, yi, target.col(i), options.y_step);
+    }
+  } catch (const NumericalError& e) {
+    throw NumericalError(sip_sample(i, count) + e.what());
+  }
+  return y_targets;
+}
+
+// An analytic inverse (or, with the method auto, one the simulator has) is asked once for the
+// whole batch, when the object has inverse_batch; local_inverse() then reads its answers.
+void answer_sip_inverses(PythonSimulator& simulator, const Matrix& y_targets, const Matrix& x,
+                         const SipOptions& options, CallbackErrors& errors) {
+  const InverseMethod how = options.inverse.method;
+  const bool analytic =
+      how == InverseMethod::kAnalytic || (how == InverseMethod::kAuto && simulator.has_inverse());
+  if (!analytic) return;
+  const std::string batch = "the batch of " + std::to_string(x.cols());
+  try {
+    simulator.answer_inverses(y_targets, x);  // one batched call, when the object has one
+  } catch (const CallbackFailed&) {
+    raise_kept(errors, "sip, " + batch + ", local inverse " + to_string(how));
+  } catch (const Error& e) {
+    throw Error("sip: " + batch + ": " + e.what());
+  }
+}
+
+// Each sample's x̃ = P⁻¹(y + Δy; x) by local_inverse(), with what it took.
+struct SipInverses {
+  explicit SipInverses(Index rows, Index count)
+      : x_tilde(rows, count), residual(count), converged(count) {}
+  Matrix x_tilde;
+  Vector residual;
+  py::array_t<bool> converged;
+  SimulatorCounts counts;
+  long long iterations = 0, evaluations = 0;
+};
+
+SipInverses sip_local_inverses(PythonSimulator& simulator, const Matrix& y_targets,
+                               const Matrix& x, const SipOptions& options, CallbackErrors& errors) {
+  const std::string method = to_string(options.inverse.method);
+  const Index count = x.cols();
+  SipInverses out(x.rows(), count);
+  Index i = 0;
+  try {
+    py::gil_scoped_release released;
+    for (; i < count; ++i) {
+      const LocalInverseResult result =
+          local_inverse(simulator, y_targets.col(i), x.col(i), Vector(), options.inverse);
+      if (!all_finite(result.x)) {
+        throw NumericalError("the local inverse (" + method + ") gave no finite preimage");
+      }
+      out.x_tilde.col(i) = result.x;
+      out.residual(i) = result.residual;
+      out.converged.mutable_at(i) = result.converged;
+      out.iterations += result.iterations;
+      out.evaluations += result.evaluations;
+      out.counts += result.counts;
+    }
+  } catch (const CallbackFailed&) {
+    raise_kept(errors, "sip, sample " + std::to_string(i) + ", local inverse " + method);
+  } catch (const NumericalError& e) {
+    throw NumericalError(sip_sample(i, count) + e.what());
+  } catch (const Error& e) {
+    throw Error(sip_sample(i, count) + e.what());
+  }
+  return out;
+}
+
 // SIP's proxy targets for one batch, made as SipUpdate::step makes them (learn/sip.cpp): for each
 // sample x̃ᵢ = P⁻¹(yᵢ + Δyᵢ; xᵢ) by local_inverse with sip's inverse options, where
 // Δyᵢ = y_step(L2, yᵢ, y*ᵢ, η) = η(y*ᵢ − yᵢ). x (B, n), y and y* (B, m) hold one sample a row.
@@ -43,80 +143,20 @@ py::dict sip_targets(const py::object& sim, const py::object& x_value, const py:
   const Matrix x = to_columns(x_value, "sip", "x");
   const Matrix y = to_columns(y_value, "sip", "y");
   const Matrix target = to_columns(target_value, "sip", "the target y*");
-  const Index count = x.cols();
-  if (y.cols() != count || target.rows() != y.rows() || target.cols() != count || count == 0) {
-    const auto shape = [](const Matrix& m) {  // as given: one sample a row
-      return "(" + std::to_string(m.cols()) + ", " + std::to_string(m.rows()) + ")";
-    };
-    throw Error("sip: x has shape " + shape(x) + ", y " + shape(y) + " and the target y* " +
-                shape(target) + ", expected (B, n), (B, m) and (B, m) with B ≥ 1");
-  }
+  check_sip_shapes(x, y, target);
   CallbackErrors errors;
   PythonSimulator simulator(sim, x.rows(), y.rows(), x.col(0), errors);
-  const std::string method = to_string(options.inverse.method);
-  const L2Loss loss;
-  Matrix x_tilde(x.rows(), count);
-  Vector residual(count);
-  py::array_t<bool> converged(count);
-  SimulatorCounts counts;
-  long long iterations = 0, evaluations = 0;
-  Index i = 0;
-  const auto sample = [&] {
-    return "sip: sample " + std::to_string(i) + " of " + std::to_string(count) + ": ";
-  };
   const auto start = std::chrono::steady_clock::now();
-  Matrix y_targets(y.rows(), count);  // y + Δy, one sample a column
-  try {
-    for (; i < count; ++i) {
-      if (!all_finite(x.col(i))) throw NumericalError("the network output x is not finite");
-      if (!all_finite(y.col(i))) throw NumericalError("the simulator output y is not finite");
-      if (!all_finite(target.col(i))) throw NumericalError("the target y* is not finite");
-      const Vector yi = y.col(i);
-      y_targets.col(i) = yi + y_step(loss, yi, target.col(i), options.y_step);
-    }
-  } catch (const NumericalError& e) {
-    throw NumericalError(sample() + e.what());
-  }
-  const InverseMethod how = options.inverse.method;
-  if (how == InverseMethod::kAnalytic || (how == InverseMethod::kAuto && simulator.has_inverse())) {
-    const std::string batch = "the batch of " + std::to_string(count);
-    try {
-      simulator.answer_inverses(y_targets, x);  // one batched call, when the object has one
-    } catch (const CallbackFailed&) {
-      raise_kept(errors, "sip, " + batch + ", local inverse " + method);
-    } catch (const Error& e) {
-      throw Error("sip: " + batch + ": " + e.what());
-    }
-  }
-  try {
-    py::gil_scoped_release released;
-    for (i = 0; i < count; ++i) {
-      const LocalInverseResult result =
-          local_inverse(simulator, y_targets.col(i), x.col(i), Vector(), options.inverse);
-      if (!all_finite(result.x)) {
-        throw NumericalError("the local inverse (" + method + ") gave no finite preimage");
-      }
-      x_tilde.col(i) = result.x;
-      residual(i) = result.residual;
-      converged.mutable_at(i) = result.converged;
-      iterations += result.iterations;
-      evaluations += result.evaluations;
-      counts += result.counts;
-    }
-  } catch (const CallbackFailed&) {
-    raise_kept(errors, "sip, sample " + std::to_string(i) + ", local inverse " + method);
-  } catch (const NumericalError& e) {
-    throw NumericalError(sample() + e.what());
-  } catch (const Error& e) {
-    throw Error(sample() + e.what());
-  }
+  const Matrix y_targets = sip_y_targets(x, y, target, options);
+  answer_sip_inverses(simulator, y_targets, x, options, errors);
+  const SipInverses inverses = sip_local_inverses(simulator, y_targets, x, options, errors);
   py::dict out;
-  out["x"] = to_numpy(Matrix(x_tilde.transpose()));
-  out["residual"] = to_numpy(residual);
-  out["converged"] = converged;
-  out["iterations"] = iterations;
-  out["evaluations"] = evaluations;
-  out["counts"] = counts_dict(simulator.actual(counts));
+  out["x"] = to_numpy(Matrix(inverses.x_tilde.transpose()));
+  out["residual"] = to_numpy(inverses.residual);
+  out["converged"] = inverses.converged;
+  out["iterations"] = inverses.iterations;
+  out["evaluations"] = inverses.evaluations;
+  out["counts"] = counts_dict(simulator.actual(inverses.counts));
   out["inversion_seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

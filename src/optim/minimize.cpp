@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <deque>
 #include <iterator>
-#include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "physgrad/error.hpp"
@@ -12,36 +13,6 @@
 #include "physgrad/timing.hpp"
 
 namespace physgrad {
-
-std::string to_string(Termination termination) {
-  switch (termination) {
-    case Termination::kConverged: return "converged";
-    case Termination::kRelativeLoss: return "relative_loss";
-    case Termination::kGradientTolerance: return "gradient_tolerance";
-    case Termination::kFunctionTolerance: return "function_tolerance";
-    case Termination::kParameterTolerance: return "parameter_tolerance";
-    case Termination::kDiverged: return "diverged";
-    case Termination::kMaxIterations: return "max_iterations";
-    case Termination::kMaxEvaluations: return "max_evaluations";
-    case Termination::kMaxSeconds: return "max_seconds";
-    case Termination::kStationary: return "stationary";
-    case Termination::kNumericalFailure: return "numerical_failure";
-    case Termination::kFailed: return "failed";
-    case Termination::kStopped: return "stopped";
-  }
-  return "unknown";
-}
-
-bool converged(Termination termination) {
-  switch (termination) {
-    case Termination::kConverged:
-    case Termination::kRelativeLoss:
-    case Termination::kGradientTolerance:
-    case Termination::kFunctionTolerance:
-    case Termination::kParameterTolerance: return true;
-    default: return false;
-  }
-}
 
 namespace {
 
@@ -146,233 +117,250 @@ class StoppingRules {
   double initial_loss_;
 };
 
+// One run of minimize(): the checked problem, the box, the summary it fills and the records kept.
+// Everything reaches the simulator through `problem_`, whose simulator is checked and counted (a
+// nested run, pg's local inverse, shares the outer run's CheckedSimulator).
+class MinimizeRun {
+ public:
+  MinimizeRun(Optimizer& optimizer, const Objective& objective, const Vector& x0,
+              const MinimizeOptions& options);
+  // The loss at x0, the budget and the stopping rules, the first record and the tests at x0.
+  void begin();
+  // One iteration; false when the run ends (a limit, a stopping rule, a failure, the callback).
+  bool iterate();
+  // The message of the ending, the history, the counts and the time.
+  MinimizeSummary finish();
+
+ private:
+  // What the rule proposed and where it leads (x_next empty and loss_next NaN when nowhere).
+  struct Trial {
+    Step step;
+    Vector x_next;
+    double loss_next = NAN;
+  };
+  double evaluate(const Vector& x);
+  bool finite(double value) const;
+  bool record(double step_norm);
+  void end_on(Termination termination, std::string message);
+  bool propose(Trial& trial, const std::string& where);
+  void take_rejected(const Step& step);
+  void take_accepted(const Trial& trial, const std::string& where);
+  const Vector* tested_gradient() const { return with_gradient_ ? &gradient_ : nullptr; }
+
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  Optimizer& optimizer_;
+  const MinimizeOptions& options_;
+  const CheckedObjective checked_;
+  const Objective& problem_;
+  const CheckedSimulator& simulator_;
+  const SimulatorCounts counts_at_start_;
+  const Domain domain_;
+  const bool with_gradient_;  // L and ∇L at every point, for the gradient test
+  Vector gradient_;
+  MinimizeSummary summary_;
+  std::optional<SimulatorBudget> budget_;
+  std::optional<StoppingRules> rules_;
+  std::size_t kept_;
+  std::deque<IterationRecord> history_;  // a deque: dropping the record after the start is O(1)
+  bool stopped_ = false, done_ = false;  // the callback asked to stop; a test or failure ended it
+};
+
+MinimizeRun::MinimizeRun(Optimizer& optimizer, const Objective& objective, const Vector& x0,
+                         const MinimizeOptions& options)
+    : optimizer_(optimizer),
+      options_(options),
+      checked_(objective),
+      problem_(checked_.objective()),
+      simulator_(checked_.simulator()),
+      counts_at_start_(simulator_.counts()),
+      domain_(problem_.dim(), options.lower, options.upper, options.x_scale),
+      with_gradient_(options.gradient_tolerance > 0) {
+  domain_.check_dim(x0.size(), "minimize");
+  domain_.check_contains(x0, "minimize: x0");
+  summary_.optimizer = optimizer.id();
+  summary_.params = optimizer.params();
+  summary_.parameters = x0.size();
+  summary_.bounded = domain_.bounded();
+  summary_.scaled = domain_.scaled();
+  summary_.x = x0;
+  summary_.termination = Termination::kMaxIterations;
+  // The records kept: the start and the latest, within both limits.
+  kept_ = static_cast<std::size_t>(std::max<long long>(
+      2, std::min(options.max_history,
+                  options.max_history_values / std::max<long long>(1, x0.size()))));
+}
+
+// L (and ∇L when the gradient test is on) at a point, timed as minimize's own evaluations.
+double MinimizeRun::evaluate(const Vector& x) {
+  const auto begin = std::chrono::steady_clock::now();
+  const double value =
+      with_gradient_ ? problem_.value_and_gradient(x, gradient_) : problem_.value(x);
+  summary_.evaluation_seconds += seconds_since(begin);
+  ++summary_.evaluations;
+  return value;
+}
+
+// A non-finite ∇L, where the gradient test asks for it, ends a run as a non-finite L does.
+bool MinimizeRun::finite(double value) const {
+  return std::isfinite(value) && (!with_gradient_ || all_finite(gradient_));
+}
+
+// Keeps the record of the current point; true when the callback asks to stop.
+bool MinimizeRun::record(double step_norm) {
+  if (history_.size() >= kept_) {
+    history_.erase(history_.begin() + 1);
+    ++summary_.history_dropped;
+  }
+  history_.push_back({summary_.iterations, summary_.loss, step_norm, seconds_since(start_),
+                      summary_.evaluations, simulator_.counts() - counts_at_start_, summary_.x});
+  return options_.callback && options_.callback(history_.back());
+}
+
+void MinimizeRun::end_on(Termination termination, std::string message) {
+  summary_.termination = termination;
+  summary_.message = std::move(message);
+  done_ = true;
+}
+
+void MinimizeRun::begin() {
+  summary_.loss = evaluate(summary_.x);
+  summary_.initial_loss = summary_.loss;
+  if (!std::isfinite(summary_.loss)) {
+    std::ostringstream msg;
+    msg << "the loss at the starting point is " << summary_.loss;
+    throw Error(msg.str());
+  }
+  // Opened after the start: its evaluation is always made.
+  budget_.emplace(simulator_, options_.max_evaluations, options_.max_seconds,
+                  counts_at_start_.passes, start_);
+  rules_.emplace(options_, domain_, summary_.initial_loss);
+  summary_.stopping_rules = rules_->listed();
+  optimizer_.reset();
+  stopped_ = record(0.0);
+  done_ = !stopped_ && rules_->at_point(summary_.loss, summary_.x, tested_gradient(), summary_);
+  if (!stopped_ && !done_ && !finite(summary_.loss)) {
+    end_on(Termination::kNumericalFailure, "the gradient at the starting point is not finite");
+  }
+}
+
+// The rule's step and the loss where it leads; false when that ended the run (a numerical
+// failure inside the rule, this run's budget).
+bool MinimizeRun::propose(Trial& trial, const std::string& where) {
+  try {
+    const auto step_start = std::chrono::steady_clock::now();
+    trial.step = optimizer_.step(problem_, summary_.x, domain_);
+    summary_.step_seconds += seconds_since(step_start);
+    summary_.evaluations += trial.step.evaluations;
+    if (trial.step.status == Step::Status::kOk && all_finite(trial.step.delta)) {
+      // The rule keeps x + Δx in the box; the projection only removes rounding in the sum.
+      trial.x_next = domain_.project(summary_.x + trial.step.delta);
+      if (trial.x_next != summary_.x) trial.loss_next = evaluate(trial.x_next);
+    }
+  } catch (const NumericalError& e) {
+    end_on(Termination::kNumericalFailure, where + e.what());
+    return false;
+  } catch (const BudgetExhausted& e) {
+    if (e.budget() != &*budget_) throw;  // an outer run's budget: that run ends
+    const bool passes = e.kind() == BudgetExhausted::Kind::kPasses;
+    end_on(passes ? Termination::kMaxEvaluations : Termination::kMaxSeconds,
+           std::string(passes ? "max_evaluations" : "max_seconds") + " reached in iteration " +
+               std::to_string(summary_.iterations + 1) + ": " + e.what());
+    return false;
+  }
+  return true;
+}
+
+// A rejected trial counts as an iteration; one too short to matter ends the run like an
+// accepted one (the loss did not move).
+void MinimizeRun::take_rejected(const Step& step) {
+  ++summary_.iterations;
+  ++summary_.rejected_steps;
+  stopped_ = record(0.0);
+  done_ = !stopped_ && step.delta.size() == summary_.x.size() &&
+          rules_->after_step(summary_.loss, summary_.loss, summary_.x, step.delta, summary_, false);
+}
+
+// Moves to the trial's point unless its step or loss is not finite or it stays where it is,
+// then tests the stopping rules there.
+void MinimizeRun::take_accepted(const Trial& trial, const std::string& where) {
+  if (!all_finite(trial.step.delta)) {
+    return end_on(Termination::kNumericalFailure, where + "non-finite step");
+  }
+  const Vector dx = trial.x_next - summary_.x;
+  const double step_norm = dx.norm();
+  if (step_norm == 0.0) {
+    return end_on(Termination::kStationary,
+                  "zero step at iteration " + std::to_string(summary_.iterations + 1));
+  }
+  if (!finite(trial.loss_next)) {
+    std::ostringstream msg;
+    msg << where << "the loss at the new point is " << trial.loss_next;
+    if (std::isfinite(trial.loss_next)) msg << ", its gradient is not finite";
+    return end_on(Termination::kNumericalFailure, msg.str());
+  }
+  const double loss_before = summary_.loss;
+  const Vector x_before = summary_.x;
+  summary_.x = trial.x_next;
+  summary_.loss = trial.loss_next;
+  ++summary_.iterations;
+  stopped_ = record(step_norm);
+  done_ = !stopped_ && (rules_->at_point(summary_.loss, summary_.x, tested_gradient(), summary_) ||
+                        rules_->after_step(loss_before, summary_.loss, x_before, dx, summary_));
+}
+
+bool MinimizeRun::iterate() {
+  if (stopped_ || done_ || summary_.iterations >= options_.max_iterations) return false;
+  if (budget_->out_of_time()) {
+    end_on(Termination::kMaxSeconds, "max_seconds = " + report_number(options_.max_seconds) +
+                                         " reached after iteration " +
+                                         std::to_string(summary_.iterations));
+    return false;
+  }
+  // Numerical failures name the iteration, the rule and the place.
+  const std::string where =
+      "iteration " + std::to_string(summary_.iterations + 1) + " of " + optimizer_.id() + ": ";
+  Trial trial;
+  if (!propose(trial, where)) return false;
+  if (trial.step.status == Step::Status::kFailed) {
+    end_on(Termination::kFailed, trial.step.message);
+  } else if (trial.step.status == Step::Status::kRejected) {
+    take_rejected(trial.step);
+  } else {
+    take_accepted(trial, where);
+  }
+  return !stopped_ && !done_;
+}
+
+MinimizeSummary MinimizeRun::finish() {
+  if (stopped_) {
+    end_on(Termination::kStopped,
+           "the callback asked to stop after iteration " + std::to_string(summary_.iterations));
+  } else if (summary_.termination == Termination::kMaxIterations) {
+    summary_.message = "max_iterations = " + std::to_string(options_.max_iterations) + " reached";
+  } else if (converged(summary_.termination) && !(summary_.loss <= summary_.initial_loss)) {
+    end_on(Termination::kDiverged,
+           to_string(summary_.termination) + " held (" + summary_.message + "), but L = " +
+               report_number(summary_.loss) +
+               " is above L(x₀) = " + report_number(summary_.initial_loss));
+  }
+  summary_.history.assign(std::make_move_iterator(history_.begin()),
+                          std::make_move_iterator(history_.end()));
+  summary_.counts = simulator_.counts() - counts_at_start_;
+  summary_.at_bounds = domain_.count_at_bounds(summary_.x);
+  summary_.wall_seconds = seconds_since(start_);
+  return std::move(summary_);
+}
+
 }  // namespace
 
 MinimizeSummary minimize(Optimizer& optimizer, const Objective& objective, const Vector& x0,
                          const MinimizeOptions& options) {
   check_minimize_options(options);
-  using Clock = std::chrono::steady_clock;
-  const auto start = Clock::now();
-  // Everything below reaches the simulator through `problem`, whose simulator is checked and
-  // counted (a nested run, pg's local inverse, shares the outer run's CheckedSimulator).
-  const CheckedObjective checked(objective);
-  const Objective& problem = checked.objective();
-  const CheckedSimulator& simulator = checked.simulator();
-  const SimulatorCounts counts_at_start = simulator.counts();
-
-  const Domain domain(problem.dim(), options.lower, options.upper, options.x_scale);
-  domain.check_dim(x0.size(), "minimize");
-  domain.check_contains(x0, "minimize: x0");
-
-  MinimizeSummary summary;
-  summary.optimizer = optimizer.id();
-  summary.params = optimizer.params();
-  summary.parameters = x0.size();
-  summary.bounded = domain.bounded();
-  summary.scaled = domain.scaled();
-  summary.x = x0;
-  summary.termination = Termination::kMaxIterations;
-
-  // L (and ∇L when the gradient test is on) at a point, timed as minimize's own evaluations.
-  Vector gradient;
-  const bool with_gradient = options.gradient_tolerance > 0;
-  const auto evaluate = [&](const Vector& x) {
-    const auto begin = Clock::now();
-    const double value =
-        with_gradient ? problem.value_and_gradient(x, gradient) : problem.value(x);
-    summary.evaluation_seconds += seconds_since(begin);
-    ++summary.evaluations;
-    return value;
-  };
-  // A non-finite ∇L, where the gradient test asks for it, ends a run as a non-finite L does.
-  const auto finite = [&](double value) {
-    return std::isfinite(value) && (!with_gradient || all_finite(gradient));
-  };
-  summary.loss = evaluate(x0);
-  summary.initial_loss = summary.loss;
-  if (!std::isfinite(summary.loss)) {
-    std::ostringstream msg;
-    msg << "the loss at the starting point is " << summary.loss;
-    throw Error(msg.str());
+  MinimizeRun run(optimizer, objective, x0, options);
+  run.begin();
+  while (run.iterate()) {
   }
-  // Opened after the start: its evaluation is always made.
-  const SimulatorBudget budget(simulator, options.max_evaluations, options.max_seconds,
-                               counts_at_start.passes, start);
-  const StoppingRules rules(options, domain, summary.initial_loss);
-  summary.stopping_rules = rules.listed();
-  const Vector* tested_gradient = with_gradient ? &gradient : nullptr;
-  // The records kept: the start and the latest, within both limits.
-  const std::size_t kept = static_cast<std::size_t>(std::max<long long>(
-      2, std::min(options.max_history,
-                  options.max_history_values / std::max<long long>(1, x0.size()))));
-  std::deque<IterationRecord> history;  // a deque: dropping the record after the start is O(1)
-  const auto record = [&](double step_norm) {
-    if (history.size() >= kept) {
-      history.erase(history.begin() + 1);
-      ++summary.history_dropped;
-    }
-    history.push_back({summary.iterations, summary.loss, step_norm, seconds_since(start),
-                       summary.evaluations, simulator.counts() - counts_at_start, summary.x});
-    return options.callback && options.callback(history.back());
-  };
-  const auto end_on = [&summary](Termination termination, std::string message) {
-    summary.termination = termination;
-    summary.message = std::move(message);
-  };
-
-  optimizer.reset();
-  bool stop = record(0.0);
-  bool done = !stop && rules.at_point(summary.loss, summary.x, tested_gradient, summary);
-  if (!stop && !done && !finite(summary.loss)) {
-    end_on(Termination::kNumericalFailure, "the gradient at the starting point is not finite");
-    done = true;
-  }
-  while (!stop && !done) {
-    if (summary.iterations >= options.max_iterations) break;
-    if (budget.out_of_time()) {
-      end_on(Termination::kMaxSeconds, "max_seconds = " + report_number(options.max_seconds) +
-                                           " reached after iteration " +
-                                           std::to_string(summary.iterations));
-      break;
-    }
-    // Numerical failures name the iteration, the rule and the place.
-    const std::string where =
-        "iteration " + std::to_string(summary.iterations + 1) + " of " + optimizer.id() + ": ";
-    Step step;
-    Vector x_next;
-    double loss_next = NAN;
-    try {
-      const auto step_start = Clock::now();
-      step = optimizer.step(problem, summary.x, domain);
-      summary.step_seconds += seconds_since(step_start);
-      summary.evaluations += step.evaluations;
-      if (step.status == Step::Status::kOk && all_finite(step.delta)) {
-        // The rule keeps x + Δx in the box; the projection only removes rounding in the sum.
-        x_next = domain.project(summary.x + step.delta);
-        if (x_next != summary.x) loss_next = evaluate(x_next);
-      }
-    } catch (const NumericalError& e) {
-      end_on(Termination::kNumericalFailure, where + e.what());
-      break;
-    } catch (const BudgetExhausted& e) {
-      if (e.budget() != &budget) throw;  // an outer run's budget: that run ends
-      const bool passes = e.kind() == BudgetExhausted::Kind::kPasses;
-      end_on(passes ? Termination::kMaxEvaluations : Termination::kMaxSeconds,
-             std::string(passes ? "max_evaluations" : "max_seconds") + " reached in iteration " +
-                 std::to_string(summary.iterations + 1) + ": " + e.what());
-      break;
-    }
-    if (step.status == Step::Status::kFailed) {
-      end_on(Termination::kFailed, step.message);
-      break;
-    }
-    if (step.status == Step::Status::kRejected) {
-      ++summary.iterations;
-      ++summary.rejected_steps;
-      stop = record(0.0);
-      // A trial too short to matter ends the run like an accepted one (the loss did not move).
-      done = !stop && step.delta.size() == summary.x.size() &&
-             rules.after_step(summary.loss, summary.loss, summary.x, step.delta, summary, false);
-      continue;
-    }
-    if (!all_finite(step.delta)) {
-      end_on(Termination::kNumericalFailure, where + "non-finite step");
-      break;
-    }
-    const Vector dx = x_next - summary.x;
-    const double step_norm = dx.norm();
-    if (step_norm == 0.0) {
-      end_on(Termination::kStationary,
-             "zero step at iteration " + std::to_string(summary.iterations + 1));
-      break;
-    }
-    if (!finite(loss_next)) {
-      std::ostringstream msg;
-      msg << where << "the loss at the new point is " << loss_next;
-      if (std::isfinite(loss_next)) msg << ", its gradient is not finite";
-      end_on(Termination::kNumericalFailure, msg.str());
-      break;
-    }
-    const double loss_before = summary.loss;
-    const Vector x_before = summary.x;
-    summary.x = x_next;
-    summary.loss = loss_next;
-    ++summary.iterations;
-    stop = record(step_norm);
-    done = !stop && (rules.at_point(summary.loss, summary.x, tested_gradient, summary) ||
-                     rules.after_step(loss_before, summary.loss, x_before, dx, summary));
-  }
-  if (stop) {
-    end_on(Termination::kStopped,
-           "the callback asked to stop after iteration " + std::to_string(summary.iterations));
-  } else if (summary.termination == Termination::kMaxIterations) {
-    summary.message = "max_iterations = " + std::to_string(options.max_iterations) + " reached";
-  } else if (converged(summary.termination) && !(summary.loss <= summary.initial_loss)) {
-    end_on(Termination::kDiverged, to_string(summary.termination) + " held (" + summary.message +
-                                       "), but L = " + report_number(summary.loss) +
-                                       " is above L(x₀) = " + report_number(summary.initial_loss));
-  }
-  summary.history.assign(std::make_move_iterator(history.begin()),
-                         std::make_move_iterator(history.end()));
-  summary.counts = simulator.counts() - counts_at_start;
-  summary.at_bounds = domain.count_at_bounds(summary.x);
-  summary.wall_seconds = seconds_since(start);
-  return summary;
-}
-
-std::string brief_report(const MinimizeSummary& s) {
-  return s.optimizer + ": " + std::to_string(s.iterations) + " iterations, " +
-         std::to_string(s.evaluations) + " evaluations, " + std::to_string(s.counts.passes) +
-         " simulator passes, loss " + report_number(s.initial_loss) + " → " + report_number(s.loss) + ", " +
-         to_string(s.termination);
-}
-
-std::string full_report(const MinimizeSummary& s) {
-  std::ostringstream out;
-  const auto row = [&out](std::string_view name, const std::string& value) {
-    out << report_row(name, value);
-  };
-  out << "physgrad minimize report\n\n";
-  out << "Problem\n";
-  row("parameters", std::to_string(s.parameters));
-  row("bounds", s.bounded ? "box (" + std::to_string(s.at_bounds) + " at a bound at the end)"
-                          : "none");
-  row("x_scale", s.scaled ? "given" : "none (1)");
-  out << "\nRule\n";
-  row("optimizer", s.optimizer);
-  for (const auto& [name, value] : s.params.items()) {
-    row(name, value.is_string() ? value.get<std::string>() : value.dump());
-  }
-  out << "\nStopping rules and budgets\n";
-  for (const auto& [name, value] : s.stopping_rules) row(name, report_number(value));
-  out << "\nLoss\n";
-  row("initial", report_number(s.initial_loss));
-  row("final", report_number(s.loss));
-  row("change", report_number(s.initial_loss - s.loss));
-  if (s.gradient_norm >= 0) row("projected gradient", report_number(s.gradient_norm));
-  out << "\nWork\n";
-  row("iterations", std::to_string(s.iterations) + " (" + std::to_string(s.rejected_steps) +
-                        " rejected trials)");
-  row("evaluations", std::to_string(s.evaluations) + " (of the loss)");
-  if (s.history_dropped > 0) {
-    row("history", std::to_string(s.history.size()) + " records kept, " +
-                       std::to_string(s.history_dropped) + " dropped (max_history)");
-  }
-  row("simulator passes", std::to_string(s.counts.passes));
-  row("  forward samples", std::to_string(s.counts.forward));
-  row("  VJP samples", std::to_string(s.counts.vjp));
-  row("  Jacobians", std::to_string(s.counts.jacobians));
-  row("  Hessians", std::to_string(s.counts.hessians));
-  row("  time reversals", std::to_string(s.counts.reversals));
-  row("  inverses", std::to_string(s.counts.inverses));
-  out << "\nTime (seconds)\n";
-  row("rule steps", report_number(s.step_seconds));
-  row("loss evaluations", report_number(s.evaluation_seconds));
-  row("total", report_number(s.wall_seconds));
-  out << "\nTermination: " << to_string(s.termination)
-      << (converged(s.termination) ? " (convergence)" : "") << "\n";
-  if (!s.message.empty()) out << "  " << s.message << "\n";
-  return out.str();
+  return run.finish();
 }
 
 }  // namespace physgrad

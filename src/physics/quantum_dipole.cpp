@@ -13,17 +13,17 @@ namespace physgrad {
 
 namespace {
 
-using Complex = std::complex<double>;
+using DipoleComplex = std::complex<double>;
 using CArray = Eigen::ArrayXXcd;
 
 // Solves T z = r for every column by the Thomas algorithm, in place (r ← z). T is tridiagonal
 // with diagonal `diag` (M×B) and both off-diagonals equal to `off`; `work` is M×B workspace.
-void solve_tridiagonal(const CArray& diag, Complex off, CArray& r, CArray& work) {
+void solve_tridiagonal(const CArray& diag, DipoleComplex off, CArray& r, CArray& work) {
   const Index M = diag.rows();
   work.row(0) = off / diag.row(0);
   r.row(0) /= diag.row(0);
   for (Index j = 1; j < M; ++j) {
-    work.row(j) = Complex(1.0) / (diag.row(j) - off * work.row(j - 1));  // 1 / pivot
+    work.row(j) = DipoleComplex(1.0) / (diag.row(j) - off * work.row(j - 1));  // 1 / pivot
     r.row(j) = (r.row(j) - off * r.row(j - 1)) * work.row(j);
     work.row(j) *= off;
   }
@@ -31,7 +31,7 @@ void solve_tridiagonal(const CArray& diag, Complex off, CArray& r, CArray& work)
 }
 
 // out = T v for every column, T as above.
-void multiply_tridiagonal(const CArray& diag, Complex off, const CArray& v, CArray& out) {
+void multiply_tridiagonal(const CArray& diag, DipoleComplex off, const CArray& v, CArray& out) {
   const Index M = diag.rows();
   out = diag * v;
   out.topRows(M - 1) += off * v.bottomRows(M - 1);
@@ -71,7 +71,7 @@ void QuantumDipole::step_diagonal(const Matrix& x, Index n, CArray& diag) const 
   for (Index b = 0; b < diag.cols(); ++b) {
     for (Index j = 0; j < diag.rows(); ++j) {
       const double xj = static_cast<double>(j + 1) * dx_;
-      diag(j, b) = Complex(1.0, dt / (dx_ * dx_) + 0.5 * dt * x(n, b) * xj);
+      diag(j, b) = DipoleComplex(1.0, dt / (dx_ * dx_) + 0.5 * dt * x(n, b) * xj);
     }
   }
 }
@@ -79,7 +79,7 @@ void QuantumDipole::step_diagonal(const Matrix& x, Index n, CArray& diag) const 
 QuantumDipole::CArray QuantumDipole::integrate(const Matrix& x, const Matrix& context,
                                                CArray* trajectory) const {
   const Index M = interior(), B = x.cols();
-  const Complex off(0.0, -0.5 * config_.dt / (dx_ * dx_));  // A_{j,j±1}
+  const DipoleComplex off(0.0, -0.5 * config_.dt / (dx_ * dx_));  // A_{j,j±1}
   CArray psi(M, B), diag(M, B), conj_diag(M, B), r(M, B), work(M, B);
   psi.real() = context.topRows(M).array();
   psi.imag() = context.bottomRows(M).array();
@@ -120,7 +120,7 @@ Matrix QuantumDipole::vjp_batch(const Matrix& x, const Matrix& context, const Ma
   // symmetric, so for ψⁿ⁺¹ = A⁻¹ conj(A) ψⁿ: μ solves conj(A) μ = λⁿ⁺¹, λⁿ = A μ, and
   // ∂A/∂u = i dt/2 diag(x) = −∂conj(A)/∂u gives ∂/∂u_n = dt/2 Σ_j x_j Im(conj(μ_j)(ψⁿ_j + ψⁿ⁺¹_j)).
   const double dt = config_.dt;
-  const Complex off(0.0, -0.5 * dt / (dx_ * dx_));
+  const DipoleComplex off(0.0, -0.5 * dt / (dx_ * dx_));
   CArray lambda(M, B), diag(M, B), conj_diag(M, B), r(M, B), work(M, B);
   lambda.real() = gy.topRows(M).array();
   lambda.imag() = gy.bottomRows(M).array();
@@ -133,7 +133,7 @@ Matrix QuantumDipole::vjp_batch(const Matrix& x, const Matrix& context, const Ma
     for (Index b = 0; b < B; ++b) {
       double g = 0;
       for (Index j = 0; j < M; ++j) {
-        const Complex sum = trajectory(j, n * B + b) + trajectory(j, (n + 1) * B + b);
+        const DipoleComplex sum = trajectory(j, n * B + b) + trajectory(j, (n + 1) * B + b);
         g += static_cast<double>(j + 1) * dx_ * std::imag(std::conj(lambda(j, b)) * sum);
       }
       gx(n, b) = 0.5 * dt * g;

@@ -80,4 +80,34 @@ std::string hover_targets(const std::vector<HoverPoint>& points, const svg::Box&
   return out + "</g>\n";
 }
 
+// A × centred at p.
+std::string cross_mark(const svg::Point& p, const std::string& color) {
+  const std::string d = std::string("M") + num(p.x - 4) + " " + num(p.y - 4) + "l8 8M" + num(p.x - 4) + " " +
+                        num(p.y + 4) + "l8 -8";
+  return svg::path(d, "stroke=\"" + color + "\" stroke-width=\"2.2\" fill=\"none\"");
+}
+
+// An arrow at p pointing up (or down) out of the frame: a value beyond the axis.
+std::string edge_arrow(const svg::Point& p, bool up, const std::string& color) {
+  const double tip = up ? -5 : 5;
+  return svg::path(std::string("M") + num(p.x) + " " + num(p.y - tip) + "V" + num(p.y + tip) +
+                       "M" + num(p.x - 4) + " " + num(p.y + tip - (up ? -4 : 4)) + "L" +
+                       num(p.x) + " " + num(p.y + tip) + "L" + num(p.x + 4) + " " +
+                       num(p.y + tip - (up ? -4 : 4)),
+                   "stroke=\"" + color + "\" stroke-width=\"2\" fill=\"none\"");
+}
+
+// A ▼ with its tip at p.
+std::string down_triangle(const svg::Point& p, const std::string& color) {
+  return svg::path(std::string("M") + num(p.x - 4.5) + " " + num(p.y - 8) + "h9L" + num(p.x) + " " + num(p.y) +
+                       "Z",
+                   "fill=\"" + color + "\" stroke=\"white\" stroke-width=\"0.8\"");
+}
+
+// A ◆ at p, outlined in white.
+std::string diamond_mark(const svg::Point& p, const std::string& color) {
+  return svg::path(marker_path(3, p, 9),
+                   "fill=\"" + color + "\" stroke=\"white\" stroke-width=\"1.2\"");
+}
+
 }  // namespace physgrad::plot

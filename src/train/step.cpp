@@ -15,7 +15,7 @@ namespace physgrad {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using StepClock = std::chrono::steady_clock;
 
 const Simulator& require_models(const LearningProblem& problem) {
   if (problem.physics == nullptr || problem.loss == nullptr) {
@@ -118,9 +118,9 @@ BatchState evaluate_batch(const Network& network, const LearningProblem& problem
                           const Dataset& batch, UpdateNeed need, NetworkCache& cache,
                           const Shard& shard, BatchTiming* timing) {
   const Simulator& physics = *problem.physics;
-  auto mark = Clock::now();
+  auto mark = StepClock::now();
   const auto lap = [&mark, timing](double BatchTiming::*part) {
-    const auto now = Clock::now();
+    const auto now = StepClock::now();
     if (timing != nullptr) timing->*part += std::chrono::duration<double>(now - mark).count();
     mark = now;
   };
@@ -203,6 +203,91 @@ std::string to_string(StepReport::Failure failure) {
   return "unknown";
 }
 
+namespace {
+
+// The first non-finite part of an evaluated batch: the loss, ∇θ or ∂L/∂y (kNone: all finite).
+StepReport::Failure batch_failure(const BatchState& evaluated) {
+  return !std::isfinite(evaluated.loss)           ? StepReport::Failure::kLoss
+         : !all_finite(evaluated.gradient)        ? StepReport::Failure::kGradient
+         : !all_finite(evaluated.loss_gradient_y) ? StepReport::Failure::kLossGradient
+                                                  : StepReport::Failure::kNone;
+}
+
+// The rule's Δθ for a finite batch, its time in `report`; a NumericalError inside the rule or a
+// non-finite Δθ is a failure of the update, a Δθ of another size an Error.
+Step propose_learning_update(LearningUpdate& update, const BatchState& evaluated, Index parameters,
+                    StepReport& report) {
+  const auto update_start = StepClock::now();
+  Step step;
+  try {
+    step = update.step(evaluated);
+    if (step.delta.size() != parameters) {
+      throw Error("learning update '" + update.id() + "': step returned " +
+                  std::to_string(step.delta.size()) + " entries, expected " +
+                  std::to_string(parameters));
+    }
+    if (!all_finite(step.delta)) {
+      report.failure = StepReport::Failure::kUpdate;
+      report.detail = step.message;
+    }
+  } catch (const NumericalError& e) {
+    step = {};
+    report.failure = StepReport::Failure::kUpdate;
+    report.detail = e.what();
+  }
+  report.inversion_seconds += step.inversion_seconds;
+  report.derivative_seconds += step.jacobian_seconds;
+  report.update_seconds +=
+      seconds_since(update_start) - step.inversion_seconds - step.jacobian_seconds;
+  return step;
+}
+
+// One try at the current θ: the batch evaluated and, where all of it is finite, the rule's Δθ
+// (`halvable`: whether the part of the rule making it allows halving it).
+Step try_train_step(const CheckedModels& models, LearningUpdate& update, const Dataset& batch,
+              StepState& state, StepReport& report, bool& halvable) {
+  BatchTiming timing;
+  const BatchState evaluated = evaluate_batch(models.network(), models.problem(), batch,
+                                              update.need(), *state.cache, state.shard, &timing);
+  report.forward_seconds += timing.forward;
+  report.derivative_seconds += timing.derivatives;
+  report.loss = evaluated.loss;
+  report.failure = batch_failure(evaluated);
+  if (!report.applied()) return {};
+  halvable = update.steps_can_be_halved();
+  return propose_learning_update(update, evaluated, models.network().num_parameters(), report);
+}
+
+// The batch at θ is broken: if θ came from a step that can be halved and halvings remain, θ
+// moves back by half that step (the whole one kept in `whole_last_step` at the first halving).
+bool halve_last_step(Network& network, StepState& state, StepReport& report,
+                     Vector& whole_last_step) {
+  if (!state.last_step_halvable || state.last_step.size() == 0 ||
+      report.halvings == state.max_step_halvings) {
+    return false;
+  }
+  if (report.halvings == 0) whole_last_step = state.last_step;
+  state.last_step *= 0.5;
+  network.parameters() = state.before_last_step + state.last_step;
+  ++report.halvings;
+  return true;
+}
+
+// A non-finite Δθ is never applied. A non-finite loss or derivative means the last applied step
+// already broke θ: it is undone, back to the θ whose batch was finite.
+void undo_broken_step(Network& network, StepState& state, StepReport& report) {
+  report.loss = NAN;
+  report.undone = state.last_step.size() != 0 &&
+                  (report.failure != StepReport::Failure::kUpdate || report.halvings > 0);
+  if (report.undone) {
+    network.set_parameters(state.before_last_step);
+    state.last_step.resize(0);
+    state.before_last_step.resize(0);
+  }
+}
+
+}  // namespace
+
 StepReport train_step(Network& network, LearningUpdate& update, const LearningProblem& problem,
                       const Dataset& batch, StepState& state) {
   // The rule and evaluate_batch() see the network and the simulator only through the checked
@@ -211,7 +296,7 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
   check_batch_shapes(models, batch, "batch");
   if (batch.size() == 0) throw Error("train_step: the batch has no samples");
   if (!state.cache) state.cache = models.network().new_cache();
-  const auto start = Clock::now();
+  const auto start = StepClock::now();
   const SimulatorCounts counts_at_start = models.physics().counts();
   StepReport report;
   Step step;
@@ -220,53 +305,9 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
   // simulator, say) puts θ and the step back, so the step leaves no trace but the cache.
   Vector whole_last_step;
   try {
-    for (;;) {
-      BatchTiming timing;
-      const BatchState evaluated = evaluate_batch(models.network(), models.problem(), batch,
-                                                  update.need(), *state.cache, state.shard,
-                                                  &timing);
-      report.forward_seconds += timing.forward;
-      report.derivative_seconds += timing.derivatives;
-      report.loss = evaluated.loss;
-      report.failure = !std::isfinite(evaluated.loss)           ? StepReport::Failure::kLoss
-                       : !all_finite(evaluated.gradient)        ? StepReport::Failure::kGradient
-                       : !all_finite(evaluated.loss_gradient_y) ? StepReport::Failure::kLossGradient
-                                                                : StepReport::Failure::kNone;
-      if (report.applied()) {
-        const auto update_start = Clock::now();
-        try {
-          halvable = update.steps_can_be_halved();  // of the part making this step
-          step = update.step(evaluated);
-          if (step.delta.size() != models.network().num_parameters()) {
-            throw Error("learning update '" + update.id() + "': step returned " +
-                        std::to_string(step.delta.size()) + " entries, expected " +
-                        std::to_string(models.network().num_parameters()));
-          }
-          if (!all_finite(step.delta)) {
-            report.failure = StepReport::Failure::kUpdate;
-            report.detail = step.message;
-          }
-        } catch (const NumericalError& e) {
-          step = {};
-          report.failure = StepReport::Failure::kUpdate;
-          report.detail = e.what();
-        }
-        report.inversion_seconds += step.inversion_seconds;
-        report.derivative_seconds += step.jacobian_seconds;
-        report.update_seconds +=
-            seconds_since(update_start) - step.inversion_seconds - step.jacobian_seconds;
-      }
-      if (report.applied()) break;
-      // The batch at θ is broken. If θ came from a step that can be halved, try half of it.
-      if (!state.last_step_halvable || state.last_step.size() == 0 ||
-          report.halvings == state.max_step_halvings) {
-        break;
-      }
-      if (report.halvings == 0) whole_last_step = state.last_step;
-      state.last_step *= 0.5;
-      network.parameters() = state.before_last_step + state.last_step;
-      ++report.halvings;
-    }
+    do {
+      step = try_train_step(models, update, batch, state, report, halvable);
+    } while (!report.applied() && halve_last_step(network, state, report, whole_last_step));
   } catch (...) {
     if (report.halvings > 0) {
       state.last_step = std::move(whole_last_step);
@@ -277,16 +318,7 @@ StepReport train_step(Network& network, LearningUpdate& update, const LearningPr
   report.total_seconds = seconds_since(start);
   report.counts = models.physics().counts() - counts_at_start;
   if (!report.applied()) {
-    // A non-finite Δθ is never applied. A non-finite loss or derivative means the last applied
-    // step already broke θ: it is undone, back to the θ whose batch was finite.
-    report.loss = NAN;
-    report.undone = state.last_step.size() != 0 &&
-                    (report.failure != StepReport::Failure::kUpdate || report.halvings > 0);
-    if (report.undone) {
-      network.set_parameters(state.before_last_step);
-      state.last_step.resize(0);
-      state.before_last_step.resize(0);
-    }
+    undo_broken_step(network, state, report);
     return report;
   }
   state.before_last_step = network.parameters();

@@ -12,8 +12,8 @@
 
 #include "physgrad/learn/stacked_jacobian.hpp"
 #include "physgrad/loss/loss.hpp"
-#include "physgrad/optim/optimizer.hpp"
 #include "physgrad/physics/simulator.hpp"
+#include "physgrad/rule_step.hpp"
 
 namespace physgrad {
 

@@ -39,4 +39,12 @@ std::string hover_targets(const std::vector<HoverPoint>& points, const svg::Box&
 // A number as a hover title or a mark's label shows it: 4 significant digits.
 std::string short_number(double v);
 
+// The marks at a curve's points, outlined so they stand out on any line: a × centred at p (a run
+// that ended, e.g. diverged), an arrow at p pointing up (or down) out of the frame (a value beyond
+// the axis), a ▼ with its tip at p (a value ≤ 0 on a log axis) and a ◆ at p (a labelled mark).
+std::string cross_mark(const svg::Point& p, const std::string& color);
+std::string edge_arrow(const svg::Point& p, bool up, const std::string& color);
+std::string down_triangle(const svg::Point& p, const std::string& color);
+std::string diamond_mark(const svg::Point& p, const std::string& color);
+
 }  // namespace physgrad::plot
