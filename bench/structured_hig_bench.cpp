@@ -59,7 +59,7 @@ const CaseSpec& case_spec(std::int64_t which) { return kCases[static_cast<std::s
 const RuleSpec& rule_spec(std::int64_t which) { return kRules[static_cast<std::size_t>(which)]; }
 
 RuleSettings case_settings(const ReferenceCase& c, const std::string& id) {
-  const RuleDefaults* own = experiment_setting(c.defaults, id);
+  const auto* own = experiment_setting(c.defaults, id);
   return own == nullptr ? RuleSettings{} : own->settings;
 }
 
