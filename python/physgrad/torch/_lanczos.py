@@ -59,8 +59,9 @@ class LanczosGN(StructuredRule):
     f(λ) = λ^{−1} on the Ritz values above rcond²·θ_max (rcond raised to 1e-7, and to √ε of the
     parameters' dtype, 3.5e-4 in float32), 0 below.
     LanczosGN(params, model, lr=None, **options): lr, kappa, rcond, products, each defaulting
-    to the library's (physgrad.rule_defaults("lanczos-gn")). step(closure), closure from structured_closure. After a step, last_info holds
-    the Lanczos steps made and the Ritz values kept."""
+    to the library's (physgrad.rule_defaults("lanczos-gn")). step(closure), closure from
+    structured_closure. After a step, last_info holds the Lanczos steps made and the Ritz values
+    kept."""
 
     rule = "lanczos-gn"
 
