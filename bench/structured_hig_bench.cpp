@@ -59,9 +59,8 @@ const CaseSpec& case_spec(std::int64_t which) { return kCases[static_cast<std::s
 const RuleSpec& rule_spec(std::int64_t which) { return kRules[static_cast<std::size_t>(which)]; }
 
 RuleSettings case_settings(const ReferenceCase& c, const std::string& id) {
-  auto found = c.defaults.find(id);
-  if (found == c.defaults.end()) found = c.defaults.find(settings_source(id));
-  return found == c.defaults.end() ? RuleSettings{} : found->second.settings;
+  const auto* own = experiment_setting(c.defaults, id);
+  return own == nullptr ? RuleSettings{} : own->settings;
 }
 
 std::unique_ptr<LearningUpdate> make_rule(const ReferenceCase& c, const RuleSpec& r) {

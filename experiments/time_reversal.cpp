@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 
+#include "physgrad/catalogue.hpp"
 #include "physgrad/run/direct_runs.hpp"
 #include "registry.hpp"
 #include "physgrad/error.hpp"
@@ -63,15 +64,17 @@ constexpr double kMaxMassSteps = 1e9;
 constexpr double kCoordinateBytes = 170;
 
 // Samples in the widest simulator call of the selected rules on a state of `dim` values:
-// Newton's Hessian differences 2·dim VJPs, a Jacobian takes dim (gn, lm, ig, PG through the
-// inverse-gradient inverse), every other rule one sample at a time.
+// a rule that forms the Hessian (RuleDerivative, newton) 2·dim VJPs, one that forms the whole
+// Jacobian dim (gn, lm, ig; PG through the inverse-gradient inverse), every other rule one sample
+// at a time.
 double widest_batch(const Settings& settings, double dim) {
   double widest = 1;
   const std::vector<std::string> inverses = settings.texts("pg-inverse");
   const bool pg_ig = std::find(inverses.begin(), inverses.end(), "ig") != inverses.end();
   for (const std::string& id : settings.texts("optimizers")) {
-    if (id == "newton") widest = std::max(widest, 2 * dim);
-    if (id == "gn" || id == "lm" || id == "ig" || (id == "pg" && pg_ig)) {
+    const RuleDerivative derivative = find_rule(RuleKind::kDirect, id).derivative;
+    if (derivative == RuleDerivative::kHessian) widest = std::max(widest, 2 * dim);
+    if (derivative == RuleDerivative::kJacobian || (id == "pg" && pg_ig)) {
       widest = std::max(widest, dim);
     }
   }

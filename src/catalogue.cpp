@@ -34,76 +34,68 @@ Error wrong_kind(const AnyRuleOptions& options, Kind wanted) {
                (wanted == Kind::kDirect ? "direct" : "learning") + " rule");
 }
 
+// Rule `Rule` built from `options`: as the catalogue id `id` when its class has several ids
+// (a constructor from (Options, id)), else from the options alone.
+template <class Rule>
+std::unique_ptr<Rule> built_as(const typename Rule::Options& options, const std::string& id) {
+  if constexpr (std::is_constructible_v<Rule, const typename Rule::Options&, const std::string&>) {
+    return std::make_unique<Rule>(options, id);
+  } else {
+    return std::make_unique<Rule>(options);
+  }
+}
+
 // The rule of `Rules` (classes deriving from Base) whose Options `options` holds, or the added
-// direct rule; Error when none does.
+// direct rule, built as the catalogue id `id` (empty: the id of its options); Error when none
+// does, or when the rule built reports another id than `id`.
 template <class Base, class... Rules>
-std::unique_ptr<Base> build(const AnyRuleOptions& options, Kind kind, RuleTypes<Rules...>) {
+std::unique_ptr<Base> build(const AnyRuleOptions& options, Kind kind, RuleTypes<Rules...>,
+                            const std::string& id = {}) {
   std::unique_ptr<Base> rule;
   std::visit(
-      [&rule](const auto& o) {
+      [&rule, &id](const auto& o) {
         using T = std::decay_t<decltype(o)>;
         if constexpr (std::is_same_v<T, AddedRuleOptions>) {
           if constexpr (std::is_same_v<Base, Optimizer>) rule = o.make_optimizer();
         } else {
           const auto make = [&]<class Rule>() {
-            if constexpr (std::is_same_v<typename Rule::Options, T>) {
-              rule = std::make_unique<Rule>(o);
-            }
+            if constexpr (std::is_same_v<typename Rule::Options, T>) rule = built_as<Rule>(o, id);
           };
           (make.template operator()<Rules>(), ...);
         }
       },
       options);
   if (!rule) throw wrong_kind(options, kind);
+  if (!id.empty() && rule->id() != id) {
+    throw Error("the rule built as " + in_quotes(id) + " reports the id " + in_quotes(rule->id()));
+  }
   return rule;
 }
 
-// The catalogue: the table below, then the rules added by add_direct_rule.
-std::vector<RuleInfo>& catalogue_entries() {
-  static std::vector<RuleInfo> rules = {
-      {Kind::kDirect, "gd", "GD", "Δx = −η ∂L/∂x", "#1f77b4", GradientDescentOptions{}},
-      {Kind::kDirect, "momentum", "Momentum", "v ← βv + ∂L/∂x, Δx = −η v", "#17becf",
-       MomentumOptions{}},
-      {Kind::kDirect, "adam", "Adam", "Δx = −η m̂/(√v̂ + ε)", "#ff7f0e", AdamOptions{}},
-      {Kind::kDirect, "newton", "Newton", "Δx = −η H⁻¹ ∂L/∂x, exact Hessian", "#d62728",
-       NewtonOptions{}},
-      {Kind::kDirect, "bfgs", "BFGS", "Δx = −α B⁻¹ ∂L/∂x, α by a strong-Wolfe line search",
-       "#9467bd", BfgsOptions{}},
-      {Kind::kDirect, "lbfgs", "L-BFGS",
-       "Δx = −α H̃ ∂L/∂x, two-loop recursion, strong-Wolfe line search", "#c5a3e0",
-       LbfgsOptions{}},
-      {Kind::kDirect, "gn", "Gauss-Newton", "Δx = −η (JᵀH_yJ)⁺ Jᵀ ∂L/∂y", "#8c564b",
-       GaussNewtonOptions{}},
-      {Kind::kDirect, "lm", "Levenberg-Marquardt",
-       "Δx = −(A + μ diag A)⁻¹ Jᵀ ∂L/∂y, μ by gain ratio", "#e377c2",
-       LevenbergMarquardtOptions{}},
-      {Kind::kDirect, "ig", "IG", "Δx = J⁺ Δy, Δy = η (y* − y)", "#2ca02c",
-       InverseGradientOptions{}},
-      {Kind::kDirect, "pg", "PG", "Δx = P⁻¹(y + Δy; x) − x, Δy = η (y* − y)", "#bcbd22",
-       PhysicalGradientOptions{}},
-      {Kind::kLearning, "sgd", "SGD", "Δθ = −η ∇θL", "#6baed6", SgdOptions{}},
-      {Kind::kLearning, "adam", "Adam", "Δθ = −η m̂/(√v̂ + ε) on ∇θL", "#ff7f0e",
-       LearningAdamOptions{}},
-      {Kind::kLearning, "gn", "Gauss-Newton",
-       "Δθ = −η J⁺ ∂L/∂y, J the stacked Jacobian, σ ≤ τσ_max dropped", "#8c564b",
-       HigOptions{.kappa = 1.0}},
-      {Kind::kLearning, "hig", "HIG", "Δθ = −η V Σ^{−1/2} Uᵀ ∂L/∂y, J = UΣVᵀ, σ ≤ τσ_max dropped",
-       "#00633a", HigOptions{}},
-      {Kind::kLearning, "sip", "SIP", "x̃ = P⁻¹(y + ηΔy; x), Adam on ½‖f(in; θ) − x̃‖²",
-       "#000000", SipOptions{}},
-      {Kind::kLearning, "kfac", "K-FAC",
-       "Δ[W b] = −η S⁻¹ ∇[W b] A⁻¹ per dense layer, JᵀJ ≈ A ⊗ S (running averages)", "#9e6b3b",
-       KroneckerHigOptions{.kappa = 1.0}},
-      {Kind::kLearning, "kfac-hig", "Kronecker HIG",
-       "Δ[W b] = −η S^{−3/4} ∇[W b] A^{−3/4} per dense layer, JᵀJ ≈ A ⊗ S (running averages)",
-       "#66c2a4", KroneckerHigOptions{}},
-      {Kind::kLearning, "lanczos-gn", "Lanczos GN",
-       "Δθ = −η Jᵀ (J Jᵀ)⁻¹ ∂L/∂y by q Lanczos steps on J Jᵀ, matrix-free", "#c49c94",
-       LanczosHigOptions{.kappa = 1.0}},
-      {Kind::kLearning, "lanczos-hig", "Lanczos HIG",
-       "Δθ = −η Jᵀ (J Jᵀ)^{−3/4} ∂L/∂y by q Lanczos steps on J Jᵀ, matrix-free", "#2ca25f",
-       LanczosHigOptions{}},
+// The catalogue's entries of each rule class of `Rules`, in their order, each class's rules() in
+// theirs.
+template <Kind kind, class... Rules>
+void append_rules(std::vector<RuleInfo>& entries, RuleTypes<Rules...>) {
+  using Base = std::conditional_t<kind == Kind::kDirect, Optimizer, LearningUpdate>;
+  const auto append = [&entries]<class Rule>() {
+    static_assert(std::is_base_of_v<Base, Rule>, "a rule class in the other kind's list");
+    for (const RuleDescriptor<typename Rule::Options>& rule : Rule::rules()) {
+      entries.push_back(RuleInfo{kind, rule.id, rule.label, rule.formula, rule.colour,
+                                 rule.defaults, rule.derivative, rule.settings_from,
+                                 rule.pretrained_colour});
+    }
   };
+  (append.template operator()<Rules>(), ...);
+}
+
+// The catalogue: the rules the classes of both lists describe, then those add_direct_rule added.
+std::vector<RuleInfo>& catalogue_entries() {
+  static std::vector<RuleInfo> rules = [] {
+    std::vector<RuleInfo> entries;
+    append_rules<Kind::kDirect>(entries, DirectRuleTypes{});
+    append_rules<Kind::kLearning>(entries, LearningRuleTypes{});
+    return entries;
+  }();
   return rules;
 }
 
@@ -147,8 +139,11 @@ std::string learning_run_label(const std::string& id) {
 }
 
 std::string settings_source(const std::string& id) {
-  if (id == "kfac" || id == "lanczos-gn") return "gn";
-  if (id == "kfac-hig" || id == "lanczos-hig") return "hig";
+  for (const RuleInfo& rule : rule_catalogue()) {
+    if (rule.kind == Kind::kLearning && rule.id == id && !rule.settings_from.empty()) {
+      return rule.settings_from;
+    }
+  }
   return id;
 }
 
@@ -234,7 +229,8 @@ std::unique_ptr<Optimizer> make_optimizer(const AnyRuleOptions& options) {
 }
 
 std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSettings& settings) {
-  return make_optimizer(with_settings(find_rule(Kind::kDirect, id), settings));
+  return build<Optimizer>(with_settings(find_rule(Kind::kDirect, id), settings), Kind::kDirect,
+                          DirectRuleTypes{}, id);
 }
 
 std::unique_ptr<LearningUpdate> make_learning_update(const AnyRuleOptions& options) {
@@ -243,7 +239,8 @@ std::unique_ptr<LearningUpdate> make_learning_update(const AnyRuleOptions& optio
 
 std::unique_ptr<LearningUpdate> make_learning_update(const std::string& id,
                                                      const RuleSettings& settings) {
-  return make_learning_update(with_settings(find_rule(Kind::kLearning, id), settings));
+  return build<LearningUpdate>(with_settings(find_rule(Kind::kLearning, id), settings),
+                               Kind::kLearning, LearningRuleTypes{}, id);
 }
 
 AddedRule::AddedRule(RuleInfo rule) : id_(rule.id) {

@@ -1,7 +1,7 @@
 // A direct rule added to the catalogue from outside the library — its class in one header
-// (sign_descent_rule.hpp) and one add_direct_rule line: the factories, the option lists, the
-// settings by name with their range checks and the tables then take it as a built-in rule; and
-// every rule's params() is its option list.
+// (sign_descent_rule.hpp, with its descriptor) and one add_direct_rule line: the factories, the
+// option lists, the settings by name with their range checks, the tables and the figures'
+// colours then take it as a built-in rule; and every rule's params() is its option list.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,6 +13,8 @@
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/optim/minimize.hpp"
+#include "physgrad/run/direct_runs.hpp"
+#include "physgrad/run/rule_colors.hpp"
 #include "sign_descent_rule.hpp"
 #include "test_problems.hpp"
 
@@ -29,8 +31,7 @@ TEST(AddedRule, OneLineMakesARuleOfTheCatalogue) {
   const std::vector<std::string> before = rule_ids(RuleKind::kDirect);
   const std::string table_before = rule_table_markdown(RuleKind::kDirect);
   {
-    const AddedRule added =
-        add_direct_rule<SignDescent>("sign", "Sign descent", "Δx = −η sign(∂L/∂x)", "#7f7f7f");
+    const AddedRule added = add_direct_rule<SignDescent>();  // as SignDescent::rules() says
 
     std::vector<std::string> expected = before;
     expected.push_back("sign");
@@ -79,6 +80,37 @@ TEST(AddedRule, OneLineMakesARuleOfTheCatalogue) {
   EXPECT_EQ(rule_ids(RuleKind::kDirect), before);
   EXPECT_EQ(rule_table_markdown(RuleKind::kDirect), table_before);
   EXPECT_THROW(make_optimizer("sign"), Error);
+}
+
+// The colour of the rule's descriptor is the one the figures draw it in while it is added (no
+// other rule has it); without the rule the same figure has it nowhere.
+TEST(AddedRule, ItsDescriptorsColourShowsInTheFigures) {
+  const std::string colour = SignDescent::rules().front().colour;
+  const testing::LinearSimulator simulator(Vector{{1.0, 10.0}}.asDiagonal());
+  const L2Loss loss;
+  const Objective objective(simulator, loss, Vector::Zero(2));
+  MinimizeOptions options;
+  options.max_iterations = 3;
+  const Vector x0{{0.48, 0.84}};
+  const auto figure = [&] {
+    SignDescent rule;
+    const run::DirectResult result{{"sign", "Sign descent", {}},
+                                   minimize(rule, objective, x0, options), objective.value(x0)};
+    return run::loss_curves_svg({result}, "loss");
+  };
+  {
+    const AddedRule added = add_direct_rule<SignDescent>();
+    EXPECT_EQ(find_rule(RuleKind::kDirect, "sign").colour, colour);
+    EXPECT_EQ(color_for("sign"), colour);
+    for (const RuleInfo& rule : rule_catalogue()) {
+      if (rule.id != "sign") {
+        EXPECT_NE(color_for(rule.id), colour) << rule.id;
+      }
+    }
+    EXPECT_NE(figure().find("stroke=\"" + colour + "\""), std::string::npos);
+  }
+  EXPECT_NE(color_for("sign"), colour);
+  EXPECT_EQ(figure().find(colour), std::string::npos);
 }
 
 TEST(AddedRule, AnIdTakenOrNotTheRulesOwnIsAnError) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad::testing {
@@ -22,8 +23,17 @@ struct SignDescentOptions {
 class SignDescent final : public Optimizer {
  public:
   using Options = SignDescentOptions;
+  // Its rule in the catalogue once added (add_direct_rule<SignDescent>()); a colour no built-in
+  // rule has.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "sign", .label = "Sign descent", .formula = "Δx = −η sign(∂L/∂x)",
+         .colour = "#3b7a57"},
+    };
+    return list;
+  }
   explicit SignDescent(Options options = {}) : options_(checked("sign", options)) {}
-  std::string id() const override { return "sign"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return option_values(options_); }
 
  private:

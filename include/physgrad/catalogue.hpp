@@ -1,5 +1,5 @@
-// Rule catalogue — every update rule in one table (id, label, formula, colour, default options),
-// direct and learning; the factories build a rule from it by id, or from a rule's full options.
+// Rule catalogue — every update rule, direct and learning, as its class describes itself (rules():
+// id, label, formula, colour, defaults); the factories build a rule by id or from its full options.
 #pragma once
 
 #include <map>
@@ -28,18 +28,17 @@
 #include "physgrad/optim/momentum.hpp"
 #include "physgrad/optim/newton.hpp"
 #include "physgrad/optim/physical_gradient.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
 
-// Direct rules move x (Optimizer, minimize()); learning rules move network weights θ
-// (LearningUpdate, train()). "adam" and "gn" exist in both kinds.
-enum class RuleKind { kDirect, kLearning };
-
-// The rule classes of each kind, one list each: the options variant below and the factories
-// (make_optimizer, make_learning_update) are built from them. Each class has an Options struct
-// with descriptors() and a constructor from it; the catalogue's table (catalogue.cpp) gives each
-// rule its id, label, formula, colour and defaults.
+// The rule classes of each kind (RuleKind, rule_descriptor.hpp), one list each: the catalogue,
+// the options variant below and the factories (make_optimizer, make_learning_update) are built
+// from them. Each class has an Options struct listing its options (descriptors()), a constructor
+// from it and its rules() (RuleDescriptor: id, label, formula, colour, defaults, …), one per
+// catalogue id; a class with several (HigUpdate: gn, hig) also has a constructor from
+// (Options, id) and reports the id it was built as. A new rule is its header and one entry here.
 template <class... Rules>
 struct RuleTypes {};
 using DirectRuleTypes =
@@ -123,6 +122,7 @@ struct OptionsOf<RuleTypes<Direct...>, RuleTypes<Learning...>> {
 // an added rule. Each struct's member initialisers are the one default of each option.
 using AnyRuleOptions = catalogue_detail::OptionsOf<DirectRuleTypes, LearningRuleTypes>::type;
 
+// One rule of the catalogue: its class's RuleDescriptor with its kind, the defaults as any rule's.
 struct RuleInfo {
   RuleKind kind;
   std::string id;       // short lower-case id, as --optimizers takes it
@@ -130,9 +130,13 @@ struct RuleInfo {
   std::string formula;  // the update in one line
   std::string colour;   // "#rrggbb", the same in every figure
   AnyRuleOptions defaults;
+  RuleDerivative derivative = RuleDerivative::kGradient;
+  std::string settings_from{};      // RuleDescriptor::settings_from
+  std::string pretrained_colour{};  // RuleDescriptor::pretrained_colour
 };
 
-// Every rule: the direct ones, then the learning ones, each in display order.
+// Every rule: the direct ones, then the learning ones, each in the order of its RuleTypes list
+// (and of each class's rules()).
 const std::vector<RuleInfo>& rule_catalogue();
 // The ids of one kind, in display order.
 std::vector<std::string> rule_ids(RuleKind kind);
@@ -151,9 +155,18 @@ std::string pretrained_rule(const std::string& id);
 std::string learning_run_label(const std::string& id);
 
 // The rule whose settings in an experiment (η, τ, batch) learning rule `id` takes where the
-// experiment gives it none: the exact gn or hig for their structured approximations (kfac,
-// lanczos-gn → gn; kfac-hig, lanczos-hig → hig), else `id` itself.
+// experiment gives it none: its descriptor's settings_from (kfac, lanczos-gn → gn; kfac-hig,
+// lanczos-hig → hig), else `id` itself (also for an id that names no learning rule).
 std::string settings_source(const std::string& id);
+
+// An experiment's choice for learning rule `id` from `table` (its choices keyed by rule id): the
+// entry of `id`, else that of settings_source(id); null when neither has one.
+template <class Value>
+const Value* experiment_setting(const std::map<std::string, Value>& table, const std::string& id) {
+  auto found = table.find(id);
+  if (found == table.end()) found = table.find(settings_source(id));
+  return found == table.end() ? nullptr : &found->second;
+}
 
 // Every option of the rule, as its options struct describes it (descriptors()).
 std::vector<OptionDescription> rule_options(const RuleInfo& rule);
@@ -186,6 +199,9 @@ std::string rule_table_markdown(RuleKind kind);
 // A direct rule from its full options (Error for a learning-only type: SgdOptions,
 // HigOptions, SipOptions), or from its id with the catalogue's defaults and `settings`
 // (with_settings). Throws Error naming an unknown id, an unknown option or an out-of-range value.
+// Built by id, a rule reports that id: make_learning_update("gn", {{"kappa", 0.5}}) is gn with
+// κ = ½ (params() shows κ); built from full options, a class of several ids reports the one of
+// its options (HigOptions: κ = 1 gn, else hig).
 std::unique_ptr<Optimizer> make_optimizer(const AnyRuleOptions& options);
 std::unique_ptr<Optimizer> make_optimizer(const std::string& id, const RuleSettings& settings = {});
 
@@ -210,12 +226,27 @@ class AddedRule {
   std::string id_;
 };
 
-// Adds the direct rule class `Rule` after the other direct rules, with the defaults
-// Rule::Options{}: `Rule` derives from Optimizer, is built from its Options, and the Options
+// Adds the direct rule class `Rule` after the other direct rules, as its one descriptor
+// (Rule::rules()) says: `Rule` derives from Optimizer, is built from its Options, and the Options
 // struct lists its options (descriptors()). While the handle lives, make_optimizer by id,
-// find_rule, rule_ids, the option names and the tables know it, as they know the built-in rules.
+// find_rule, rule_ids, the option names, the tables and the figures' colours (color_for) know it,
+// as they know the built-in rules. Throws Error when Rule::rules() does not list one rule.
 // Not thread-safe: add rules before other threads read the catalogue; adding or removing one
 // moves the entries (references into rule_catalogue() taken before are invalid).
+template <class Rule>
+[[nodiscard]] AddedRule add_direct_rule() {
+  const RuleDescriptors<typename Rule::Options>& rules = Rule::rules();
+  if (rules.size() != 1) {
+    throw Error("add_direct_rule: the class lists " + std::to_string(rules.size()) +
+                " rules, not one");
+  }
+  const RuleDescriptor<typename Rule::Options>& rule = rules.front();
+  return AddedRule(RuleInfo{RuleKind::kDirect, rule.id, rule.label, rule.formula, rule.colour,
+                            AddedRuleOptions::of<Rule>(rule.defaults), rule.derivative,
+                            rule.settings_from, rule.pretrained_colour});
+}
+
+// The same for a class without rules(): its descriptor given, the defaults Rule::Options{}.
 template <class Rule>
 [[nodiscard]] AddedRule add_direct_rule(std::string id, std::string label, std::string formula,
                                         std::string colour) {

@@ -6,6 +6,7 @@
 // A test reads this list against include/physgrad/ (tests/front_door_test.cpp).
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 #include "physgrad/rule_step.hpp"
 #include "physgrad/stop.hpp"

@@ -7,7 +7,7 @@ solves P(x) = y near a guess; physgrad.torch holds the learning rules as torch o
 from . import _physgrad
 from ._physgrad import (Error, LearningExperiment, MinimizeResult, NumericalError, blas_core,
                         blas_core_note, direct_rules, jacobian_step, learning_rules,
-                        open_metrics, open_summary, reference_step)
+                        open_metrics, open_summary, reference_step, rule_defaults)
 from ._results import Experiment, LocalInverseResult, RunOutcome, _experiments
 
 __version__ = _physgrad.__version__
@@ -31,6 +31,7 @@ _warn_of_the_blas_core()
 
 __all__ = ["Error", "NumericalError", "MinimizeResult", "LocalInverseResult", "RunOutcome",
            "Experiment", "minimize", "local_inverse", "direct_rules", "learning_rules",
+           "rule_defaults",
            "jacobian_step", "reference_step", "experiments", "open_metrics", "open_summary",
            "run_experiment", "resume_experiment", "write_index", "LearningExperiment",
            "blas_core", "blas_core_note", "BlasCoreWarning", "__version__"]

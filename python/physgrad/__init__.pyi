@@ -10,7 +10,7 @@ from ._physgrad import (Error as Error, MinimizeResult as MinimizeResult,
                         jacobian_step as jacobian_step, learning_rules as learning_rules,
                         LearningExperiment as LearningExperiment,
                         open_metrics as open_metrics, open_summary as open_summary,
-                        reference_step as reference_step)
+                        reference_step as reference_step, rule_defaults as rule_defaults)
 from ._results import (Experiment as Experiment, LocalInverseResult as LocalInverseResult,
                        RunOutcome as RunOutcome)
 

@@ -242,10 +242,19 @@ py::list rules(RuleKind kind) {
     d["id"] = rule.id;
     d["label"] = rule.label;
     d["formula"] = rule.formula;
+    d["colour"] = rule.colour;
     d["defaults"] = rule_defaults_text(rule);
     out.append(d);
   }
   return out;
+}
+
+// The options of rule `id` of `kind` ("learning" or "direct") with the catalogue's defaults, by
+// name as params() reports them: what physgrad.torch takes its keyword defaults from.
+py::object rule_defaults(const std::string& id, const std::string& kind) {
+  if (kind == "direct") return to_python(make_optimizer(id)->params());
+  if (kind == "learning") return to_python(make_learning_update(id)->params());
+  throw Error("rule_defaults: kind " + in_quotes(kind) + " is neither 'learning' nor 'direct'");
 }
 
 }  // namespace
@@ -311,9 +320,12 @@ void bind_direct(py::module_& m) {
         py::arg("relative_tolerance"), py::arg("function_tolerance"), py::arg("rcond"),
         py::arg("lower"), py::arg("upper"));
   m.def("direct_rules", [] { return rules(RuleKind::kDirect); },
-        "The direct rules: id, label, formula and defaults of each.");
+        "The direct rules: id, label, formula, colour and defaults of each.");
   m.def("learning_rules", [] { return rules(RuleKind::kLearning); },
-        "The learning rules: id, label, formula and defaults of each.");
+        "The learning rules: id, label, formula, colour and defaults of each.");
+  m.def("rule_defaults", &rule_defaults, py::arg("rule"), py::arg("kind") = "learning",
+        "The options of a rule with the catalogue's defaults, by name ({'lr': 1.0, ...}); kind "
+        "'learning' or 'direct'.");
 }
 
 }  // namespace physgrad::python

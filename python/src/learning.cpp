@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "bindings.hpp"
+#include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/learn/hig.hpp"
 #include "physgrad/learn/mapped_jacobian.hpp"
@@ -232,10 +233,12 @@ py::dict reference_step(const std::string& name, Index batch, const std::string&
 }  // namespace
 
 void bind_learning(py::module_& m) {
+  // hig's defaults in the catalogue (HigUpdate::rules()), not written again here.
+  const auto hig = std::get<HigOptions>(find_rule(RuleKind::kLearning, "hig").defaults);
   m.def("jacobian_step", &jacobian_step, py::arg("jacobian"), py::arg("loss_gradient_y"),
-        py::arg("lr") = 1.0, py::arg("kappa") = 0.5, py::arg("rcond") = 1e-6,
-        py::arg("backend") = "auto", py::arg("precision") = "double",
-        py::arg("eigensolver") = "auto", py::arg("previous") = py::none(),
+        py::arg("lr") = hig.lr, py::arg("kappa") = hig.kappa, py::arg("rcond") = hig.rcond,
+        py::arg("backend") = to_string(hig.backend), py::arg("precision") = to_string(hig.precision),
+        py::arg("eigensolver") = to_string(hig.eigensolver), py::arg("previous") = py::none(),
         "Δθ = −lr·J^{−κ}·dL/dy (HigUpdate) for J of shape (B, m, P) or (B·m, P), C-contiguous "
         "float64 (read in place) or float32 (converted once); returns (Δθ, info). "
         "precision 'double' | 'float' | 'auto' and eigensolver 'full' | 'subset' | 'auto' choose "

@@ -160,3 +160,28 @@ def test_find_lr_picks_the_best_candidate_and_leaves_the_parameters():
     lower = {lr: l for lr, l in losses.items() if lr != 0 and l < losses[0]}
     assert lower and opt.param_groups[0]["lr"] == min(lower, key=lower.get)
     assert all(torch.equal(p, b) for p, b in zip(model.parameters(), before))
+
+
+def test_the_keyword_defaults_are_the_catalogues():
+    import inspect
+    for cls, rule in ((pt.HIG, "hig"), (pt.GN, "gn")):
+        defaults = physgrad.rule_defaults(rule)
+        parameters = inspect.signature(cls).parameters
+        for name in ("lr", "kappa", "rcond", "backend", "precision", "eigensolver"):
+            assert parameters[name].default == defaults[name], (rule, name)
+    assert physgrad.rule_defaults("gn")["kappa"] == 1.0
+    assert physgrad.rule_defaults("hig")["kappa"] == 0.5
+    assert inspect.signature(pt.SIP).parameters["lr"].default == \
+        physgrad.rule_defaults("sip")["lr"]
+    hig = physgrad.rule_defaults("hig")
+    assert f"kappa: float = {hig['kappa']}" in physgrad.jacobian_step.__doc__
+    assert f"rcond: float = {hig['rcond']}" in physgrad.jacobian_step.__doc__
+    model, *_ = _problem()
+    assert pt.HIG(model.parameters()).defaults["kappa"] == hig["kappa"]
+    # Direct rules by kind; an unknown rule or kind is an Error naming it.
+    assert physgrad.rule_defaults("gn", kind="direct") != physgrad.rule_defaults("gn")
+    assert "kappa" not in physgrad.rule_defaults("gn", kind="direct")
+    with pytest.raises(physgrad.Error, match="'both'"):
+        physgrad.rule_defaults("gn", kind="both")
+    with pytest.raises(physgrad.Error, match="'lbfgs'"):
+        physgrad.rule_defaults("lbfgs")

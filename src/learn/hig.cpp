@@ -27,7 +27,11 @@ const OptionList<HigOptions>& HigOptions::descriptors() {
   return options;
 }
 
-HigUpdate::HigUpdate(Options options) : options_(options) { check_options(id(), options_); }
+HigUpdate::HigUpdate(Options options, const std::string& id)
+    : options_(options),
+      id_(listed_rule_id(rules(), id, rules()[options.kappa == 1.0 ? 0 : 1].id)) {
+  check_options(id_, options_);
+}
 
 nlohmann::json HigUpdate::params() const { return option_values(options_); }
 

@@ -74,8 +74,10 @@ const OptionList<KroneckerHigOptions>& KroneckerHigOptions::descriptors() {
   return options;
 }
 
-KroneckerHigUpdate::KroneckerHigUpdate(Options options) : options_(options) {
-  check_options(id(), options_);
+KroneckerHigUpdate::KroneckerHigUpdate(Options options, const std::string& id)
+    : options_(options),
+      id_(listed_rule_id(rules(), id, rules()[options.kappa == 1.0 ? 0 : 1].id)) {
+  check_options(id_, options_);
 }
 
 nlohmann::json KroneckerHigUpdate::params() const { return option_values(options_); }

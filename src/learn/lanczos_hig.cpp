@@ -24,8 +24,10 @@ const OptionList<LanczosHigOptions>& LanczosHigOptions::descriptors() {
   return options;
 }
 
-LanczosHigUpdate::LanczosHigUpdate(Options options) : options_(options) {
-  check_options(id(), options_);
+LanczosHigUpdate::LanczosHigUpdate(Options options, const std::string& id)
+    : options_(options),
+      id_(listed_rule_id(rules(), id, rules()[options.kappa == 1.0 ? 0 : 1].id)) {
+  check_options(id_, options_);
 }
 
 nlohmann::json LanczosHigUpdate::params() const { return option_values(options_); }

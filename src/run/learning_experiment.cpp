@@ -44,7 +44,8 @@ void require_learning_sizes(const Settings& settings, const LearningExperiment::
   bool jacobian = !settings.has("optimizers");  // the default rules may include gn or hig
   for (const std::string& id : settings.has("optimizers") ? settings.texts("optimizers")
                                                           : std::vector<std::string>{}) {
-    jacobian = jacobian || id == "gn" || id == "hig";
+    jacobian = jacobian ||
+               find_rule(RuleKind::kLearning, id).derivative == RuleDerivative::kJacobian;
   }
   if (jacobian && settings.has("batch")) {
     const long long given = settings.integer("batch");
@@ -183,16 +184,13 @@ long long pretrain_iterations(const std::string& text) {
 }
 
 std::unique_ptr<LearningUpdate> ReferenceCase::update(const std::string& id) const {
-  auto found = defaults.find(id);
-  if (found == defaults.end()) found = defaults.find(settings_source(id));
-  return make_learning_update(id, found == defaults.end() ? RuleSettings{} : found->second.settings);
+  const RuleDefaults* own = experiment_setting(defaults, id);
+  return make_learning_update(id, own == nullptr ? RuleSettings{} : own->settings);
 }
 
 Index ReferenceCase::batch_size(const std::string& id) const {
-  auto found = defaults.find(id);
-  if (found == defaults.end()) found = defaults.find(settings_source(id));
-  const std::optional<Index> own = found == defaults.end() ? std::nullopt : found->second.batch;
-  return own.value_or(TrainerOptions{}.batch_size);
+  const RuleDefaults* own = experiment_setting(defaults, id);
+  return (own == nullptr ? std::nullopt : own->batch).value_or(TrainerOptions{}.batch_size);
 }
 
 std::vector<OptionSpec> LearningExperiment::options() const {

@@ -310,9 +310,8 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
 }
 
 std::unique_ptr<LearningUpdate> LearningSweep::make_update(const std::string& rule) const {
-  auto found = defaults_.find(rule);
-  if (found == defaults_.end()) found = defaults_.find(settings_source(rule));
-  RuleSettings options = found == defaults_.end() ? RuleSettings{} : found->second.settings;
+  const RuleDefaults* own = experiment_setting(defaults_, rule);
+  RuleSettings options = own == nullptr ? RuleSettings{} : own->settings;
   for (const auto& [name, value] : rule_settings(settings_, RuleKind::kLearning)) {
     options[name] = value;
   }
@@ -321,10 +320,8 @@ std::unique_ptr<LearningUpdate> LearningSweep::make_update(const std::string& ru
 
 Index LearningSweep::batch_size(const std::string& rule) const {
   if (settings_.has("batch")) return settings_.integer("batch");
-  auto found = defaults_.find(rule);
-  if (found == defaults_.end()) found = defaults_.find(settings_source(rule));
-  const std::optional<Index> own = found == defaults_.end() ? std::nullopt : found->second.batch;
-  return own.value_or(TrainerOptions{}.batch_size);
+  const RuleDefaults* own = experiment_setting(defaults_, rule);
+  return (own == nullptr ? std::nullopt : own->batch).value_or(TrainerOptions{}.batch_size);
 }
 
 TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Network& network,

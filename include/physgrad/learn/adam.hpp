@@ -19,8 +19,16 @@ struct LearningAdamOptions {
 class AdamUpdate final : public LearningUpdate {
  public:
   using Options = LearningAdamOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "adam", .label = "Adam", .formula = "Δθ = −η m̂/(√v̂ + ε) on ∇θL",
+         .colour = "#ff7f0e"},
+    };
+    return list;
+  }
   explicit AdamUpdate(Options options = {});
-  std::string id() const override { return "adam"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return option_values(options_); }
   UpdateNeed need() const override { return UpdateNeed::kGradient; }
   void reset() override;

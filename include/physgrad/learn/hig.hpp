@@ -4,6 +4,7 @@
 
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/inversion/power_pinv.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -29,9 +30,24 @@ struct HigOptions {
 class HigUpdate final : public LearningUpdate {
  public:
   using Options = HigOptions;
-  explicit HigUpdate(Options options = {});
-  // "gn" for κ = 1, "hig" otherwise (params() lists κ).
-  std::string id() const override { return options_.kappa == 1.0 ? "gn" : "hig"; }
+  // Its rules in the catalogue, one per id it is built as, each with its defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "gn", .label = "Gauss-Newton",
+         .formula = "Δθ = −η J⁺ ∂L/∂y, J the stacked Jacobian, σ ≤ τσ_max dropped",
+         .colour = "#8c564b", .defaults = {.kappa = 1.0}, .derivative = RuleDerivative::kJacobian,
+         .pretrained_colour = "#c51b7d"},
+        {.id = "hig", .label = "HIG",
+         .formula = "Δθ = −η V Σ^{−1/2} Uᵀ ∂L/∂y, J = UΣVᵀ, σ ≤ τσ_max dropped",
+         .colour = "#00633a", .derivative = RuleDerivative::kJacobian,
+         .pretrained_colour = "#7b3294"},
+    };
+    return list;
+  }
+  // Built as `id`, one of rules(): it reports that id whatever κ is (gn with κ = ½ is still
+  // gn); without one, the id of its κ (κ = 1: gn, else hig). Throws Error naming another id.
+  explicit HigUpdate(Options options = {}, const std::string& id = {});
+  std::string id() const override { return id_; }
   nlohmann::json params() const override;
   UpdateNeed need() const override { return UpdateNeed::kStackedJacobian; }
   Step step(const BatchState& batch) override;
@@ -49,6 +65,7 @@ class HigUpdate final : public LearningUpdate {
 
  private:
   Options options_;
+  std::string id_;  // the catalogue id it was built as
   PowerPinvInfo info_{};
 };
 

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "physgrad/learn/learning_update.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -38,8 +39,25 @@ struct KroneckerHigOptions {
 class KroneckerHigUpdate final : public LearningUpdate {
  public:
   using Options = KroneckerHigOptions;
-  explicit KroneckerHigUpdate(Options options = {});
-  std::string id() const override { return options_.kappa == 1.0 ? "kfac" : "kfac-hig"; }
+  // Its rules in the catalogue, one per id it is built as, each with its defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "kfac", .label = "K-FAC",
+         .formula = "Δ[W b] = −η S⁻¹ ∇[W b] A⁻¹ per dense layer, JᵀJ ≈ A ⊗ S (running averages)",
+         .colour = "#9e6b3b", .defaults = {.kappa = 1.0},
+         .derivative = RuleDerivative::kJacobianProducts, .settings_from = "gn"},
+        {.id = "kfac-hig", .label = "Kronecker HIG",
+         .formula = "Δ[W b] = −η S^{−3/4} ∇[W b] A^{−3/4} per dense layer, JᵀJ ≈ A ⊗ S (running averages)",
+         .colour = "#66c2a4",
+         .derivative = RuleDerivative::kJacobianProducts, .settings_from = "hig"},
+    };
+    return list;
+  }
+  // Built as `id`, one of rules(): it reports that id whatever κ is (kfac with κ = ½
+  // is still kfac); without one, the id of its κ (κ = 1: kfac, else kfac-hig). Throws Error
+  // naming another id.
+  explicit KroneckerHigUpdate(Options options = {}, const std::string& id = {});
+  std::string id() const override { return id_; }
   nlohmann::json params() const override;
   // The stacked Jacobian on the steps that refresh the factors, else the gradient.
   UpdateNeed need() const override;
@@ -76,6 +94,7 @@ class KroneckerHigUpdate final : public LearningUpdate {
   void refresh_powers();
 
   Options options_;
+  std::string id_;  // the catalogue id it was built as
   long long steps_ = 0;  // steps made since the last reset
   std::vector<Layer> layers_;
   // S^{−p} and A^{−p} of each layer (empty: to be computed from layers_).

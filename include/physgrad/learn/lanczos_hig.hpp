@@ -3,6 +3,7 @@
 #pragma once
 
 #include "physgrad/learn/learning_update.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -27,8 +28,25 @@ struct LanczosHigOptions {
 class LanczosHigUpdate final : public LearningUpdate {
  public:
   using Options = LanczosHigOptions;
-  explicit LanczosHigUpdate(Options options = {});
-  std::string id() const override { return options_.kappa == 1.0 ? "lanczos-gn" : "lanczos-hig"; }
+  // Its rules in the catalogue, one per id it is built as, each with its defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "lanczos-gn", .label = "Lanczos GN",
+         .formula = "Δθ = −η Jᵀ (J Jᵀ)⁻¹ ∂L/∂y by q Lanczos steps on J Jᵀ, matrix-free",
+         .colour = "#c49c94", .defaults = {.kappa = 1.0},
+         .derivative = RuleDerivative::kJacobianProducts, .settings_from = "gn"},
+        {.id = "lanczos-hig", .label = "Lanczos HIG",
+         .formula = "Δθ = −η Jᵀ (J Jᵀ)^{−3/4} ∂L/∂y by q Lanczos steps on J Jᵀ, matrix-free",
+         .colour = "#2ca25f",
+         .derivative = RuleDerivative::kJacobianProducts, .settings_from = "hig"},
+    };
+    return list;
+  }
+  // Built as `id`, one of rules(): it reports that id whatever κ is (lanczos-gn with κ = ½
+  // is still lanczos-gn); without one, the id of its κ (κ = 1: lanczos-gn, else lanczos-hig). Throws Error
+  // naming another id.
+  explicit LanczosHigUpdate(Options options = {}, const std::string& id = {});
+  std::string id() const override { return id_; }
   nlohmann::json params() const override;
   UpdateNeed need() const override { return UpdateNeed::kStackedJacobian; }
   Step step(const BatchState& batch) override;
@@ -40,6 +58,7 @@ class LanczosHigUpdate final : public LearningUpdate {
 
  private:
   Options options_;
+  std::string id_;  // the catalogue id it was built as
   Index last_steps_ = 0, last_kept_ = 0;
 };
 

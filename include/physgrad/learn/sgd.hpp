@@ -4,6 +4,7 @@
 
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/learn/schedule.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -19,8 +20,15 @@ struct SgdOptions {
 class SgdUpdate final : public LearningUpdate {
  public:
   using Options = SgdOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "sgd", .label = "SGD", .formula = "Δθ = −η ∇θL", .colour = "#6baed6"},
+    };
+    return list;
+  }
   explicit SgdUpdate(Options options = {});
-  std::string id() const override { return "sgd"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return option_values(options_); }
   UpdateNeed need() const override { return UpdateNeed::kGradient; }
   void reset() override { schedule_.reset(); }

@@ -5,6 +5,7 @@
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/optim/adam.hpp"
 #include "physgrad/optim/local_inverse.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -24,8 +25,16 @@ struct SipOptions {
 class SipUpdate final : public LearningUpdate {
  public:
   using Options = SipOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "sip", .label = "SIP", .formula = "x̃ = P⁻¹(y + ηΔy; x), Adam on ½‖f(in; θ) − x̃‖²",
+         .colour = "#000000"},
+    };
+    return list;
+  }
   explicit SipUpdate(Options options = {});
-  std::string id() const override { return "sip"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override;
   UpdateNeed need() const override { return UpdateNeed::kNetworkOutputs; }
   void reset() override { adam_.reset(); }

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -43,8 +44,15 @@ class AdamState {
 class Adam final : public Optimizer {
  public:
   using Options = AdamOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "adam", .label = "Adam", .formula = "Δx = −η m̂/(√v̂ + ε)", .colour = "#ff7f0e"},
+    };
+    return list;
+  }
   explicit Adam(Options options = {}) : state_(options) {}
-  std::string id() const override { return "adam"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return state_.params(); }
   void reset() override { state_.reset(); }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "physgrad/optim/quasi_newton.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -20,10 +21,18 @@ struct BfgsOptions {
 class Bfgs final : public QuasiNewton {
  public:
   using Options = BfgsOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "bfgs", .label = "BFGS",
+         .formula = "Δx = −α B⁻¹ ∂L/∂x, α by a strong-Wolfe line search", .colour = "#9467bd"},
+    };
+    return list;
+  }
   // Throws Error naming the field when an option is out of range.
   explicit Bfgs(Options options = {});
 
-  std::string id() const override { return "bfgs"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return option_values(options_); }
 
  private:

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -20,8 +21,16 @@ struct GaussNewtonOptions {
 class GaussNewton final : public Optimizer {
  public:
   using Options = GaussNewtonOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "gn", .label = "Gauss-Newton", .formula = "Δx = −η (JᵀH_yJ)⁺ Jᵀ ∂L/∂y",
+         .colour = "#8c564b", .derivative = RuleDerivative::kJacobian},
+    };
+    return list;
+  }
   explicit GaussNewton(Options options = {});
-  std::string id() const override { return "gn"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return option_values(options_); }
 
  private:

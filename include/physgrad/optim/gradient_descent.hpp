@@ -4,6 +4,7 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -18,8 +19,15 @@ struct GradientDescentOptions {
 class GradientDescent final : public Optimizer {
  public:
   using Options = GradientDescentOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "gd", .label = "GD", .formula = "Δx = −η ∂L/∂x", .colour = "#1f77b4"},
+    };
+    return list;
+  }
   explicit GradientDescent(Options options = {});
-  std::string id() const override { return "gd"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return option_values(options_); }
 
  private:

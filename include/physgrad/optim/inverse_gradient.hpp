@@ -3,6 +3,7 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -18,8 +19,16 @@ struct InverseGradientOptions {
 class InverseGradient final : public Optimizer {
  public:
   using Options = InverseGradientOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "ig", .label = "IG", .formula = "Δx = J⁺ Δy, Δy = η (y* − y)", .colour = "#2ca02c",
+         .derivative = RuleDerivative::kJacobian},
+    };
+    return list;
+  }
   explicit InverseGradient(Options options = {});
-  std::string id() const override { return "ig"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return option_values(options_); }
 
  private:

@@ -5,6 +5,7 @@
 #include <deque>
 
 #include "physgrad/optim/quasi_newton.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -22,10 +23,19 @@ struct LbfgsOptions {
 class Lbfgs final : public QuasiNewton {
  public:
   using Options = LbfgsOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "lbfgs", .label = "L-BFGS",
+         .formula = "Δx = −α H̃ ∂L/∂x, two-loop recursion, strong-Wolfe line search",
+         .colour = "#c5a3e0"},
+    };
+    return list;
+  }
   // Throws Error naming the field when an option is out of range.
   explicit Lbfgs(Options options = {});
 
-  std::string id() const override { return "lbfgs"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return option_values(options_); }
 
  private:

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -22,8 +23,17 @@ struct LevenbergMarquardtOptions {
 class LevenbergMarquardt final : public Optimizer {
  public:
   using Options = LevenbergMarquardtOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "lm", .label = "Levenberg-Marquardt",
+         .formula = "Δx = −(A + μ diag A)⁻¹ Jᵀ ∂L/∂y, μ by gain ratio", .colour = "#e377c2",
+         .derivative = RuleDerivative::kJacobian},
+    };
+    return list;
+  }
   explicit LevenbergMarquardt(Options options = {});
-  std::string id() const override { return "lm"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return option_values(options_); }
   void reset() override;
   double damping() const { return mu_; }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -18,8 +19,16 @@ struct MomentumOptions {
 class Momentum final : public Optimizer {
  public:
   using Options = MomentumOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "momentum", .label = "Momentum", .formula = "v ← βv + ∂L/∂x, Δx = −η v",
+         .colour = "#17becf"},
+    };
+    return list;
+  }
   explicit Momentum(Options options = {});
-  std::string id() const override { return "momentum"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return option_values(options_); }
   void reset() override { velocity_.resize(0); }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -20,8 +21,16 @@ struct NewtonOptions {
 class Newton final : public Optimizer {
  public:
   using Options = NewtonOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "newton", .label = "Newton", .formula = "Δx = −η H⁻¹ ∂L/∂x, exact Hessian",
+         .colour = "#d62728", .derivative = RuleDerivative::kHessian},
+    };
+    return list;
+  }
   explicit Newton(Options options = {});
-  std::string id() const override { return "newton"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override { return option_values(options_); }
 
  private:

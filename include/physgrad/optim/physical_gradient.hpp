@@ -4,6 +4,7 @@
 
 #include "physgrad/optim/local_inverse.hpp"
 #include "physgrad/optim/optimizer.hpp"
+#include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 
 namespace physgrad {
@@ -24,8 +25,16 @@ struct PhysicalGradientOptions {
 class PhysicalGradient final : public Optimizer {
  public:
   using Options = PhysicalGradientOptions;
+  // Its rule in the catalogue (catalogue.hpp): id, label, formula, colour, defaults.
+  static const RuleDescriptors<Options>& rules() {
+    static const RuleDescriptors<Options> list = {
+        {.id = "pg", .label = "PG", .formula = "Δx = P⁻¹(y + Δy; x) − x, Δy = η (y* − y)",
+         .colour = "#bcbd22"},
+    };
+    return list;
+  }
   explicit PhysicalGradient(Options options = {});
-  std::string id() const override { return "pg"; }
+  std::string id() const override { return rules().front().id; }
   nlohmann::json params() const override;
 
  private:

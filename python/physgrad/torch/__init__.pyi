@@ -1,4 +1,5 @@
-# Type stubs of physgrad.torch (__init__.py): the optimizers with the keywords they take.
+# Type stubs of physgrad.torch (__init__.py): the optimizers with the keywords they take. Every
+# default (`...`) is the library's catalogue's for that rule: physgrad.rule_defaults("hig").
 from typing import Any, Callable, Dict, Iterable, Optional, Sequence, Tuple, Union
 
 import torch
@@ -9,9 +10,9 @@ SipClosure = Callable[[], Tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.
 
 class HIG(torch.optim.Optimizer):
     last_info: Optional[Dict[str, Any]]
-    def __init__(self, params: Params, lr: float = 1.0, kappa: float = 0.5,
-                 rcond: float = 1e-6, backend: str = "auto", precision: str = "double",
-                 eigensolver: str = "auto") -> None: ...
+    def __init__(self, params: Params, lr: float = ..., kappa: float = ...,
+                 rcond: float = ..., backend: str = ..., precision: str = ...,
+                 eigensolver: str = ...) -> None: ...
     def step(self, closure: JacobianClosure) -> torch.Tensor: ...  # type: ignore[override]
     def jacobian_step(self, jacobian: Any, dl_dy: Any,
                       lr: Optional[float] = ...) -> Tuple[Any, Dict[str, Any]]: ...
@@ -19,9 +20,9 @@ class HIG(torch.optim.Optimizer):
                 candidates: Sequence[float] = ...) -> Dict[float, float]: ...
 
 class GN(HIG):
-    def __init__(self, params: Params, lr: float = 1.0, kappa: float = 1.0,
-                 rcond: float = 1e-6, backend: str = "auto", precision: str = "double",
-                 eigensolver: str = "auto") -> None: ...
+    def __init__(self, params: Params, lr: float = ..., kappa: float = ...,
+                 rcond: float = ..., backend: str = ..., precision: str = ...,
+                 eigensolver: str = ...) -> None: ...
 
 class TorchSimulator:
     def __init__(self, simulate: Callable[[torch.Tensor], torch.Tensor],
@@ -31,7 +32,7 @@ class TorchSimulator:
 
 class SIP(torch.optim.Adam):
     last_info: Optional[Dict[str, Any]]
-    def __init__(self, params: Params, simulator: Any, lr: float = 1e-3, *,
+    def __init__(self, params: Params, simulator: Any, lr: float = ..., *,
                  y_step: float = ..., beta1: float = ..., beta2: float = ...,
                  epsilon: float = ..., inverse: str = ..., inverse_tolerance: float = ...,
                  inverse_iterations: int = ..., inverse_relative_tolerance: float = ...,

@@ -103,8 +103,9 @@ class KFAC(StructuredRule):
     """K-FAC (κ = 1, the library's kfac): Δ[W b] = −lr·S^{−1}·∇[W b]·A^{−1} per layer, with the
     factor eigenvalues λ ≤ rcond²·λ_max dropped and the others damped by damping·λ_max; the
     factors refreshed every `refresh` steps as running averages (weight factor_decay for the
-    old ones; the first refresh takes the batch's). KFAC(params, model, lr=1.0, kappa=1,
-    rcond=1e-6, damping=1e-2, refresh=10, factor_decay=0.9), the library's defaults.
+    old ones; the first refresh takes the batch's). KFAC(params, model, lr=None, **options):
+    lr, kappa, rcond, damping, refresh, factor_decay, each defaulting to the library's
+    (physgrad.rule_defaults("kfac")).
     step(closure), closure from structured_closure."""
 
     rule = "kfac"
@@ -234,4 +235,3 @@ class KFACHIG(KFAC):
     that Δθ = −lr·(A ⊗ S)^{−¾}·∇θL approximates HIG's −lr·(JᵀJ)^{−¾}·∇θL."""
 
     rule = "kfac-hig"
-    kappa = 0.5

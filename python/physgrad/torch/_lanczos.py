@@ -58,9 +58,10 @@ class LanczosGN(StructuredRule):
     """Gauss-Newton by q Lanczos steps (κ = 1, the library's lanczos-gn): Δθ = −lr·Jᵀ f(J Jᵀ) g,
     f(λ) = λ^{−1} on the Ritz values above rcond²·θ_max (rcond raised to 1e-7, and to √ε of the
     parameters' dtype, 3.5e-4 in float32), 0 below.
-    LanczosGN(params, model, lr=1.0, kappa=1, rcond=1e-6, products=20), the library's
-    defaults. step(closure), closure from structured_closure. After a step, last_info holds
-    the Lanczos steps made and the Ritz values kept."""
+    LanczosGN(params, model, lr=None, **options): lr, kappa, rcond, products, each defaulting
+    to the library's (physgrad.rule_defaults("lanczos-gn")). step(closure), closure from
+    structured_closure. After a step, last_info holds the Lanczos steps made and the Ritz values
+    kept."""
 
     rule = "lanczos-gn"
 
@@ -142,4 +143,3 @@ class LanczosHIG(LanczosGN):
     """HIG by q Lanczos steps (κ = ½, the library's lanczos-hig): f(λ) = λ^{−¾}."""
 
     rule = "lanczos-hig"
-    kappa = 0.5

@@ -257,26 +257,34 @@ class _JacobianRule(_LibraryRule):
         self._previous = previous
 
 
+# The keyword defaults of HIG and GN: the library's catalogue's (physgrad.rule_defaults), read
+# once here.
+_HIG = _physgrad.rule_defaults("hig")
+_GN = _physgrad.rule_defaults("gn")
+
+
 class HIG(_JacobianRule):
     """Half-inverse gradients: Δθ = −lr·J^{−κ}·∂L/∂y, κ = ½ by default (truncated at
-    rcond·σ_max)."""
+    rcond·σ_max); the defaults are the library's hig's."""
 
     rule = "hig"
 
-    def __init__(self, params, lr=1.0, kappa=0.5, rcond=1e-6, backend="auto",
-                 precision="double", eigensolver="auto", **unknown):
+    def __init__(self, params, lr=_HIG["lr"], kappa=_HIG["kappa"], rcond=_HIG["rcond"],
+                 backend=_HIG["backend"], precision=_HIG["precision"],
+                 eigensolver=_HIG["eigensolver"], **unknown):
         super().__init__(params, dict(lr=lr, kappa=kappa, rcond=rcond, backend=backend,
                                       precision=precision, eigensolver=eigensolver, **unknown))
 
 
 class GN(_JacobianRule):
     """Gauss-Newton: Δθ = −lr·J^{−κ}·∂L/∂y, κ = 1 (J⁺) by default (truncated at
-    rcond·σ_max)."""
+    rcond·σ_max); the defaults are the library's gn's."""
 
     rule = "gn"
 
-    def __init__(self, params, lr=1.0, kappa=1.0, rcond=1e-6, backend="auto",
-                 precision="double", eigensolver="auto", **unknown):
+    def __init__(self, params, lr=_GN["lr"], kappa=_GN["kappa"], rcond=_GN["rcond"],
+                 backend=_GN["backend"], precision=_GN["precision"],
+                 eigensolver=_GN["eigensolver"], **unknown):
         super().__init__(params, dict(lr=lr, kappa=kappa, rcond=rcond, backend=backend,
                                       precision=precision, eigensolver=eigensolver, **unknown))
 

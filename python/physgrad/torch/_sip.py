@@ -99,7 +99,7 @@ class SIP(torch.optim.Adam):
     one. The y-space step η(y* − y) is the Newton step of the L2 loss ½‖y − y*‖².
     """
 
-    def __init__(self, params, simulator, lr=1e-3, **options):
+    def __init__(self, params, simulator, lr=_physgrad.rule_defaults("sip")["lr"], **options):
         checked = _physgrad._sip_params(dict(options, lr=lr))
         super().__init__(params, lr=checked["lr"], betas=(checked["beta1"], checked["beta2"]),
                          eps=checked["epsilon"])

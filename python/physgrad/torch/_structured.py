@@ -54,14 +54,11 @@ class StructuredRule(torch.optim.Optimizer):
     options shared, frozen parameters skipped, options checked before anything is made."""
 
     rule = ""
-    kappa = None  # fixed by the class (KFACHIG, LanczosHIG) or None: the library's default
 
     def __init__(self, params, model, lr=None, **options):
-        given = dict(options)
+        given = dict(options)  # the others: `rule`'s defaults in the library's catalogue
         if lr is not None:
             given["lr"] = lr
-        if self.kappa is not None:
-            given.setdefault("kappa", self.kappa)
         defaults = dict(_physgrad._structured_params(self.rule, given))  # Error before anything
         self._model = model
         self._names = {id(p): name for name, p in model.named_parameters()}
