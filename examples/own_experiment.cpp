@@ -19,12 +19,12 @@
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
-#include "physgrad/run/interrupt.hpp"
-#include "physgrad/run/learning_experiment.hpp"
-#include "physgrad/run/registry.hpp"
+#include "physgrad/run/life/interrupt.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
+#include "physgrad/run/cases/registry.hpp"
 #include "physgrad/run/run.hpp"
-#include "physgrad/run/run_index.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/pages/run_index.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace {
 

@@ -5,15 +5,15 @@
 #include <cmath>
 
 #include "registry.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/svg_document.hpp"
-#include "physgrad/run/learning_verdict.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/pages/learning_verdict.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

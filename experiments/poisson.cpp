@@ -5,12 +5,12 @@
 #include <cmath>
 
 #include "registry.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/poisson.hpp"
 #include "physgrad/report/field_plot.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

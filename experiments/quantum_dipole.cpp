@@ -5,13 +5,13 @@
 #include <cmath>
 
 #include "registry.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/fidelity.hpp"
 #include "physgrad/physics/quantum_dipole.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/line_plot.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

@@ -6,12 +6,12 @@
 #include <cmath>
 
 #include "registry.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/sin_rotation.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/landscape.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

@@ -5,7 +5,7 @@
 #include <algorithm>
 
 #include "registry.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
 

@@ -13,7 +13,7 @@
 
 #include "cli_fixture.hpp"
 #include "physgrad/error.hpp"
-#include "physgrad/run/config_file.hpp"
+#include "physgrad/run/life/config_file.hpp"
 #include "registry.hpp"
 #include "physgrad/stop.hpp"
 

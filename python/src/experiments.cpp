@@ -15,7 +15,7 @@
 #include "physgrad/io/json_file.hpp"
 #include "registry.hpp"
 #include "physgrad/run/run.hpp"
-#include "physgrad/run/run_index.hpp"
+#include "physgrad/run/pages/run_index.hpp"
 #include "physgrad/stop.hpp"
 #include "python_simulator.hpp"
 
@@ -24,7 +24,7 @@ namespace physgrad::python {
 namespace {
 
 // What open_metrics and open_summary read at most: the limits `physgrad report` reads a run
-// folder's files with (src/run/run_index.cpp), so that a file of any size, a FIFO or a device
+// folder's files with (src/run/pages/run_index.cpp), so that a file of any size, a FIFO or a device
 // neither fills the memory nor blocks.
 constexpr std::size_t kMaxSummaryBytes = std::size_t{8} << 20;
 constexpr std::size_t kMaxSummaryDepth = 64;

@@ -13,12 +13,12 @@
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/io/checkpoint_file.hpp"
 #include "physgrad/parallel/distributed_eigen.hpp"
-#include "physgrad/run/checkpoint.hpp"
-#include "physgrad/run/config_file.hpp"
-#include "physgrad/run/interrupt.hpp"
-#include "physgrad/run/registry.hpp"
-#include "physgrad/run/run_folder.hpp"
-#include "fault_point.hpp"
+#include "physgrad/run/life/checkpoint.hpp"
+#include "physgrad/run/life/config_file.hpp"
+#include "physgrad/run/life/interrupt.hpp"
+#include "physgrad/run/cases/registry.hpp"
+#include "physgrad/run/life/run_folder.hpp"
+#include "life/fault_point.hpp"
 #include "physgrad/threads.hpp"
 
 namespace physgrad::run {

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "physgrad/parallel/communicator.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 
 namespace physgrad::run {
 

@@ -1,4 +1,4 @@
-#include "physgrad/run/direct_runs.hpp"
+#include "physgrad/run/cases/direct_runs.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/landscape.hpp"
 #include "physgrad/report/line_plot.hpp"
 

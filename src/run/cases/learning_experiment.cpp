@@ -1,4 +1,4 @@
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,14 +1,14 @@
-#include "physgrad/run/learning_runs.hpp"
+#include "physgrad/run/cases/learning_runs.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <new>
 
-#include "physgrad/run/checkpoint.hpp"
-#include "physgrad/run/learning_experiment.hpp"
-#include "physgrad/run/direct_runs.hpp"
-#include "physgrad/run/interrupt.hpp"
+#include "physgrad/run/life/checkpoint.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
+#include "physgrad/run/cases/direct_runs.hpp"
+#include "physgrad/run/life/interrupt.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/io/serialize.hpp"

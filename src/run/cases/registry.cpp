@@ -1,4 +1,4 @@
-#include "physgrad/run/registry.hpp"
+#include "physgrad/run/cases/registry.hpp"
 
 #include "physgrad/error.hpp"
 #include "physgrad/text.hpp"

@@ -1,4 +1,4 @@
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/io/hash.hpp"

@@ -1,4 +1,4 @@
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 #include <complex>
 #include <vector>

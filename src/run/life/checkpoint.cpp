@@ -1,9 +1,9 @@
-#include "physgrad/run/checkpoint.hpp"
+#include "physgrad/run/life/checkpoint.hpp"
 
 #include "physgrad/error.hpp"
 #include "physgrad/io/serialize.hpp"
 #include "physgrad/io/checkpoint_file.hpp"
-#include "physgrad/run/run_folder.hpp"
+#include "physgrad/run/life/run_folder.hpp"
 #include "fault_point.hpp"
 
 namespace physgrad::run {

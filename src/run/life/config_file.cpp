@@ -1,6 +1,6 @@
 // Config files — JSON documents of option values, checked by the same parse_option() as the
 // command line; and the option table printed by `physgrad describe`.
-#include "physgrad/run/config_file.hpp"
+#include "physgrad/run/life/config_file.hpp"
 
 #include <algorithm>
 #include <charconv>

@@ -1,4 +1,4 @@
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <sstream>
 
-#include "physgrad/run/interrupt.hpp"
+#include "physgrad/run/life/interrupt.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/text.hpp"

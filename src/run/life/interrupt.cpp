@@ -1,4 +1,4 @@
-#include "physgrad/run/interrupt.hpp"
+#include "physgrad/run/life/interrupt.hpp"
 
 #include <semaphore.h>
 #include <unistd.h>

@@ -10,12 +10,12 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "physgrad/run/checkpoint.hpp"
-#include "physgrad/run/config_file.hpp"
+#include "physgrad/run/life/checkpoint.hpp"
+#include "physgrad/run/life/config_file.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/text.hpp"
-#include "physgrad/run/run_folder.hpp"
+#include "physgrad/run/life/run_folder.hpp"
 #include "fault_point.hpp"
 
 namespace physgrad::run {

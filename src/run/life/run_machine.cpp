@@ -1,4 +1,4 @@
-#include "physgrad/run/run_machine.hpp"
+#include "physgrad/run/life/run_machine.hpp"
 
 #include <dlfcn.h>
 

@@ -1,10 +1,10 @@
-#include "physgrad/run/crossing.hpp"
+#include "physgrad/run/pages/crossing.hpp"
 
 #include <algorithm>
 #include <iomanip>
 #include <sstream>
 
-#include "physgrad/run/learning_verdict.hpp"  // ratio_text, value_text
+#include "physgrad/run/pages/learning_verdict.hpp"  // ratio_text, value_text
 
 namespace physgrad::run {
 

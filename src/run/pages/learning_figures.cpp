@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "physgrad/run/learning_runs.hpp"
-#include "physgrad/run/learning_verdict.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/learning_runs.hpp"
+#include "physgrad/run/pages/learning_verdict.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/seed_band.hpp"
 #include "physgrad/report/svg_document.hpp"

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "physgrad/run/learning_runs.hpp"
-#include "physgrad/run/learning_verdict.hpp"
+#include "physgrad/run/cases/learning_runs.hpp"
+#include "physgrad/run/pages/learning_verdict.hpp"
 #include "physgrad/report/significant.hpp"
 
 namespace physgrad::run {

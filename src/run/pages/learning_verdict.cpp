@@ -1,4 +1,4 @@
-#include "physgrad/run/learning_verdict.hpp"
+#include "physgrad/run/pages/learning_verdict.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/report/significant.hpp"
-#include "physgrad/run/learning_runs.hpp"
+#include "physgrad/run/cases/learning_runs.hpp"
 
 namespace physgrad::run {
 

@@ -1,4 +1,4 @@
-#include "physgrad/run/report_page.hpp"
+#include "physgrad/run/pages/report_page.hpp"
 
 #include <charconv>
 #include <chrono>
@@ -9,9 +9,9 @@
 #include "physgrad/error.hpp"
 #include "physgrad/report/compare_view.hpp"
 #include "physgrad/report/html_report.hpp"
-#include "physgrad/run/run_compare_data.hpp"
-#include "physgrad/run/run_folder.hpp"
-#include "physgrad/run/run_machine.hpp"
+#include "physgrad/run/pages/run_compare_data.hpp"
+#include "physgrad/run/life/run_folder.hpp"
+#include "physgrad/run/life/run_machine.hpp"
 
 namespace physgrad::run {
 

@@ -1,4 +1,4 @@
-#include "physgrad/run/run_compare_data.hpp"
+#include "physgrad/run/pages/run_compare_data.hpp"
 
 #include <cmath>
 #include <cstdlib>

@@ -1,6 +1,6 @@
 // What a committed run folder holds: metrics.csv, summary.json, figures and report.html, written
 // into the staging folder before commit (write_run_folder, run_folder.hpp).
-#include "physgrad/run/run_folder.hpp"
+#include "physgrad/run/life/run_folder.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -10,8 +10,8 @@
 #include "physgrad/error.hpp"
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/io/csv.hpp"
-#include "physgrad/run/report_page.hpp"
-#include "physgrad/run/run_machine.hpp"
+#include "physgrad/run/pages/report_page.hpp"
+#include "physgrad/run/life/run_machine.hpp"
 
 namespace physgrad::run {
 

@@ -3,7 +3,7 @@
 // rows in the tables, its command — goes to a spool file at once, and only the overlays' curves
 // stay in memory, for a bounded number of folders, so that memory does not grow with the number
 // of folders. The page is written at the end, part by part, from the spool.
-#include "physgrad/run/run_index.hpp"
+#include "physgrad/run/pages/run_index.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -19,12 +19,12 @@
 #include "physgrad/report/compare_view.hpp"
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/report/page_spool.hpp"
-#include "physgrad/run/checkpoint.hpp"
-#include "physgrad/run/registry.hpp"
-#include "physgrad/run/run_compare_data.hpp"
-#include "physgrad/run/run_folder.hpp"
-#include "physgrad/run/run_index_compare.hpp"
-#include "physgrad/run/run_index_folder.hpp"
+#include "physgrad/run/life/checkpoint.hpp"
+#include "physgrad/run/cases/registry.hpp"
+#include "physgrad/run/pages/run_compare_data.hpp"
+#include "physgrad/run/life/run_folder.hpp"
+#include "physgrad/run/pages/run_index_compare.hpp"
+#include "physgrad/run/pages/run_index_folder.hpp"
 #include "physgrad/text.hpp"
 
 namespace physgrad::run {

@@ -1,6 +1,6 @@
 // One comparison of the index page (run_index_compare.hpp): its table rows per folder and its
 // overlays of the first folders' curves.
-#include "physgrad/run/run_index_compare.hpp"
+#include "physgrad/run/pages/run_index_compare.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/report/colors.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/plot_marks.hpp"
 #include "physgrad/report/significant.hpp"
 

@@ -1,6 +1,6 @@
 // Reading one run folder for the index: summary.json and config.json (run_index_summary.cpp),
 // then the compared runs' curves from metrics.csv, each file bounded.
-#include "physgrad/run/run_index_folder.hpp"
+#include "physgrad/run/pages/run_index_folder.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 #include "physgrad/io/csv.hpp"
 #include "physgrad/io/json_file.hpp"
 #include "physgrad/report/seed_band.hpp"
-#include "physgrad/run/run_folder.hpp"
+#include "physgrad/run/life/run_folder.hpp"
 #include "physgrad/text.hpp"
 
 namespace physgrad::run {

@@ -1,13 +1,13 @@
 // Reading a run folder's summary.json and config.json for the index (run_index_folder.hpp): the
 // runs, then at once the rows of the table of every run and the compared labels.
-#include "physgrad/run/run_index_folder.hpp"
+#include "physgrad/run/pages/run_index_folder.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <map>
 
 #include "physgrad/error.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "physgrad/text.hpp"
 
 namespace physgrad::run {

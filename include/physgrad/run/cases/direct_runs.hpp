@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "physgrad/optim/minimize.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/report/colors.hpp"

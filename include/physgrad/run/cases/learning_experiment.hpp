@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "physgrad/run/experiment.hpp"
-#include "physgrad/run/learning_runs.hpp"
+#include "physgrad/run/life/experiment.hpp"
+#include "physgrad/run/cases/learning_runs.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad::run {

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/learn/switching.hpp"
 #include "physgrad/nn/mlp.hpp"

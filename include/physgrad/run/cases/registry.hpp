@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "physgrad/run/experiment.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 
 namespace physgrad::run {
 

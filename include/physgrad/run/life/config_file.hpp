@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "physgrad/io/folder_handle.hpp"
 
 namespace physgrad::run {

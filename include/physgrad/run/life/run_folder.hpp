@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "physgrad/io/folder_handle.hpp"
 
 namespace physgrad::run {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "physgrad/report/significant.hpp"
-#include "physgrad/run/crossing.hpp"
+#include "physgrad/run/pages/crossing.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad::run {

@@ -5,7 +5,7 @@
 #include <string>
 #include <string_view>
 
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 
 namespace physgrad::run {
 

@@ -15,7 +15,7 @@
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/page_spool.hpp"
-#include "physgrad/run/run_index_folder.hpp"
+#include "physgrad/run/pages/run_index_folder.hpp"
 
 namespace physgrad::run {
 
