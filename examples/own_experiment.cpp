@@ -91,9 +91,8 @@ int print_finals(const run::RunOutcome& outcome) {
     std::cout << stopped << '\n';
     return outcome.signal > 0 ? 128 + outcome.signal : 1;
   }
-  for (const auto& run : outcome.summary.at("runs")) {
-    std::printf("%-6s final test loss %.6e\n", run.at("label").get<std::string>().c_str(),
-                run.at("final").at("test_loss").get<double>());
+  for (const physgrad::run::RunEntry& run : outcome.summary->runs) {
+    std::printf("%-6s final test loss %.6e\n", run.label.c_str(), run.final.test_loss.value());
   }
   std::cout << "report: " << outcome.report.string() << '\n';
   return 0;

@@ -156,9 +156,9 @@ py::dict outcome_dict(const experiments::RunOutcome& outcome, const py::object& 
   out["finished"] = outcome.finished;
   out["report"] = outcome.report.string();
   out["stopped"] = python_resume_text(outcome.stopped, own);
-  out["summary"] = outcome.summary.is_null()
-                       ? py::object(py::none())
-                       : py::module_::import("json").attr("loads")(outcome.summary.dump());
+  out["summary"] = !outcome.summary ? py::object(py::none())
+                                     : py::module_::import("json").attr("loads")(
+                                           run::run_summary_json(*outcome.summary).dump());
   return out;
 }
 

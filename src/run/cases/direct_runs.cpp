@@ -109,23 +109,25 @@ DirectResult run_direct(RunContext& context, const RuleSetup& rule, const Object
   for (const auto& [key, value] : rule.extra_params.items()) params[key] = value;
   for (const auto& [key, value] : row_extras.items()) params[key] = value;
   const MinimizeSummary& s = result.summary;
-  // The final entry also holds the extra columns of the last iterate (e.g. its simulator passes).
-  nlohmann::json final = {{"loss", s.loss}, {"x", std::vector<double>(s.x.begin(), s.x.end())}};
+  // The final entry also holds the iterate and the extra columns of the last one (e.g. its
+  // simulator passes).
+  RunEntry entry;
+  entry.label = rule.label;
+  entry.optimizer = rule.id;
+  entry.params = params;
+  entry.initial.loss = result.initial_loss;
+  entry.final.loss = s.loss;
+  entry.final.more["x"] = std::vector<double>(s.x.begin(), s.x.end());
   if (columns) {  // with the whole run's work, that of a last step that failed included
     IterationRecord last = s.history.back();
     last.counts = s.counts;
-    final.update(columns(last));
+    entry.final.more.update(columns(last));
   }
-  context.add_run({{"label", rule.label},
-                   {"optimizer", rule.id},
-                   {"params", params},
-                   {"initial", {{"loss", result.initial_loss}}},
-                   {"final", final},
-                   {"iterations", s.iterations},
-                   {"epochs", nullptr},
-                   {"wall_seconds", s.wall_seconds},
-                   {"termination", to_string(s.termination)},
-                   {"message", s.message}});
+  entry.iterations = s.iterations;
+  entry.wall_seconds = s.wall_seconds;
+  entry.termination = to_string(s.termination);
+  entry.message = s.message;
+  context.add_run(std::move(entry));
   return result;
 }
 

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <new>
 
+#include "physgrad/run/cases/learning_case.hpp"
 #include "physgrad/run/life/checkpoint.hpp"
 #include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/run/cases/direct_runs.hpp"
-#include "physgrad/run/life/interrupt.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/io/serialize.hpp"
@@ -65,40 +65,50 @@ std::string time_left(const RunContext::RunPlan& plan, double fraction) {
   return out;
 }
 
-// Refuses the history of a run read from a checkpoint unless this experiment could have written
-// it: no more iterations than the run's limit (and than 2⁵³), every test loss finite when the
-// run has a test set, and each record's extras exactly the finite numbers the experiment's
-// on_evaluate records (found by letting it fill one record for `network` as it is).
-void check_saved_history(const RunKey& key, const TrainingSummary& summary,
-                         const Network& network, bool has_test_set,
-                         const TrainerOptions& options) {
-  const long long limit = options.max_iterations.value_or(1LL << 53);
-  if (summary.iterations > limit) {
-    throw Error("checkpoint: " + key.describe() + " has " + std::to_string(summary.iterations) +
-                " iterations, more than the run's " + std::to_string(limit));
+// The progress lines of one run: one per evaluation, and one when it finished (a run taken whole
+// from the checkpoint reports nothing).
+class SweepRunProgress {
+ public:
+  SweepRunProgress(RunContext& context, const TrainerOptions& options)
+      : context_(context),
+        plan_(context.run_plan()),
+        name_(context.experiment_name() + ": " + run_number(plan_) + ", "),
+        budget_(options.time_budget_seconds
+                    ? " s of training, the run's budget " +
+                          format_value(*options.time_budget_seconds)
+                    : "") {}
+
+  void evaluated(const LearningResult& result, const TrainerOptions& options,
+                 const TrainingRecord& r) {
+    trained_now_ = true;
+    if (!plan_.announcement.empty()) {
+      context_.progress_event(plan_.announcement);
+      plan_.announcement.clear();
+    }
+    context_.progress(name_ + result.label + " seed " + std::to_string(result.seed) +
+                      ", iteration " + std::to_string(r.iteration) + ", test loss " +
+                      format_value(r.test_loss) + " · " + format_value(r.train_seconds) +
+                      budget_ + " s · " +
+                      time_left(plan_, run_fraction(options, r, steady_seconds() - started_)));
   }
-  TrainingRecord probe;
-  if (options.on_evaluate) options.on_evaluate(network, probe);
-  for (const TrainingRecord& record : summary.history) {
-    std::string problem;
-    if (has_test_set && !std::isfinite(record.test_loss)) problem = "has no finite test loss";
-    for (const auto& item : probe.extras.items()) {
-      const std::string& name = item.key();
-      if (problem.empty() && !(record.extras.contains(name) &&
-                               record.extras.at(name).is_number() &&
-                               std::isfinite(record.extras.at(name).get<double>()))) {
-        problem = "has no finite '" + name + "'";
-      }
-    }
-    if (problem.empty() && record.extras.size() != probe.extras.size()) {
-      problem = "has values this experiment does not record";
-    }
-    if (!problem.empty()) {
-      throw Error("checkpoint: " + key.describe() + ": the record of iteration " +
-                  std::to_string(record.iteration) + " " + problem);
-    }
+
+  void finished(const LearningResult& result) const {
+    if (!trained_now_) return;
+    context_.progress_event(name_ + result.label + " seed " + std::to_string(result.seed) +
+                            " finished: " + std::to_string(result.summary.iterations) +
+                            " iterations in " + format_value(result.summary.train_seconds) +
+                            " s of training, test loss " +
+                            format_value(result.summary.history.back().test_loss) + " · " +
+                            time_left(plan_, 0));
   }
-}
+
+ private:
+  RunContext& context_;
+  RunContext::RunPlan& plan_;
+  const std::string name_, budget_;
+  const double started_ = steady_seconds();
+  bool trained_now_ = false;
+};
 
 }  // namespace
 
@@ -116,6 +126,12 @@ LearningSweep::LearningSweep(const Settings& settings, RunContext& context,
                       " would leave none of the --iters " +
                       std::to_string(settings_.integer("iters")) + " to the rule taking over.");
   }
+}
+
+LearningSweep::LearningSweep(const Settings& settings, RunContext& context,
+                             const LearningCase& learning_case)
+    : LearningSweep(settings, context, learning_case.defaults) {
+  draw_from(learning_case.samples);
 }
 
 std::optional<SwitchCondition> LearningSweep::switch_condition() const {
@@ -171,24 +187,9 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
                                          const LearningProblem& problem,
                                          const Dataset& train_set, const Dataset* test_set,
                                          std::function<void(const Network&, TrainingRecord&)> observe) {
-  // A pretrained run: its Adam part as the Adam run of this sweep, then its rule.
-  const std::string pretrained = pretrained_rule(id);
-  std::unique_ptr<LearningUpdate> update;
   const SwitchingUpdate* switching = nullptr;
-  if (pretrained.empty()) {
-    update = make_update(id);
-  } else {
-    const std::optional<SwitchCondition> condition = switch_condition();
-    if (!condition) {
-      throw Error(context_.experiment_name() + ": run '" + id +
-                  "' needs --pretrain auto or N, N below the --iters limit if one is given");
-    }
-    auto composed = std::make_unique<SwitchingUpdate>(
-        make_update(kPretrainingRule), batch_size(kPretrainingRule), make_update(pretrained),
-        batch_size(pretrained), *condition);
-    switching = composed.get();
-    update = std::move(composed);
-  }
+  const std::unique_ptr<LearningUpdate> update = run_update(id, switching);
+  const std::string pretrained = pretrained_rule(id);
 
   LearningResult result;
   result.id = id;
@@ -196,8 +197,45 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   result.label = learning_run_label(id) + " (" + tag + ")";
   result.seed = params.value("seed", 0LL);
 
+  TrainerOptions options = trainer_options(pretrained.empty() ? id : pretrained, result.seed);
+  if (observe) {
+    options.on_evaluate = [&network, observe](const Network&, TrainingRecord& record) {
+      observe(network, record);
+    };
+  }
+  SweepRunProgress progress(context_, options);
+  options.on_progress = [&](const TrainingRecord& r) { progress.evaluated(result, options, r); };
+  result.summary = train_or_resume(RunKey{context_.next_learning_run(), id, tag, result.seed},
+                                   network, *update, problem, train_set, test_set, options);
+  ++context_.run_plan().finished;
+  result.params = trained_params(*update, options.batch_size, switching, result);
+  progress.finished(result);
+  record_run(result, network, params);
+  results_.push_back(std::move(result));
+  return results_.back();
+}
+
+std::unique_ptr<LearningUpdate> LearningSweep::run_update(const std::string& id,
+                                                          const SwitchingUpdate*& switching) const {
+  // A pretrained run: its Adam part as the Adam run of this sweep, then its rule.
+  const std::string pretrained = pretrained_rule(id);
+  switching = nullptr;
+  if (pretrained.empty()) return make_update(id);
+  const std::optional<SwitchCondition> condition = switch_condition();
+  if (!condition) {
+    throw Error(context_.experiment_name() + ": run '" + id +
+                "' needs --pretrain auto or N, N below the --iters limit if one is given");
+  }
+  auto composed = std::make_unique<SwitchingUpdate>(
+      make_update(kPretrainingRule), batch_size(kPretrainingRule), make_update(pretrained),
+      batch_size(pretrained), *condition);
+  switching = composed.get();
+  return composed;
+}
+
+TrainerOptions LearningSweep::trainer_options(const std::string& rule, long long seed) const {
   TrainerOptions options;
-  options.batch_size = batch_size(pretrained.empty() ? id : pretrained);
+  options.batch_size = batch_size(rule);
   if (settings_.has("iters")) options.max_iterations = settings_.integer("iters");
   if (settings_.has("epochs")) options.max_epochs = settings_.integer("epochs");
   if (settings_.has("time")) options.time_budget_seconds = settings_.real("time");
@@ -208,7 +246,7 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
     options.eval_seconds = settings_.real("time") / kEvaluationsOverTime;
   }
   if (settings_.has("eval-every")) options.eval_every = settings_.integer("eval-every");
-  options.seed = static_cast<std::uint64_t>(result.seed);
+  options.seed = static_cast<std::uint64_t>(seed);
   if (settings_.has("data") && settings_.text("data") == "fresh") {
     if (!fresh_samples_) {
       throw Error(context_.experiment_name() + ": --data fresh: this experiment draws no fresh "
@@ -217,36 +255,14 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
     options.fresh_samples = fresh_samples_;
   }
   options.communicator = context_.communicator();
-  if (observe) {
-    options.on_evaluate = [&network, observe](const Network&, TrainingRecord& record) {
-      observe(network, record);
-    };
-  }
-  RunContext::RunPlan& plan = context_.run_plan();
-  const std::string name = context_.experiment_name() + ": " + run_number(plan) + ", ";
-  const std::string budget = options.time_budget_seconds
-                                 ? " s of training, the run's budget " +
-                                       format_value(*options.time_budget_seconds)
-                                 : "";
-  const double run_started = steady_seconds();
-  bool trained_now = false;  // a run taken whole from the checkpoint reports nothing
-  options.on_progress = [&](const TrainingRecord& r) {
-    trained_now = true;
-    if (!plan.announcement.empty()) {
-      context_.progress_event(plan.announcement);
-      plan.announcement.clear();
-    }
-    context_.progress(name + result.label + " seed " + std::to_string(result.seed) +
-                      ", iteration " + std::to_string(r.iteration) + ", test loss " +
-                      format_value(r.test_loss) + " · " + format_value(r.train_seconds) +
-                      budget + " s · " +
-                      time_left(plan, run_fraction(options, r, steady_seconds() - run_started)));
-  };
-  result.summary = train_or_resume(RunKey{context_.next_learning_run(), id, tag, result.seed},
-                                   network, *update, problem, train_set, test_set, options);
-  ++plan.finished;
-  nlohmann::json run_params = update->params();
-  run_params["batch"] = options.batch_size;
+  return options;
+}
+
+nlohmann::json LearningSweep::trained_params(const LearningUpdate& update, Index batch,
+                                             const SwitchingUpdate* switching,
+                                             LearningResult& result) const {
+  nlohmann::json run_params = update.params();
+  run_params["batch"] = batch;
   if (switching != nullptr) {
     // Where the rule took over (the second part's first iteration), or that it never did: then
     // the run is Adam's alone and reads so.
@@ -255,27 +271,21 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
     if (phases.size() > 1) {
       run_params["pretrain_iterations"] = phases[1].first_iteration;
     } else {
-      result.label = learning_run_label(kPretrainingRule) + " (" + tag + "; never switched to " +
-                     learning_run_label(pretrained) + ")";
+      result.label = learning_run_label(kPretrainingRule) + " (" + result.tag +
+                     "; never switched to " + learning_run_label(pretrained_rule(result.id)) + ")";
     }
   }
-  const TrainingRecord& last = result.summary.history.back();
-  if (trained_now) {
-    context_.progress_event(name + result.label + " seed " + std::to_string(result.seed) +
-                            " finished: " + std::to_string(result.summary.iterations) +
-                            " iterations in " + format_value(result.summary.train_seconds) +
-                            " s of training, test loss " + format_value(last.test_loss) + " · " +
-                            time_left(plan, 0));
-  }
+  return run_params;
+}
+
+void LearningSweep::record_run(const LearningResult& result, const Network& network,
+                               const nlohmann::json& params) {
   context_.add_network({{"label", result.label},
                         {"seed", result.seed},
                         {"network", network.describe()},
                         {"parameters", vector_to_json(network.parameters())}});
-
-  result.params = run_params;
-  for (const auto& [key, value] : params.items()) run_params[key] = value;
   for (const TrainingRecord& r : result.summary.history) {
-    nlohmann::json row = {{"label", result.label},  {"optimizer", id},
+    nlohmann::json row = {{"label", result.label},  {"optimizer", result.id},
                           {"iteration", r.iteration}, {"epoch", r.epoch},
                           {"wall_seconds", r.train_seconds}, {"train_loss", r.train_loss},
                           {"test_loss", r.test_loss}};
@@ -285,28 +295,26 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
     context_.add_metrics_row(std::move(row));
   }
   const TrainingSummary& s = result.summary;
-  nlohmann::json final_figures = {{"loss", s.history.back().train_loss},
-                                  {"test_loss", s.history.back().test_loss}};
-  for (const auto& [key, value] : s.history.back().extras.items()) final_figures[key] = value;
-  context_.add_run({{"label", result.label},
-                    {"optimizer", id},
-                    {"params", run_params},
-                    {"initial", {{"loss", s.history.front().train_loss},
-                                 {"test_loss", s.history.front().test_loss}}},
-                    {"final", final_figures},
-                    {"iterations", s.iterations},
-                    {"epochs", s.history.back().epoch},
-                    {"wall_seconds", s.train_seconds},
-                    {"run_seconds", s.wall_seconds},  // evaluations and checkpoints included
-                    {"termination", to_string(*s.termination)},
-                    {"message", s.message},
-                    {"step_halvings", s.step_halvings},
-                    {"seconds_per_part", {{"forward", s.forward_seconds},
-                                          {"derivatives", s.derivative_seconds},
-                                          {"inversion", s.inversion_seconds},
-                                          {"update", s.update_seconds}}}});
-  results_.push_back(std::move(result));
-  return results_.back();
+  RunEntry entry;
+  entry.label = result.label;
+  entry.optimizer = result.id;
+  entry.params = result.params;
+  for (const auto& [key, value] : params.items()) entry.params[key] = value;
+  entry.initial.loss = s.history.front().train_loss;
+  entry.initial.test_loss = s.history.front().test_loss;
+  entry.final.loss = s.history.back().train_loss;
+  entry.final.test_loss = s.history.back().test_loss;
+  for (const auto& [key, value] : s.history.back().extras.items()) entry.final.more[key] = value;
+  entry.iterations = s.iterations;
+  entry.epochs = s.history.back().epoch;
+  entry.wall_seconds = s.train_seconds;
+  entry.run_seconds = s.wall_seconds;  // evaluations and checkpoints included
+  entry.termination = to_string(*s.termination);
+  entry.message = s.message;
+  entry.step_halvings = s.step_halvings;
+  entry.seconds_per_part = SecondsPerPart{s.forward_seconds, s.derivative_seconds,
+                                          s.inversion_seconds, s.update_seconds};
+  context_.add_run(std::move(entry));
 }
 
 std::unique_ptr<LearningUpdate> LearningSweep::make_update(const std::string& rule) const {
@@ -325,52 +333,6 @@ Index LearningSweep::batch_size(const std::string& rule) const {
   if (found == defaults_.end()) found = defaults_.find(settings_source(rule));
   const std::optional<Index> own = found == defaults_.end() ? std::nullopt : found->second.batch;
   return own.value_or(TrainerOptions{}.batch_size);
-}
-
-TrainingSummary LearningSweep::train_or_resume(const RunKey& key, Network& network,
-                                               LearningUpdate& update,
-                                               const LearningProblem& problem,
-                                               const Dataset& train_set, const Dataset* test_set,
-                                               TrainerOptions options) {
-  options.stop = context_.stop_flag();
-  ExperimentCheckpoint* checkpoint = context_.checkpoint();
-  std::optional<TrainerState> state;
-  if (checkpoint != nullptr) {
-    const Index count = network.num_parameters();
-    if (std::optional<FinishedRun> done = checkpoint->finished(key, count)) {
-      check_saved_history(key, done->summary, network, test_set != nullptr, options);
-      network.set_parameters(done->parameters);
-      return std::move(done->summary);
-    }
-    state = checkpoint->in_progress(key, count);
-    if (state) {
-      check_saved_history(key, state->summary, network, test_set != nullptr, options);
-      options.resume = &*state;
-    }
-    if (settings_.has("checkpoint-every")) {
-      options.checkpoint_every = settings_.integer("checkpoint-every");
-    }
-    options.checkpoint_seconds = settings_.real("checkpoint-seconds");
-    options.on_checkpoint = [checkpoint, &key, stop = options.stop](const TrainerState& s) {
-      if (stop != nullptr && stop->load()) stop_point_reached();  // saving, then ending
-      checkpoint->save_progress(key, s);
-    };
-  }
-  TrainingSummary summary;
-  try {
-    summary = train(network, update, problem, train_set, test_set, options);
-  } catch (const Error& e) {
-    throw Error(key.describe() + ": " + e.what());  // names the setting (λ=…, ξ=…) and seed
-  } catch (const std::bad_alloc&) {
-    throw Error(key.describe() + ": out of memory while training (--batch, --train-size or the "
-                "network need more than this process may use)");
-  }
-  if (summary.termination == TrainingTermination::kInterrupted) {
-    stop_point_reached();
-    throw Interrupted(context_.experiment_name() + ": " + key.describe() + " " + summary.message);
-  }
-  if (checkpoint != nullptr) checkpoint->record_finished(key, summary, network.parameters());
-  return summary;
 }
 
 }  // namespace physgrad::run

@@ -265,7 +265,6 @@ std::vector<std::string> Settings::texts(const std::string& name) const {
 }
 
 void RunContext::add_metrics_row(nlohmann::json row) { metrics_.push_back(std::move(row)); }
-void RunContext::add_run(nlohmann::json run) { runs_.push_back(std::move(run)); }
 
 void RunContext::progress(const std::string& line) {
   if (show_progress_) show_progress_(line);

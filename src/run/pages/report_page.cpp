@@ -1,5 +1,8 @@
 #include "physgrad/run/pages/report_page.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -7,6 +10,7 @@
 #include <sstream>
 
 #include "physgrad/error.hpp"
+#include "physgrad/io/atomic_file.hpp"
 #include "physgrad/report/compare_view.hpp"
 #include "physgrad/report/html_report.hpp"
 #include "physgrad/run/pages/run_compare_data.hpp"
@@ -73,7 +77,7 @@ HtmlTable report_options_table(const Experiment& experiment, const Settings& set
 }
 
 bool is_learning(const RunContext& context) {
-  return !context.runs().empty() && context.runs().front().contains("seconds_per_part");
+  return !context.runs().empty() && context.runs().front().seconds_per_part.has_value();
 }
 
 HtmlTable runs_table(const RunContext& context) {
@@ -88,27 +92,41 @@ HtmlTable runs_table(const RunContext& context) {
                              "seconds (evaluations excluded)"
                            : "Every run: the loss L(x) at the start and at the end, the "
                              "iterations made, what ended the run and its wall-clock seconds"};
-  for (const nlohmann::json& run : context.runs()) {
+  for (const RunEntry& run : context.runs()) {
     // A run that --time ended before a step that would not have fit says so.
-    std::string ended = run.value("termination", std::string());
-    if (run.value("message", std::string()).rfind("time limit: next step would overrun", 0) == 0) {
+    std::string ended = run.termination;
+    if (run.message.rfind("time limit: next step would overrun", 0) == 0) {
       ended += " (next step would overrun)";
     }
     std::string params;
-    for (const auto& [key, value] : run.at("params").items()) {
+    for (const auto& [key, value] : run.params.items()) {
       params += (params.empty() ? "" : ", ") + key + " = " +
                 (value.is_string() ? value.get<std::string>() : format_number(value));
     }
-    table.rows.push_back({run.at("label").get<std::string>(), params,
-                          format_number(run.at("initial").at("loss")),
-                          format_number(run.at("final").at("loss")),
-                          std::to_string(run.at("iterations").get<long long>()),
-                          ended, format_number(run.at("wall_seconds"))});
+    table.rows.push_back({run.label, params, format_number(run.initial.loss),
+                          format_number(run.final.loss), std::to_string(run.iterations), ended,
+                          format_number(run.wall_seconds)});
   }
   return table;
 }
 
+// Whether the folder holding the run folder (staging is RUN/.staging) has an index.html.
+bool run_index_beside(const FolderHandle& staging) {
+  return ::faccessat(staging.fd(), "../../index.html", F_OK, 0) == 0;
+}
+
 }  // namespace
+
+void write_report_file(const FolderHandle& staging, const Experiment& experiment,
+                       const Settings& settings, const RunContext& context,
+                       const std::string& command_line, const RunSummary& summary) {
+  write_file_atomic(staging, kReportFile,
+                    report_page_html(experiment, settings, context, command_line,
+                                     run_index_beside(staging),
+                                     summary.machine.is_null() ? nlohmann::json::object()
+                                                               : summary.machine,
+                                     metrics_csv(context)));
+}
 
 std::string format_number(const nlohmann::json& value) {
   if (!value.is_number()) return value.is_null() ? "–" : value.dump();

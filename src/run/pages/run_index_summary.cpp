@@ -8,6 +8,7 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/run/life/experiment.hpp"
+#include "physgrad/run/life/run_summary.hpp"
 #include "physgrad/text.hpp"
 
 namespace physgrad::run {
@@ -60,52 +61,10 @@ std::string index_text_field(const json& object, const char* key, const std::str
   return value ? value->get<std::string>() : absent;
 }
 
-double index_number_field(const json& object, const char* key, const std::string& where) {
-  const json* value = index_field(object, key, where, &json::is_number, "a number");
-  return value ? value->get<double>() : NAN;
-}
-
 const json& index_object_field(const json& object, const char* key, const std::string& where) {
   static const json empty = json::object();
   const json* value = index_field(object, key, where, &json::is_object, "an object");
   return value ? *value : empty;
-}
-
-// A number of a run for `key`: its "final" entry's, else its own (e.g. "iterations"); NaN when
-// neither is a number.
-double index_summary_number(const json& run, const std::string& key) {
-  const auto final = run.find("final");
-  if (final != run.end() && final->is_object()) {
-    const auto value = final->find(key);
-    if (value != final->end() && value->is_number()) return value->get<double>();
-  }
-  const auto value = run.find(key);
-  return value != run.end() && value->is_number() ? value->get<double>() : NAN;
-}
-
-IndexedMessage read_index_message(const json& summary) {
-  IndexedMessage message;
-  const json* given = index_field(summary, "message", "", &json::is_object, "an object");
-  if (!given) return message;
-  message.figure = index_clipped(index_text_field(*given, "figure", "message.", ""), kIndexMaxName);
-  message.sentence =
-      index_clipped(index_text_field(*given, "sentence", "message.", ""), kIndexMaxSentence);
-  const std::string metric =
-      index_clipped(index_text_field(*given, "metric", "message.", ""), kIndexMaxName);
-  if (!metric.empty()) {
-    message.metric = metric;
-    message.metric_text =
-        index_clipped(index_text_field(*given, "metric_text", "message.", metric), kIndexMaxName);
-  }
-  if (const json* labels = index_field(*given, "labels", "message.", &json::is_array, "an array")) {
-    for (const json& label : *labels) {
-      if (!label.is_string()) {
-        throw Error("message.labels holds " + index_type_name(label) + ", not text");
-      }
-      message.labels.push_back(index_clipped(label.get<std::string>(), kIndexMaxName));
-    }
-  }
-  return message;
 }
 
 bool index_failed_end(const std::string& t) {
@@ -118,47 +77,59 @@ bool index_converged_end(const std::string& t) {
 
 }  // namespace
 
-std::vector<RunRecord> read_index_summary(const json& summary, IndexedFolder& folder,
-                                    std::vector<std::string>& notes, const fs::path& file) {
-  if (!summary.is_object() || !summary.contains("runs") || !summary.at("runs").is_array()) {
-    throw Error("has no list of runs");
+namespace {
+
+// The message of a summary as the index keeps it: texts clipped; without one, every run is
+// compared by its final test loss, or by its final loss when no run has one.
+IndexedMessage read_index_message(const RunSummary& summary) {
+  IndexedMessage message;
+  if (summary.message) {
+    const RunMessage& given = *summary.message;
+    message.figure = index_clipped(given.figure, kIndexMaxName);
+    message.sentence = index_clipped(given.sentence, kIndexMaxSentence);
+    if (!given.metric.empty()) {
+      message.metric = index_clipped(given.metric, kIndexMaxName);
+      message.metric_text = index_clipped(
+          given.metric_text.empty() ? given.metric : given.metric_text, kIndexMaxName);
+    }
+    for (const std::string& label : given.labels) {
+      message.labels.push_back(index_clipped(label, kIndexMaxName));
+    }
   }
+  if (message.metric.empty()) {
+    const bool tested = std::any_of(summary.runs.begin(), summary.runs.end(),
+                                    [](const RunEntry& run) {
+                                      return !std::isnan(run.figure("test_loss"));
+                                    });
+    message.metric = tested ? "test_loss" : "loss";
+    message.metric_text = tested ? "final test loss" : "final loss";
+  }
+  return message;
+}
+
+}  // namespace
+
+std::vector<RunRecord> read_index_summary(const json& document, IndexedFolder& folder,
+                                          std::vector<std::string>& notes, const fs::path& file) {
+  const RunSummary summary = read_run_summary(document, kIndexMaxRuns);
   folder.experiment =
-      index_clipped(index_text_field(summary, "experiment", "", "?"), kIndexMaxName);
+      index_clipped(summary.experiment.empty() ? "?" : summary.experiment, kIndexMaxName);
   folder.message = read_index_message(summary);
-  const json& runs = summary.at("runs");
-  if (folder.message.metric.empty()) {
-    const bool tested = std::any_of(runs.begin(), runs.end(), [](const json& run) {
-      return run.is_object() && !std::isnan(index_summary_number(run, "test_loss"));
-    });
-    folder.message.metric = tested ? "test_loss" : "loss";
-    folder.message.metric_text = tested ? "final test loss" : "final loss";
-  }
-  if (runs.size() > kIndexMaxRuns) {
-    notes.push_back(in_quotes(file.string()) + ": " + std::to_string(runs.size()) +
+  if (const std::size_t runs = document.at("runs").size(); runs > kIndexMaxRuns) {
+    notes.push_back(in_quotes(file.string()) + ": " + std::to_string(runs) +
                     " runs, only the first " + std::to_string(kIndexMaxRuns) + " are listed");
   }
   std::vector<RunRecord> records;
-  for (std::size_t k = 0; k < std::min(runs.size(), kIndexMaxRuns); ++k) {
-    const std::string where = "runs[" + std::to_string(k) + "]";
-    const json& run = runs[k];
-    if (!run.is_object()) throw Error(where + " is " + index_type_name(run) + ", not an object");
-    const json& final = index_object_field(run, "final", where + ".");
+  for (const RunEntry& run : summary.runs) {
     // Only training evaluates on a test set; direct optimization writes "epochs": null.
-    const bool learning = run.contains("seconds_per_part") ||
-                          (run.contains("epochs") && run.at("epochs").is_number()) ||
-                          !std::isnan(index_summary_number(run, "test_loss"));
-    records.push_back({index_clipped(index_text_field(run, "label", where + ".", "?"), kIndexMaxName),
-                       index_text_field(run, "optimizer", where + ".", ""),
-                       index_object_field(run, "params", where + "."),
-                       index_number_field(final, "loss", where + ".final."),
-                       index_number_field(final, "test_loss", where + ".final."),
-                       index_number_field(run, "iterations", where + "."),
-                       index_number_field(run, "wall_seconds", where + "."),
-                       index_summary_number(run, folder.message.metric),
-                       index_text_field(run, "termination", where + ".", "–"), learning});
-    const json& initial = index_object_field(run, "initial", where + ".");
-    records.back().initial_loss = index_number_field(initial, "loss", where + ".initial.");
+    const bool learning = run.seconds_per_part.has_value() || run.epochs.has_value() ||
+                          !std::isnan(run.figure("test_loss"));
+    records.push_back({index_clipped(run.label.empty() ? "?" : run.label, kIndexMaxName),
+                       run.optimizer, run.params, run.final.loss,
+                       run.final.test_loss.value_or(NAN), static_cast<double>(run.iterations),
+                       run.wall_seconds, run.figure(folder.message.metric),
+                       run.termination.empty() ? "–" : run.termination, learning});
+    records.back().initial_loss = run.initial.loss;
   }
   folder.learning = std::any_of(records.begin(), records.end(),
                                 [](const RunRecord& r) { return r.learning; });

@@ -15,14 +15,15 @@
 #include <string>
 #include <vector>
 
-#include "physgrad/run/life/experiment.hpp"
+#include "physgrad/run/cases/learning_case.hpp"
 #include "physgrad/run/cases/learning_runs.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "physgrad/train/trainer.hpp"
 
 namespace physgrad::run {
 
-// The learning problem of an experiment at one batch, built by the experiment's own set-up code:
-// its simulator, loss, initial network, the first B training samples and its choices per rule.
+// The learning problem of an experiment at one batch (LearningCase::reference): its simulator,
+// loss, initial network, the first B training samples and its choices per rule.
 struct ReferenceCase {
   std::shared_ptr<const Simulator> physics;
   std::shared_ptr<const Loss> loss;

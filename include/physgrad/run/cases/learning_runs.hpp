@@ -20,6 +20,7 @@
 namespace physgrad::run {
 
 struct RunKey;
+struct LearningCase;  // learning_case.hpp
 
 struct LearningResult {
   std::string id;     // update rule id, or a pretrained run's ("adam-hig", catalogue.hpp)
@@ -55,6 +56,8 @@ class LearningSweep {
  public:
   LearningSweep(const Settings& settings, RunContext& context,
                 std::map<std::string, RuleDefaults> defaults);
+  // The sweep of a case: its rule defaults, and its samples for --data fresh (draw_from).
+  LearningSweep(const Settings& settings, RunContext& context, const LearningCase& learning_case);
 
   // The rules the experiment runs when --optimizers is not given (it chose them): their runs
   // (run_ids) are the run count the progress lines plan with. The first call counts.
@@ -138,6 +141,19 @@ class LearningSweep {
   void add_tables() const;
 
  private:
+  // The steps of run(). The update rule `id` trains with: a pretrained run ("adam-hig") is a
+  // SwitchingUpdate, also returned in `switching`.
+  std::unique_ptr<LearningUpdate> run_update(const std::string& id,
+                                             const SwitchingUpdate*& switching) const;
+  // The trainer's limits, evaluations, batch of `rule`, seed and samples from the settings.
+  TrainerOptions trainer_options(const std::string& rule, long long seed) const;
+  // The run's params after training: the rule's, its batch, and for a pretrained run where it
+  // switched (a run that never did is relabelled as Adam's).
+  nlohmann::json trained_params(const LearningUpdate& update, Index batch,
+                                const SwitchingUpdate* switching, LearningResult& result) const;
+  // Its trained network, metrics rows (with `params`) and summary entry into the context.
+  void record_run(const LearningResult& result, const Network& network,
+                  const nlohmann::json& params);
   // Trains, or takes the run from the context's checkpoint when it finished there, or
   // continues it from its saved state; saves checkpoints as the settings ask. Throws
   // Interrupted when a stop request ended the run.

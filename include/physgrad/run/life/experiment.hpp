@@ -15,6 +15,7 @@
 #include "physgrad/catalogue.hpp"
 #include "physgrad/parallel/communicator.hpp"
 #include "physgrad/types.hpp"
+#include "physgrad/run/life/run_summary.hpp"
 
 namespace physgrad::run {
 
@@ -139,8 +140,8 @@ class RunContext {
   // Metrics: one row per run × evaluation; columns are the union of all keys in first-seen
   // order (label, optimizer and iteration first).
   void add_metrics_row(nlohmann::json row);
-  // A summary entry: {"label", "optimizer", "params", "initial", "final", "iterations", ...}.
-  void add_run(nlohmann::json run);
+  // A run's entry of summary.json (run_summary.hpp).
+  void add_run(RunEntry run) { runs_.push_back(std::move(run)); }
   void add_figure(Figure figure) { figures_.push_back(std::move(figure)); }
   void add_table(Table table) { tables_.push_back(std::move(table)); }
   void add_note(std::string text) { notes_.push_back(std::move(text)); }
@@ -175,7 +176,7 @@ class RunContext {
   RunPlan& run_plan() { return run_plan_; }
 
   const std::vector<nlohmann::json>& metrics() const { return metrics_; }
-  const std::vector<nlohmann::json>& runs() const { return runs_; }
+  const std::vector<RunEntry>& runs() const { return runs_; }
   const std::vector<Figure>& figures() const { return figures_; }
   const std::vector<Table>& tables() const { return tables_; }
   const std::vector<std::string>& notes() const { return notes_; }
@@ -210,7 +211,7 @@ class RunContext {
 
  private:
   std::vector<nlohmann::json> metrics_;
-  std::vector<nlohmann::json> runs_;
+  std::vector<RunEntry> runs_;
   std::vector<Figure> figures_;
   std::vector<Table> tables_;
   std::vector<std::string> notes_;

@@ -20,13 +20,15 @@
 #include <string>
 #include <vector>
 
-#include "physgrad/run/life/experiment.hpp"
 #include "physgrad/io/folder_handle.hpp"
+#include "physgrad/run/life/experiment.hpp"
+#include "physgrad/run/life/run_summary.hpp"
 
 namespace physgrad::run {
 
-inline constexpr const char* kConfigFile = "config.json";
-inline constexpr const char* kSummaryFile = "summary.json";
+inline constexpr const char* kConfigFile = "config.json";  // kSummaryFile: run_summary.hpp
+inline constexpr const char* kMetricsFile = "metrics.csv";
+inline constexpr const char* kReportFile = "report.html";
 
 // A path a user typed, checked and resolved: not blank, no control characters, trailing slashes
 // dropped, symbolic links to folders followed (a dangling or looping link, or a file, is refused).
@@ -94,17 +96,21 @@ class RunFolder {
 nlohmann::json config_document(const Experiment& experiment, const Settings& settings,
                                const std::string& command_line);
 
-// Writes config.json, metrics.csv, summary.json (`summary`, of summary_document()), the figures,
-// networks.json and report.html into `staging`, through its handle.
+// Writes config.json, metrics.csv, summary.json, the figures and networks.json into `staging`,
+// through its handle; report.html is the pages' (write_report_file, report_page.hpp).
 void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
-                      const std::string& command_line, const nlohmann::json& summary);
-// True for the name of a file write_run_folder() writes: what a commit cut short leaves in an
-// unfinished folder besides config.json and the checkpoint.
+                      const std::string& command_line, const RunSummary& summary);
+// True for the name of a file a run writes into its folder when it commits (write_run_folder,
+// report.html): what a commit cut short leaves in an unfinished folder besides config.json and
+// the checkpoint.
 bool is_result_file(const std::string& name);
 
-// The summary.json document: {"experiment": NAME, "runs": [...]} and, when the experiment set
-// one, "message": {"figure", "sentence", "metric", "metric_text", "labels"} (RunContext).
-nlohmann::json summary_document(const Experiment& experiment, const RunContext& context);
+// metrics.csv: one row per run × evaluation, the columns label, optimizer, iteration, epoch,
+// wall_seconds first, then the others in the order first seen.
+std::string metrics_csv(const RunContext& context);
+
+// The summary of the finished run: the context's runs and message, and run_machine().
+RunSummary run_summary(const Experiment& experiment, const RunContext& context);
 
 }  // namespace physgrad::run

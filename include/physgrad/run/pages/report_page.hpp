@@ -5,7 +5,9 @@
 #include <string>
 #include <string_view>
 
+#include "physgrad/io/folder_handle.hpp"
 #include "physgrad/run/life/experiment.hpp"
+#include "physgrad/run/life/run_summary.hpp"
 
 namespace physgrad::run {
 
@@ -15,6 +17,12 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
                              const RunContext& context, const std::string& command_line,
                              bool index_exists, const nlohmann::json& machine,
                              std::string_view metrics = {});
+
+// Writes report.html of the finished run (its `summary`) into `staging`, through its handle,
+// linking ../index.html when the run folder's parent has one.
+void write_report_file(const FolderHandle& staging, const Experiment& experiment,
+                       const Settings& settings, const RunContext& context,
+                       const std::string& command_line, const RunSummary& summary);
 
 // A number of a summary or settings document with 4 significant digits ("–" for null).
 std::string format_number(const nlohmann::json& value);

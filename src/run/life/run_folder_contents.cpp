@@ -1,25 +1,19 @@
-// What a committed run folder holds: metrics.csv, summary.json, figures and report.html, written
-// into the staging folder before commit (write_run_folder, run_folder.hpp).
-#include "physgrad/run/life/run_folder.hpp"
-
-#include <fcntl.h>
-#include <unistd.h>
-
+// What a committed run folder holds: config.json, metrics.csv, summary.json, figures and
+// networks.json, written into the staging folder before commit (write_run_folder,
+// run_folder.hpp); report.html beside them is written by the pages (report_page.hpp).
 #include <set>
 
 #include "physgrad/error.hpp"
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/io/csv.hpp"
-#include "physgrad/run/pages/report_page.hpp"
+#include "physgrad/run/life/run_folder.hpp"
 #include "physgrad/run/life/run_machine.hpp"
 
 namespace physgrad::run {
 
 namespace {
 
-constexpr const char* kMetricsFile = "metrics.csv";
 constexpr const char* kNetworksFile = "networks.json";
-constexpr const char* kReportFile = "report.html";
 
 // A figure: NAME.svg, a plain file name that is not hidden.
 bool is_figure_file(const std::string& name) {
@@ -34,6 +28,8 @@ CsvCell to_cell(const nlohmann::json& value) {
   if (value.is_null()) return std::string();
   return value.dump();
 }
+
+}  // namespace
 
 std::string metrics_csv(const RunContext& context) {
   std::vector<std::string> columns;
@@ -58,13 +54,6 @@ std::string metrics_csv(const RunContext& context) {
   return table.str();
 }
 
-// Whether the folder holding the run folder (staging is RUN/.staging) has an index.html.
-bool run_index_beside(const FolderHandle& staging) {
-  return ::faccessat(staging.fd(), "../../index.html", F_OK, 0) == 0;
-}
-
-}  // namespace
-
 nlohmann::json config_document(const Experiment& experiment, const Settings& settings,
                                const std::string& command_line) {
   return {{"experiment", experiment.name()},
@@ -72,16 +61,12 @@ nlohmann::json config_document(const Experiment& experiment, const Settings& set
           {"settings", settings.json()}};
 }
 
-nlohmann::json summary_document(const Experiment& experiment, const RunContext& context) {
-  nlohmann::json summary = {
-      {"experiment", experiment.name()}, {"runs", context.runs()}, {"machine", run_machine()}};
+RunSummary run_summary(const Experiment& experiment, const RunContext& context) {
+  RunSummary summary{experiment.name(), context.runs(), std::nullopt, run_machine()};
   if (!context.message_figure().empty()) {
     const MessageMetric& metric = context.message_metric();
-    summary["message"] = {{"figure", context.message_figure()},
-                          {"sentence", context.message()},
-                          {"metric", metric.key},
-                          {"metric_text", metric.text},
-                          {"labels", metric.labels}};
+    summary.message = RunMessage{context.message_figure(), context.message(), metric.key,
+                                 metric.text, metric.labels};
   }
   return summary;
 }
@@ -93,12 +78,11 @@ bool is_result_file(const std::string& name) {
 
 void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
                       const Settings& settings, const RunContext& context,
-                      const std::string& command_line, const nlohmann::json& summary) {
+                      const std::string& command_line, const RunSummary& summary) {
   write_file_atomic(staging, kConfigFile,
                     config_document(experiment, settings, command_line).dump(2) + "\n");
-  const std::string metrics = metrics_csv(context);
-  write_file_atomic(staging, kMetricsFile, metrics);
-  write_file_atomic(staging, kSummaryFile, summary.dump(2) + "\n");
+  write_file_atomic(staging, kMetricsFile, metrics_csv(context));
+  write_file_atomic(staging, kSummaryFile, run_summary_json(summary).dump(2) + "\n");
   for (const RunContext::Figure& figure : context.figures()) {
     if (!is_figure_file(figure.file)) {
       throw Error("figure file '" + figure.file + "': expected a name NAME.svg");
@@ -109,11 +93,6 @@ void write_run_folder(const FolderHandle& staging, const Experiment& experiment,
     write_file_atomic(staging, kNetworksFile,
                       nlohmann::json{{"networks", context.networks()}}.dump() + "\n");
   }
-  write_file_atomic(staging, kReportFile,
-                    report_page_html(experiment, settings, context, command_line,
-                                     run_index_beside(staging),
-                                     summary.value("machine", nlohmann::json::object()),
-                                     metrics));
 }
 
 }  // namespace physgrad::run
