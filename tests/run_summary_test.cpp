@@ -86,7 +86,7 @@ TEST(RunSummary, WhatIsWrittenReadsBackAsTheSameSummary) {
 
 // A summary.json as the code wrote it before runs had "run_seconds" and summaries a "machine"
 // and a "message", with a key this reader does not know.
-constexpr const char* kOlderSummary = R"({
+constexpr const char* kOlderSummary = R"json({
   "experiment": "poisson",
   "runs": [
     {"label": "Adam (8x8)", "optimizer": "adam", "params": {"lr": 0.0003, "batch": 64, "seed": 0},
@@ -99,7 +99,7 @@ constexpr const char* kOlderSummary = R"({
      "final": {"loss": 1, "x": [0.5]}, "iterations": 10, "epochs": null, "wall_seconds": 0.5,
      "termination": "max_iterations", "message": "10 iterations"}
   ]
-})";
+})json";
 
 TEST(RunSummary, AFileOfAnOlderVersionReads) {
   const nlohmann::json document = nlohmann::json::parse(kOlderSummary);
