@@ -19,12 +19,12 @@
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
-#include "physgrad/run/interrupt.hpp"
-#include "physgrad/run/learning_experiment.hpp"
-#include "physgrad/run/registry.hpp"
+#include "physgrad/run/life/interrupt.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
+#include "physgrad/run/cases/registry.hpp"
 #include "physgrad/run/run.hpp"
-#include "physgrad/run/run_index.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/pages/run_index.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace {
 
@@ -91,9 +91,8 @@ int print_finals(const run::RunOutcome& outcome) {
     std::cout << stopped << '\n';
     return outcome.signal > 0 ? 128 + outcome.signal : 1;
   }
-  for (const auto& run : outcome.summary.at("runs")) {
-    std::printf("%-6s final test loss %.6e\n", run.at("label").get<std::string>().c_str(),
-                run.at("final").at("test_loss").get<double>());
+  for (const physgrad::run::RunEntry& run : outcome.summary->runs) {
+    std::printf("%-6s final test loss %.6e\n", run.label.c_str(), run.final.test_loss.value());
   }
   std::cout << "report: " << outcome.report.string() << '\n';
   return 0;

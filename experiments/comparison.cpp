@@ -4,8 +4,8 @@
 #include <cmath>
 #include <functional>
 
-#include "physgrad/run/direct_runs.hpp"
-#include "physgrad/run/learning_verdict.hpp"  // ratio_text, value_text
+#include "physgrad/run/cases/direct_runs.hpp"
+#include "physgrad/run/pages/learning_verdict.hpp"  // ratio_text, value_text
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"

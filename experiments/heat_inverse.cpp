@@ -9,13 +9,13 @@
 #include "heat_inverse_figures.hpp"
 #include "registry.hpp"
 #include "unet_case.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/memory.hpp"
 #include "physgrad/nn/mean_matched_network.hpp"
 #include "physgrad/physics/heat_diffusion.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

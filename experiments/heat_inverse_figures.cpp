@@ -4,7 +4,7 @@
 #include <string>
 
 #include "physgrad/catalogue.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/field_plot.hpp"
 #include "physgrad/report/line_plot.hpp"
 

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "physgrad/nn/network.hpp"
-#include "physgrad/run/experiment.hpp"
-#include "physgrad/run/learning_runs.hpp"
+#include "physgrad/run/life/experiment.hpp"
+#include "physgrad/run/cases/learning_runs.hpp"
 
 namespace physgrad::experiments {
 

@@ -5,15 +5,15 @@
 #include <cmath>
 
 #include "registry.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/svg_document.hpp"
-#include "physgrad/run/learning_verdict.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/pages/learning_verdict.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {
@@ -47,6 +47,15 @@ Dataset make_data(Index n, std::uint64_t seed) {
     data.targets.col(i) << std::sin(6 * x), std::cos(9 * x);
   }
   return data;
+}
+
+// The case at scale λ: P(y) = (y₁, λy₂), L = ½‖P(y) − ŷ‖², the 1-7-2 tanh network, inputs
+// uniform on [−1, 1]; the samples and rule defaults are the same for every λ.
+LearningCase learning_case(double lambda) {
+  return {std::make_shared<DiagonalScale>(Vector{{1.0, lambda}}), std::make_shared<L2Loss>(),
+          make_network,
+          [](std::uint64_t stream, Index count) { return make_data(count, stream); },
+          rule_defaults()};
 }
 
 // A hidden neuron counts as saturated when |tanh| > 0.99 for every validation input: it then
@@ -97,23 +106,19 @@ class HigToy final : public LearningExperiment {
 
   // The badly conditioned case λ = 0.01.
   std::optional<ReferenceCase> reference(Index batch, std::uint64_t seed) const override {
-    return ReferenceCase{std::make_shared<DiagonalScale>(Vector{{1.0, 0.01}}),
-                         std::make_shared<L2Loss>(), make_network(seed),
-                         make_data(batch, 2 * seed), rule_defaults()};
+    return learning_case(0.01).reference(batch, seed);
   }
 
   void run(const Settings& settings, RunContext& context) const override {
-    LearningSweep sweep(settings, context, rule_defaults());
-    sweep.draw_from([](std::uint64_t stream, Index count) { return make_data(count, stream); });
+    LearningSweep sweep(settings, context, learning_case(settings.reals("lambda").front()));
     for (const double lambda : settings.reals("lambda")) {
-      const DiagonalScale physics(Vector{{1.0, lambda}});
-      const L2Loss loss;
-      const LearningProblem problem{&physics, &loss};
+      const LearningCase learning = learning_case(lambda);
+      const Simulator& physics = *learning.physics;
       const std::string tag = "λ=" + format_value(lambda);
       for (long long s = 0; s < settings.integer("seeds"); ++s) {
         const auto seed = static_cast<std::uint64_t>(settings.integer("seed") + s);
-        const Dataset train_set = make_data(settings.integer("train-size"), 2 * seed);
-        const Dataset test_set = make_data(settings.integer("test-size"), 2 * seed + 1);
+        const Dataset train_set = learning.training_set(settings.integer("train-size"), seed);
+        const Dataset test_set = learning.test_set(settings.integer("test-size"), seed);
 
         const auto observe = [&](const Network& network, TrainingRecord& record) {
           // The sweep trains the Mlp made below, so the network observed is that one.
@@ -128,9 +133,9 @@ class HigToy final : public LearningExperiment {
           record.extras["y2"] = y(1);
         };
         for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
-          Mlp network = make_network(seed);
-          sweep.run(id, tag, {{"lambda", lambda}, {"seed", seed}}, network, problem, train_set,
-                    &test_set, observe);
+          Mlp network = learning.network(seed);
+          sweep.run(id, tag, {{"lambda", lambda}, {"seed", seed}}, network, learning.problem(),
+                    train_set, &test_set, observe);
         }
       }
     }

@@ -5,13 +5,13 @@
 #include <cmath>
 
 #include "registry.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/line_plot.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {
@@ -63,6 +63,19 @@ Mlp make_network(const CoupledOscillators& physics, Activation activation, std::
   Mlp network(widths(physics), activation);
   network.initialize(seed);
   return network;
+}
+
+// The case of a configuration: its oscillators, L = Σ (y − y*)² (gradients of the batch mean),
+// the 20-20-20 network, start states uniform on [0, 1).
+LearningCase learning_case(const Configuration& config) {
+  auto physics = std::make_shared<CoupledOscillators>(config.physics);
+  const Index dim = physics->output_dim();
+  return {physics, std::make_shared<L2Loss>(2.0),
+          [physics, activation = config.activation](std::uint64_t seed) {
+            return make_network(*physics, activation, seed);
+          },
+          [dim](std::uint64_t stream, Index count) { return make_states(count, dim, stream); },
+          config.defaults};
 }
 
 // Column k: the state after the first k steps (k = 0 … Nt) under the controls u from s₀.
@@ -168,37 +181,27 @@ class Oscillators final : public LearningExperiment {
 
   // The paper's configuration.
   std::optional<ReferenceCase> reference(Index batch, std::uint64_t seed) const override {
-    const Configuration config = configuration("paper");
-    auto physics = std::make_shared<CoupledOscillators>(config.physics);
-    Mlp network = make_network(*physics, config.activation, seed);
-    Dataset data = make_states(batch, physics->output_dim(), 2 * seed);
-    return ReferenceCase{std::move(physics), std::make_shared<L2Loss>(2.0), std::move(network),
-                         std::move(data), config.defaults};
+    return learning_case(configuration("paper")).reference(batch, seed);
   }
 
   void run(const Settings& settings, RunContext& context) const override {
     const std::string config_name = settings.text("variant");
     const Configuration config = configuration(config_name);
-    const CoupledOscillators physics(config.physics);
-    const L2Loss squares(2.0);  // L = Σ (y − y*)², gradients of the batch mean
-    const LearningProblem problem{&physics, &squares};
-    const Index dim = physics.output_dim();
+    const LearningCase learning = learning_case(config);
     const auto seed = static_cast<std::uint64_t>(settings.integer("seed"));
-    const Dataset train_set = make_states(settings.integer("train-size"), dim, 2 * seed);
-    const Dataset test_set = make_states(settings.integer("test-size"), dim, 2 * seed + 1);
+    const Dataset train_set = learning.training_set(settings.integer("train-size"), seed);
+    const Dataset test_set = learning.test_set(settings.integer("test-size"), seed);
 
-    LearningSweep sweep(settings, context, config.defaults);
-    sweep.draw_from(
-        [dim](std::uint64_t stream, Index count) { return make_states(count, dim, stream); });
+    LearningSweep sweep(settings, context, learning);
     const std::vector<std::string> rules =
         settings.has("optimizers") ? settings.texts("optimizers") : config.rules;
     sweep.plan_runs(rules);
     std::vector<std::pair<const LearningResult*, Mlp>> trained;
     const std::vector<std::string> ids = sweep.run_ids(rules);
     for (const std::string& id : ids) {
-      Mlp network = make_network(physics, config.activation, seed);
+      Mlp network = learning.network(seed);
       const LearningResult& r = sweep.run(id, config_name, {{"variant", config_name}, {"seed", seed}},
-                                          network, problem, train_set, &test_set);
+                                          network, learning.problem(), train_set, &test_set);
       trained.emplace_back(&r, std::move(network));
     }
     sweep.add_loss_figures(context, config_name, config_name, true);

@@ -5,12 +5,12 @@
 #include <cmath>
 
 #include "registry.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/poisson.hpp"
 #include "physgrad/report/field_plot.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {
@@ -47,6 +47,18 @@ std::map<std::string, RuleDefaults> rule_defaults(Index batch) {
           {"gn", {{{"lr", paper_step}, {"rcond", 1e-5}}, kBatch}},
           {"hig", {{{"lr", paper_step}, {"rcond", 1e-5}}, kBatch}},
           {"sip", {{{"lr", 1e-3}}, kBatch}}};
+}
+
+// The case on an n×n grid: the 5-point Laplacian, L = ½‖∇²x − y*‖² per sample, the tanh network
+// n² → 64 → 128 → 64 → n², fields as make_fields draws them; the rules' steps for `batch`.
+LearningCase learning_case(Index n, Index batch) {
+  auto physics = std::make_shared<Poisson>(n);
+  return {physics, std::make_shared<L2Loss>(),
+          [n](std::uint64_t seed) { return make_network(n, seed); },
+          [physics](std::uint64_t stream, Index count) {
+            return make_data(*physics, count, stream);
+          },
+          rule_defaults(batch)};
 }
 
 // The first test sample's true x* next to each rule's prediction f(y*), in one colour range.
@@ -109,22 +121,18 @@ class PoissonExperiment final : public LearningExperiment {
 
   // The 8×8 grid.
   std::optional<ReferenceCase> reference(Index batch, std::uint64_t seed) const override {
-    auto physics = std::make_shared<Poisson>(8);
-    Mlp network = make_network(8, seed);
-    Dataset data = make_data(*physics, batch, 2 * seed);
-    return ReferenceCase{std::move(physics), std::make_shared<L2Loss>(), std::move(network),
-                         std::move(data), rule_defaults(batch)};
+    return learning_case(8, batch).reference(batch, seed);
   }
 
   void run(const Settings& settings, RunContext& context) const override {
     const Index n = settings.integer("grid");
-    const Poisson physics(n);
-    const L2Loss loss;  // ½‖∇²x − y*‖² per sample
-    const LearningProblem problem{&physics, &loss};
+    const Index batch = settings.has("batch") ? settings.integer("batch") : kBatch;
+    const LearningCase learning = learning_case(n, batch);
     const auto seed = static_cast<std::uint64_t>(settings.integer("seed"));
-    const Dataset train_set = make_data(physics, settings.integer("train-size"), 2 * seed);
+    const Dataset train_set = learning.training_set(settings.integer("train-size"), seed);
+    // The test set keeps its fields x*, which the predictions are compared with.
     const Matrix x_test = make_fields(settings.integer("test-size"), n, 2 * seed + 1);
-    const Matrix y_test = physics.forward_batch(x_test, Matrix());
+    const Matrix y_test = learning.physics->forward_batch(x_test, Matrix());
     const Dataset test_set{y_test, y_test, Matrix()};
     const auto observe = [&](const Network& network, TrainingRecord& record) {
       // The published x_distance_l1: mean over samples of Σ|x − x*|.
@@ -134,17 +142,13 @@ class PoissonExperiment final : public LearningExperiment {
     };
 
     const std::string tag = std::to_string(n) + "x" + std::to_string(n);
-    const Index batch = settings.has("batch") ? settings.integer("batch") : kBatch;
-    LearningSweep sweep(settings, context, rule_defaults(batch));
-    sweep.draw_from([&physics](std::uint64_t stream, Index count) {
-      return make_data(physics, count, stream);
-    });
+    LearningSweep sweep(settings, context, learning);
     std::vector<std::pair<const LearningResult*, Mlp>> trained;
     const std::vector<std::string> ids = sweep.run_ids(settings.texts("optimizers"));
     for (const std::string& id : ids) {
-      Mlp network = make_network(n, seed);
-      const LearningResult& r =
-          sweep.run(id, tag, {{"seed", seed}}, network, problem, train_set, &test_set, observe);
+      Mlp network = learning.network(seed);
+      const LearningResult& r = sweep.run(id, tag, {{"seed", seed}}, network, learning.problem(),
+                                          train_set, &test_set, observe);
       trained.emplace_back(&r, std::move(network));
     }
     sweep.add_loss_figures(context, tag, "poisson");

@@ -5,13 +5,13 @@
 #include <cmath>
 
 #include "registry.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/fidelity.hpp"
 #include "physgrad/physics/quantum_dipole.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/line_plot.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {
@@ -55,6 +55,18 @@ const std::map<std::string, RuleDefaults>& rule_defaults() {
       {"gn", {{{"lr", 0.5}, {"rcond", 1e-5}}, 16}},
       {"hig", {{{"lr", 0.5}, {"rcond", 1e-5}}, 16}}};
   return defaults;
+}
+
+// The case of a configuration: the Crank-Nicolson dipole, the fidelity loss, the 20-20-20 tanh
+// network, targets as make_targets draws them.
+LearningCase learning_case(const QuantumDipoleConfig& config) {
+  auto physics = std::make_shared<QuantumDipole>(config);
+  return {physics, std::make_shared<FidelityLoss>(),
+          [physics](std::uint64_t seed) { return make_network(*physics, seed); },
+          [points = config.points](std::uint64_t stream, Index count) {
+            return make_targets(count, points, stream);
+          },
+          rule_defaults()};
 }
 
 // For one test target and each rule's trained controls: the infidelity 1 − |⟨ψ*|ψ(t)⟩|² along
@@ -160,11 +172,7 @@ class QuantumDipoleExperiment final : public LearningExperiment {
 
   // The paper's configuration.
   std::optional<ReferenceCase> reference(Index batch, std::uint64_t seed) const override {
-    const QuantumDipoleConfig config = QuantumDipoleConfig::paper();
-    auto physics = std::make_shared<QuantumDipole>(config);
-    Mlp network = make_network(*physics, seed);
-    return ReferenceCase{std::move(physics), std::make_shared<FidelityLoss>(), std::move(network),
-                         make_targets(batch, config.points, 2 * seed), rule_defaults()};
+    return learning_case(QuantumDipoleConfig::paper()).reference(batch, seed);
   }
 
   void check(const Settings& settings) const override {
@@ -176,23 +184,18 @@ class QuantumDipoleExperiment final : public LearningExperiment {
 
   void run(const Settings& settings, RunContext& context) const override {
     const QuantumDipoleConfig config = configuration(settings);
-    const QuantumDipole physics(config);
-    const FidelityLoss fidelity;
-    const LearningProblem problem{&physics, &fidelity};
+    const LearningCase learning = learning_case(config);
     const auto seed = static_cast<std::uint64_t>(settings.integer("seed"));
-    const Dataset train_set = make_targets(settings.integer("train-size"), config.points, 2 * seed);
-    const Dataset test_set = make_targets(settings.integer("test-size"), config.points, 2 * seed + 1);
+    const Dataset train_set = learning.training_set(settings.integer("train-size"), seed);
+    const Dataset test_set = learning.test_set(settings.integer("test-size"), seed);
 
-    LearningSweep sweep(settings, context, rule_defaults());
-    sweep.draw_from([points = config.points](std::uint64_t stream, Index count) {
-      return make_targets(count, points, stream);
-    });
+    LearningSweep sweep(settings, context, learning);
     const std::string tag = "Nt=" + std::to_string(config.steps);
     std::vector<std::pair<const LearningResult*, Mlp>> trained;
     for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
-      Mlp network = make_network(physics, seed);
+      Mlp network = learning.network(seed);
       const LearningResult& r =
-          sweep.run(id, tag, {{"seed", seed}}, network, problem, train_set, &test_set);
+          sweep.run(id, tag, {{"seed", seed}}, network, learning.problem(), train_set, &test_set);
       trained.emplace_back(&r, std::move(network));
     }
     sweep.add_loss_figures(context, tag, "dipole", true, "mean test infidelity 1 − |⟨ψ*|ψ(T)⟩|²");

@@ -1,12 +1,12 @@
 // The reference experiments: each experiment's file defines its factory; registry.cpp lists them
 // in display order (builtin_experiments()), and builtin_registry() is the Registry of them
-// (physgrad/run/registry.hpp) that the CLI, the Python module and the tests hand to run/.
+// (physgrad/run/cases/registry.hpp) that the CLI, the Python module and the tests hand to run/.
 #pragma once
 
 #include <memory>
 #include <vector>
 
-#include "physgrad/run/registry.hpp"
+#include "physgrad/run/cases/registry.hpp"
 
 namespace physgrad::experiments {
 

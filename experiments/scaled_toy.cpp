@@ -3,9 +3,9 @@
 // loss by the tolerance show which rules are scale-invariant (independent of α).
 #include <cmath>
 
-#include "physgrad/run/direct_runs.hpp"
-#include "physgrad/run/learning_verdict.hpp"  // ratio_text
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/direct_runs.hpp"
+#include "physgrad/run/pages/learning_verdict.hpp"  // ratio_text
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"

@@ -3,8 +3,8 @@
 // inverse gradient's step does not depend on α at all.
 #include <cmath>
 
-#include "physgrad/run/direct_runs.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/direct_runs.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"

@@ -6,12 +6,12 @@
 #include <cmath>
 
 #include "registry.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/sin_rotation.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/landscape.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {
@@ -55,6 +55,98 @@ double x_distance(const SinRotation& physics, const Matrix& x, const Matrix& tar
   return sum / static_cast<double>(x.cols());
 }
 
+constexpr Index kBatch = 100;  // the SIP repository's batch
+
+// SGD's rate depends on ξ (see the step-size note); the rest as published
+// (docs/reference_experiments.md).
+std::map<std::string, RuleDefaults> rule_defaults(double xi, const std::string& form) {
+  const double sgd = (form == "code" ? 3e-3 : 0.1) / (xi * xi);
+  return {{"sgd", {{{"lr", sgd}}, kBatch}},
+          {"adam", {{{"lr", 1e-3}}, kBatch}},
+          {"gn", {{{"lr", 0.1}}, 32}},
+          {"hig", {{{"lr", 1.0}}, 32}},
+          {"sip", {{{"lr", 1e-3}}, kBatch}}};
+}
+
+// The case at conditioning ξ: `physics` (SinRotation(ξ, φ)), L = ½‖P(x) − y*‖², the ReLU
+// network with He-uniform weights (the same start for every rule), targets as make_data draws.
+LearningCase learning_case(std::shared_ptr<const SinRotation> physics, double xi,
+                           const std::string& form) {
+  return {std::move(physics), std::make_shared<L2Loss>(1.0),
+          [](std::uint64_t seed) {
+            Mlp network(kWidths, Activation::kRelu);
+            network.initialize(seed, Init::kHeUniform);
+            return network;
+          },
+          [xi, form](std::uint64_t stream, Index count) {
+            return make_data(count, xi, form, stream);
+          },
+          rule_defaults(xi, form)};
+}
+
+// One run's line of the summary table.
+struct SinRotationRow {
+  double xi;
+  std::string id;
+  double lr, loss, distance, seconds;
+  long long iterations;
+};
+
+// The table of the medians over the seeds per ξ and rule.
+void add_sin_rotation_table(RunContext& context, const std::vector<double>& xis,
+                            const std::vector<SinRotationRow>& rows) {
+  RunContext::Table table{
+      "Final test loss and x-distance, medians over the seeds: the mean loss over the test "
+      "set and the mean distance |f(y*) − x_closest| of the network's x to the nearest exact "
+      "solution; lr is each rule's step size, training s its time without evaluations",
+      {"ξ", "rule", "lr", "iterations", "training s", "test loss", "x-distance"},
+      {}};
+  std::vector<std::string> ids;  // the runs' rules (and pretrained runs) in the order they ran
+  for (const SinRotationRow& row : rows) {
+    if (std::find(ids.begin(), ids.end(), row.id) == ids.end()) ids.push_back(row.id);
+  }
+  for (const double xi : xis) {
+    for (const std::string& id : ids) {
+      std::vector<double> loss, distance, seconds, iterations;
+      double lr = 0;
+      for (const SinRotationRow& row : rows) {
+        if (row.xi != xi || row.id != id) continue;
+        lr = row.lr;
+        loss.push_back(row.loss);
+        distance.push_back(row.distance);
+        seconds.push_back(row.seconds);
+        iterations.push_back(static_cast<double>(row.iterations));
+      }
+      table.rows.push_back({format_value(xi), id, format_value(lr),
+                            std::to_string(std::llround(median(iterations))),
+                            format_value(median(seconds)), format_value(median(loss)),
+                            format_value(median(distance))});
+    }
+  }
+  context.add_table(std::move(table));
+}
+
+// What the run compares with, and why the step sizes are what they are.
+void add_sin_rotation_notes(RunContext& context, const Settings& settings) {
+  context.add_note(
+      "docs/reference_experiments.md (code form, φ = 45°, 600 s per method on a GPU): at "
+      "ξ = 32 SIP reaches an x-distance of ~1e-2 and Adam ~0.2–0.5, SGD ~1.5–2; at ξ = 1 all "
+      "methods end below ~2e-3 with Adam best. This run: " + settings.text("form") +
+      " form, φ = " + format_value(settings.real("phi")) + "°, at most " +
+      format_value(settings.real("time")) +
+      " s of training per run on the CPU, so compare the ordering rather than the values. P "
+      "reacts ξ² times more strongly to x along the second rotated axis than along the first, "
+      "so at large ξ a low loss can go with a large x-distance. The SIP rule here is the "
+      "book's (L2 proxy towards the exact local inverse, η = 1); the SIP repository used an L1 "
+      "proxy with a step-limited Newton step.");
+  context.add_note(
+      "Step sizes: Adam and SIP 1e-3 as in the SIP repository. SGD keeps its 1/ξ² scaling (the "
+      "stiff curvature of L grows with ξ²): the repository's 1e-2/ξ² diverges within 5 steps "
+      "here (He-uniform weights start larger than PyTorch's default), so the code form uses "
+      "3e-3/ξ², and the book form, whose curvature lacks the code form's factor 10² = 100, "
+      "0.1/ξ² (1/ξ² diverges). HIG (optional): lr 1, τ = 1e-6 as in the HIG paper, batch 32.");
+}
+
 class SinRotationExperiment final : public LearningExperiment {
  public:
   SinRotationExperiment()
@@ -88,129 +180,79 @@ class SinRotationExperiment final : public LearningExperiment {
   Shape shape(const Settings& /*settings*/) const override { return {2, kWidths}; }
 
   void run(const Settings& settings, RunContext& context) const override {
-    const double phi = settings.real("phi");
-    const std::string form = settings.text("form");
-    struct Row {
-      double xi;
-      std::string id;
-      double lr, loss, distance, seconds;
-      long long iterations;
-    };
-    std::vector<Row> rows;
     const std::vector<double> xis = settings.reals("xi");
+    std::vector<SinRotationRow> rows;
     for (const double xi : xis) {
-      const SinRotation physics = make_physics(xi, phi, form);
-      const L2Loss loss(1.0);
-      const LearningProblem problem{&physics, &loss};
-      const std::string tag = "ξ=" + format_value(xi);
-      const std::map<std::string, RuleDefaults> defaults = rule_defaults(xi, form);
-      LearningSweep sweep(settings, context, defaults);
-      sweep.draw_from([xi, form](std::uint64_t stream, Index count) {
-        return make_data(count, xi, form, stream);
-      });
-      for (long long s = 0; s < settings.integer("seeds"); ++s) {
-        const auto seed = static_cast<std::uint64_t>(settings.integer("seed") + s);
-        const Dataset train_set = make_data(settings.integer("train-size"), xi, form, 2 * seed);
-        const Dataset test_set = make_data(settings.integer("test-size"), xi, form, 2 * seed + 1);
-        const auto observe = [&](const Network& network, TrainingRecord& record) {
-          record.extras["x_distance"] =
-              x_distance(physics, network.forward(test_set.inputs), test_set.targets);
-          if (xi != 1.0) return;  // the landscape figure's path
-          const Vector x = network.forward(kTrackedTarget).col(0);
-          record.extras["tracked_x1"] = x(0);
-          record.extras["tracked_x2"] = x(1);
-        };
-        for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
-          Mlp network(kWidths, Activation::kRelu);
-          network.initialize(seed, Init::kHeUniform);  // the same start for every rule
-          const LearningResult& r = sweep.run(id, tag, {{"xi", xi}, {"phi", phi}, {"seed", seed}},
-                                              network, problem, train_set, &test_set, observe);
-          const TrainingRecord& last = r.summary.history.back();
-          rows.push_back({xi, id, r.params.at("lr").get<double>(), last.test_loss, last.extras["x_distance"].get<double>(),
-                          r.summary.train_seconds, r.summary.iterations});
-        }
-      }
-      const std::vector<const LearningResult*> runs = sweep.first_seed_runs(tag);
-      sweep.add_loss_figures(context, tag, "xi_" + format_value(xi));
-      const std::string distance_file = "x_distance_xi_" + format_value(xi) + ".svg";
-      context.add_figure(sweep.progress_figure(tag, distance_file, LearningSweep::extra("x_distance"),
-                                               "x-distance to the nearest exact solution",
-                                               "mean |f(y*) − x_closest| on the test set"));
-      // The message: at the stiffest ξ, how much closer to an exact solution the best rule lands.
-      if (xi == *std::max_element(xis.begin(), xis.end())) {
-        sweep.set_metric_message(tag, distance_file, "x_distance",
-                                 "final x-distance to the nearest exact solution",
-                                 "Lowest test loss", "final test loss",
-                                 "At ξ = " + format_value(xi) + ", ");
-      }
-      if (xi == 1.0) add_landscape(context, phi, form, runs);
-      sweep.add_tables();
+      const LearningSweep sweep = train_xi(settings, context, xi, rows);
+      add_xi_figures(settings, context, sweep, xi);
     }
     if (std::find(xis.begin(), xis.end(), 1.0) == xis.end()) {
-      add_landscape(context, phi, form, {});
+      add_landscape(context, settings.real("phi"), settings.text("form"), {});
     }
-
-    RunContext::Table table{
-        "Final test loss and x-distance, medians over the seeds: the mean loss over the test "
-        "set and the mean distance |f(y*) − x_closest| of the network's x to the nearest exact "
-        "solution; lr is each rule's step size, training s its time without evaluations",
-        {"ξ", "rule", "lr", "iterations", "training s", "test loss", "x-distance"},
-        {}};
-    std::vector<std::string> ids;  // the runs' rules (and pretrained runs) in the order they ran
-    for (const Row& row : rows) {
-      if (std::find(ids.begin(), ids.end(), row.id) == ids.end()) ids.push_back(row.id);
-    }
-    for (const double xi : xis) {
-      for (const std::string& id : ids) {
-        std::vector<double> loss, distance, seconds, iterations;
-        double lr = 0;
-        for (const Row& row : rows) {
-          if (row.xi != xi || row.id != id) continue;
-          lr = row.lr;
-          loss.push_back(row.loss);
-          distance.push_back(row.distance);
-          seconds.push_back(row.seconds);
-          iterations.push_back(static_cast<double>(row.iterations));
-        }
-        table.rows.push_back({format_value(xi), id, format_value(lr),
-                              std::to_string(std::llround(median(iterations))),
-                              format_value(median(seconds)), format_value(median(loss)),
-                              format_value(median(distance))});
-      }
-    }
-    context.add_table(std::move(table));
-    context.add_note(
-        "docs/reference_experiments.md (code form, φ = 45°, 600 s per method on a GPU): at "
-        "ξ = 32 SIP reaches an x-distance of ~1e-2 and Adam ~0.2–0.5, SGD ~1.5–2; at ξ = 1 all "
-        "methods end below ~2e-3 with Adam best. This run: " + form +
-        " form, φ = " + format_value(phi) + "°, at most " + format_value(settings.real("time")) +
-        " s of training per run on the CPU, so compare the ordering rather than the values. P "
-        "reacts ξ² times more strongly to x along the second rotated axis than along the first, "
-        "so at large ξ a low loss can go with a large x-distance. The SIP rule here is the "
-        "book's (L2 proxy towards the exact local inverse, η = 1); the SIP repository used an L1 "
-        "proxy with a step-limited Newton step.");
-    context.add_note(
-        "Step sizes: Adam and SIP 1e-3 as in the SIP repository. SGD keeps its 1/ξ² scaling (the "
-        "stiff curvature of L grows with ξ²): the repository's 1e-2/ξ² diverges within 5 steps "
-        "here (He-uniform weights start larger than PyTorch's default), so the code form uses "
-        "3e-3/ξ², and the book form, whose curvature lacks the code form's factor 10² = 100, "
-        "0.1/ξ² (1/ξ² diverges). HIG (optional): lr 1, τ = 1e-6 as in the HIG paper, batch 32.");
+    add_sin_rotation_table(context, xis, rows);
+    add_sin_rotation_notes(context, settings);
   }
 
  private:
-  static constexpr Index kBatch = 100;  // the SIP repository's batch
-
-  // SGD's rate depends on ξ (see the note in run()); the rest as published
-  // (docs/reference_experiments.md).
-  static std::map<std::string, RuleDefaults> rule_defaults(double xi, const std::string& form) {
-    const double sgd = (form == "code" ? 3e-3 : 0.1) / (xi * xi);
-    return {{"sgd", {{{"lr", sgd}}, kBatch}},
-            {"adam", {{{"lr", 1e-3}}, kBatch}},
-            {"gn", {{{"lr", 0.1}}, 32}},
-            {"hig", {{{"lr", 1.0}}, 32}},
-            {"sip", {{{"lr", 1e-3}}, kBatch}}};
+  // Every rule and seed on the case at ξ, each run's line added to `rows`.
+  static LearningSweep train_xi(const Settings& settings, RunContext& context, double xi,
+                                std::vector<SinRotationRow>& rows) {
+    const double phi = settings.real("phi");
+    const std::string form = settings.text("form");
+    const auto physics = std::make_shared<const SinRotation>(make_physics(xi, phi, form));
+    const LearningCase learning = learning_case(physics, xi, form);
+    const std::string tag = "ξ=" + format_value(xi);
+    LearningSweep sweep(settings, context, learning);
+    for (long long s = 0; s < settings.integer("seeds"); ++s) {
+      const auto seed = static_cast<std::uint64_t>(settings.integer("seed") + s);
+      const Dataset train_set = learning.training_set(settings.integer("train-size"), seed);
+      const Dataset test_set = learning.test_set(settings.integer("test-size"), seed);
+      const auto observe = [&](const Network& network, TrainingRecord& record) {
+        record.extras["x_distance"] =
+            x_distance(*physics, network.forward(test_set.inputs), test_set.targets);
+        if (xi != 1.0) return;  // the landscape figure's path
+        const Vector x = network.forward(kTrackedTarget).col(0);
+        record.extras["tracked_x1"] = x(0);
+        record.extras["tracked_x2"] = x(1);
+      };
+      for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
+        Mlp network = learning.network(seed);
+        const LearningResult& r =
+            sweep.run(id, tag, {{"xi", xi}, {"phi", phi}, {"seed", seed}}, network,
+                      learning.problem(), train_set, &test_set, observe);
+        const TrainingRecord& last = r.summary.history.back();
+        rows.push_back({xi, id, r.params.at("lr").get<double>(), last.test_loss,
+                        last.extras["x_distance"].get<double>(), r.summary.train_seconds,
+                        r.summary.iterations});
+      }
+    }
+    return sweep;
   }
 
+  // The loss and x-distance figures of ξ, the message at the stiffest ξ, the landscape at
+  // ξ = 1, and the sweep's tables.
+  static void add_xi_figures(const Settings& settings, RunContext& context,
+                             const LearningSweep& sweep, double xi) {
+    const std::vector<double> xis = settings.reals("xi");
+    const std::string tag = "ξ=" + format_value(xi);
+    sweep.add_loss_figures(context, tag, "xi_" + format_value(xi));
+    const std::string distance_file = "x_distance_xi_" + format_value(xi) + ".svg";
+    context.add_figure(sweep.progress_figure(tag, distance_file, LearningSweep::extra("x_distance"),
+                                             "x-distance to the nearest exact solution",
+                                             "mean |f(y*) − x_closest| on the test set"));
+    // The message: at the stiffest ξ, how much closer to an exact solution the best rule lands.
+    if (xi == *std::max_element(xis.begin(), xis.end())) {
+      sweep.set_metric_message(tag, distance_file, "x_distance",
+                               "final x-distance to the nearest exact solution",
+                               "Lowest test loss", "final test loss",
+                               "At ξ = " + format_value(xi) + ", ");
+    }
+    if (xi == 1.0) {
+      add_landscape(context, settings.real("phi"), settings.text("form"),
+                    sweep.first_seed_runs(tag));
+    }
+    sweep.add_tables();
+  }
 
   // L^0.2 for y* = (0.3, −0.5) at ξ = 1 over the paper's view, the exact preimages in view, and
   // where each rule's network maps that y* during training (when ξ = 1 was run).

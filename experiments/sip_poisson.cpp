@@ -9,8 +9,8 @@
 #include "unet_case.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/poisson_solve.hpp"
-#include "physgrad/run/learning_experiment.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

@@ -8,13 +8,13 @@
 #include <map>
 
 #include "physgrad/catalogue.hpp"
-#include "physgrad/run/direct_runs.hpp"
+#include "physgrad/run/cases/direct_runs.hpp"
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"
 #include "physgrad/physics/fpu_chain.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::experiments {
 namespace {

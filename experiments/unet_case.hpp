@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "physgrad/nn/conv_net.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 
 namespace physgrad::experiments {
 

@@ -13,8 +13,8 @@
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/optim/minimize.hpp"
-#include "physgrad/run/direct_runs.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/direct_runs.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "sign_descent_rule.hpp"
 #include "test_problems.hpp"
 

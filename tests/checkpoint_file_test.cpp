@@ -12,7 +12,7 @@
 #include <random>
 #include <sstream>
 
-#include "physgrad/run/checkpoint.hpp"
+#include "physgrad/run/life/checkpoint.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
 #include "physgrad/io/serialize.hpp"

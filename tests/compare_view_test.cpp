@@ -8,7 +8,7 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/report/compare_view.hpp"
-#include "physgrad/run/run_compare_data.hpp"
+#include "physgrad/run/pages/run_compare_data.hpp"
 
 namespace {
 

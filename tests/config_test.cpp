@@ -9,9 +9,9 @@
 #include <functional>
 #include <tuple>
 
-#include "physgrad/run/config_file.hpp"
+#include "physgrad/run/life/config_file.hpp"
 #include "registry.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "physgrad/error.hpp"
 
 namespace physgrad::experiments {

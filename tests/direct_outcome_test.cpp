@@ -2,7 +2,7 @@
 // reads "diverged at iteration 162", never "needs diverged at 162".
 #include <gtest/gtest.h>
 
-#include "physgrad/run/direct_runs.hpp"
+#include "physgrad/run/cases/direct_runs.hpp"
 
 namespace physgrad::run {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "cli_fixture.hpp"
 #include "registry.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 
 namespace {
 

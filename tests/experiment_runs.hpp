@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "registry.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 
 namespace physgrad::experiments::testing {
 

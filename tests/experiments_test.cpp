@@ -5,7 +5,7 @@
 #include <algorithm>
 
 #include "registry.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
 
@@ -14,10 +14,10 @@ namespace {
 
 using testing::run_experiment;
 
-const nlohmann::json& find_run(const RunContext& context, const std::string& optimizer,
+const RunEntry& find_run(const RunContext& context, const std::string& optimizer,
                                double alpha) {
-  for (const nlohmann::json& entry : context.runs()) {
-    if (entry["optimizer"] == optimizer && entry["params"]["alpha"] == alpha) return entry;
+  for (const RunEntry& entry : context.runs()) {
+    if (entry.optimizer == optimizer && entry.params["alpha"] == alpha) return entry;
   }
   throw Error("no run " + optimizer);
 }
@@ -25,17 +25,17 @@ const nlohmann::json& find_run(const RunContext& context, const std::string& opt
 TEST(ScaledToyExperiment, InvertedRulesNeedTheSameIterationsForEveryAlphaAndGdDoesNot) {
   const RunContext context = run_experiment("scaled-toy", {{"alpha", "1,10,100,1000"}});
   for (const std::string id : {"newton", "gn", "ig", "pg", "lm"}) {
-    const nlohmann::json& reference = find_run(context, id, 1.0);
-    EXPECT_EQ(reference["termination"], "converged") << id;
+    const RunEntry& reference = find_run(context, id, 1.0);
+    EXPECT_EQ(reference.termination, "converged") << id;
     for (const double alpha : {10.0, 100.0, 1000.0}) {
-      const nlohmann::json& entry = find_run(context, id, alpha);
-      EXPECT_EQ(entry["termination"], "converged") << id << " alpha " << alpha;
-      EXPECT_EQ(entry["iterations"], reference["iterations"]) << id << " alpha " << alpha;
+      const RunEntry& entry = find_run(context, id, alpha);
+      EXPECT_EQ(entry.termination, "converged") << id << " alpha " << alpha;
+      EXPECT_EQ(entry.iterations, reference.iterations) << id << " alpha " << alpha;
     }
   }
   // One fixed step size: GD converges for α = 1 and diverges for α = 1000 (η α² ≫ 2).
-  EXPECT_EQ(find_run(context, "gd", 1.0)["termination"], "converged");
-  EXPECT_EQ(find_run(context, "gd", 1000.0)["termination"], "numerical_failure");
+  EXPECT_EQ(find_run(context, "gd", 1.0).termination, "converged");
+  EXPECT_EQ(find_run(context, "gd", 1000.0).termination, "numerical_failure");
   EXPECT_EQ(context.tables().size(), 1u);
   EXPECT_EQ(context.figures().size(), 1u + 2u * 4u);  // iterations vs α, landscape + loss per α
 }
@@ -48,11 +48,11 @@ TEST(ScaledToyExperiment, RulesThatFailNumericallyAreMarkedAndTheOthersKept) {
   ASSERT_NO_THROW(context = run_experiment("scaled-toy", {{"alpha", "1,100"}, {"lr", "1e308"}}));
   EXPECT_EQ(context.runs().size(), 20u);  // 10 rules × 2 values of α
   for (const std::string id : {"gd", "newton", "gn", "ig", "pg"}) {
-    const nlohmann::json& entry = find_run(context, id, 100.0);
-    EXPECT_EQ(entry["termination"], "numerical_failure") << id;
-    EXPECT_FALSE(entry["message"].get<std::string>().empty()) << id;
+    const RunEntry& entry = find_run(context, id, 100.0);
+    EXPECT_EQ(entry.termination, "numerical_failure") << id;
+    EXPECT_FALSE(entry.message.empty()) << id;
   }
-  EXPECT_EQ(find_run(context, "lm", 100.0)["termination"], "converged");  // lm has no step size
+  EXPECT_EQ(find_run(context, "lm", 100.0).termination, "converged");  // lm has no step size
 }
 
 TEST(SensitivityExperiment, GdStepGrowsWithAlphaSquaredInvertedStepsDoNot) {
@@ -75,9 +75,9 @@ TEST(SensitivityExperiment, GdStepGrowsWithAlphaSquaredInvertedStepsDoNot) {
 TEST(ComparisonExperiment, PgEndsClosestToTheMinimumAndBothInversesAgree) {
   const RunContext context = run_experiment("comparison", {});
   std::map<std::string, double> distance;
-  for (const nlohmann::json& entry : context.runs()) {
-    const std::vector<double> x = entry["final"]["x"];
-    distance[entry["label"]] = std::hypot(x[0], x[1]);
+  for (const RunEntry& entry : context.runs()) {
+    const std::vector<double> x = entry.final.more.at("x");
+    distance[entry.label] = std::hypot(x[0], x[1]);
   }
   // docs/reference_experiments.md (comparison): distances GD 2.63, Newton 0.925, PG 0.51 after
   // 10 steps.
@@ -95,11 +95,11 @@ TEST(HigToyExperiment, HalfInverseGradientsBeatAdamAndGaussNewtonWhenIllConditio
   const RunContext context =
       run_experiment("hig-toy", {{"lambda", "0.01"}, {"seeds", "2"}, {"iters", "2000"}, {"eval-every", "500"}});
   std::map<std::string, std::vector<double>> losses;
-  for (const nlohmann::json& entry : context.runs()) {
-    const double initial = entry["initial"]["test_loss"], final_loss = entry["final"]["test_loss"];
-    losses[entry["optimizer"]].push_back(final_loss);
-    if (entry["optimizer"] != "gn") {
-      EXPECT_LT(final_loss, initial) << entry["label"];
+  for (const RunEntry& entry : context.runs()) {
+    const double initial = entry.initial.test_loss.value(), final_loss = entry.final.test_loss.value();
+    losses[entry.optimizer].push_back(final_loss);
+    if (entry.optimizer != "gn") {
+      EXPECT_LT(final_loss, initial) << entry.label;
     }
   }
   ASSERT_EQ(losses["hig"].size(), 2u);

@@ -8,7 +8,7 @@
 #include "learning_fixture.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/physics/diagonal_scale.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad {
 namespace {

@@ -11,7 +11,7 @@
 #include <thread>
 
 #include "hostile_fixture.hpp"
-#include "physgrad/run/interrupt.hpp"
+#include "physgrad/run/life/interrupt.hpp"
 
 namespace {
 

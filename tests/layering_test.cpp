@@ -34,9 +34,12 @@ const std::map<std::string, int>& ranks() {
       {"train", 7},
       {"physgrad", 8},  // the front door physgrad.hpp: every part of the library
       {"report", 9},
-      {"run", 10},
-      {"experiments", 11},
-      {"cli", 12},
+      {"run/life", 10},   // run/: the run's life (settings, folder, checkpoint, interrupt),
+      {"run/cases", 11},  // the learning cases and sweeps, the verdicts and pages,
+      {"run/pages", 12},
+      {"run", 13},        // and on top run.hpp, the run from claim to commit
+      {"experiments", 14},
+      {"cli", 15},
   };
   return table;
 }
@@ -45,11 +48,15 @@ const std::map<std::string, int>& ranks() {
 // parts nor train/ reach it, and it reaches none of them.
 const std::vector<std::string> kReportMayInclude = {"core", "io", "report"};
 
-// The part of a path below include/physgrad or src: its first folder, or for a top-level file
-// "catalogue", "physgrad" or "core".
+// The part of a path below include/physgrad or src: its first folder (in run/ its first two,
+// "run/life"), or for a top-level file "catalogue", "physgrad" or "core".
 std::string part_of(const fs::path& relative) {
   const std::string first = relative.begin()->string();
-  if (std::next(relative.begin()) != relative.end()) return first;  // in a folder
+  const auto second = std::next(relative.begin());
+  if (first == "run" && second != relative.end() && std::next(second) != relative.end()) {
+    return first + "/" + second->string();  // a room of run/
+  }
+  if (second != relative.end()) return first;  // in a folder
   const std::string stem = relative.stem().string();
   if (stem == "catalogue" || stem == "physgrad") return stem;
   return "core";
@@ -183,20 +190,25 @@ TEST(Layering, TheCheckRefusesWhatGoesUp) {
   EXPECT_EQ(part_of("train/trainer.hpp"), "train");
   EXPECT_EQ(part_of("catalogue.hpp"), "catalogue");
   EXPECT_EQ(part_of("error.hpp"), "core");
+  EXPECT_EQ(part_of("run/run.hpp"), "run");
+  EXPECT_EQ(part_of("run/pages/run_index.hpp"), "run/pages");
   EXPECT_EQ(included_part("physgrad/report/line_plot.hpp", "train"), "report");
   EXPECT_EQ(included_part("checkpoint.hpp", "experiments"), "experiments");
   for (const auto& [own, to] : std::vector<std::pair<std::string, std::string>>{
            {"train", "report"}, {"learn", "report"}, {"physgrad", "report"}, {"report", "train"},
            {"report", "physics"}, {"train", "run"}, {"report", "run"}, {"run", "experiments"},
            {"optim", "learn"}, {"io", "physics"}, {"core", "io"}, {"experiments", "cli"},
-           {"inversion", "optim"}, {"inversion", "learn"}, {"physics", "inversion"}}) {
+           {"inversion", "optim"}, {"inversion", "learn"}, {"physics", "inversion"},
+           {"run/life", "run/cases"}, {"run/cases", "run/pages"}, {"run/pages", "run"},
+           {"run/life", "run"}}) {
     EXPECT_FALSE(may_include(own, to)) << own << " → " << to;
   }
   for (const auto& [own, to] : std::vector<std::pair<std::string, std::string>>{
            {"report", "io"}, {"report", "core"}, {"run", "report"}, {"run", "train"},
            {"experiments", "run"}, {"cli", "run"}, {"train", "learn"}, {"learn", "optim"},
            {"physics", "physics"}, {"nn", "core"}, {"optim", "inversion"},
-           {"learn", "inversion"}}) {
+           {"learn", "inversion"}, {"run/pages", "run/cases"}, {"run/cases", "run/life"},
+           {"run", "run/pages"}, {"experiments", "run/cases"}, {"run/life", "report"}}) {
     EXPECT_TRUE(may_include(own, to)) << own << " → " << to;
   }
 }

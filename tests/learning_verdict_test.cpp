@@ -5,8 +5,8 @@
 
 #include <cmath>
 
-#include "physgrad/run/learning_runs.hpp"
-#include "physgrad/run/learning_verdict.hpp"
+#include "physgrad/run/cases/learning_runs.hpp"
+#include "physgrad/run/pages/learning_verdict.hpp"
 
 namespace physgrad::run {
 namespace {

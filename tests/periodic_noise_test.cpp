@@ -5,7 +5,7 @@
 #include <complex>
 
 #include "physgrad/error.hpp"
-#include "physgrad/run/sampling.hpp"
+#include "physgrad/run/cases/sampling.hpp"
 
 namespace physgrad::run {
 namespace {

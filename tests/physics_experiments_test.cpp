@@ -18,11 +18,11 @@ RunContext run(const std::string& name,
 
 // Each run's final test loss is below its initial one; returns the number of runs checked.
 std::size_t expect_every_run_improves(const RunContext& context) {
-  for (const nlohmann::json& entry : context.runs()) {
-    const double initial = entry["initial"]["test_loss"];
-    const nlohmann::json& final_loss = entry["final"]["test_loss"];
-    EXPECT_TRUE(final_loss.is_number() && final_loss.get<double>() < initial) << entry["label"];
-    EXPECT_EQ(entry["termination"], "max_iterations") << entry["label"];
+  for (const RunEntry& entry : context.runs()) {
+    const double initial = entry.initial.test_loss.value();
+    const double final_loss = entry.final.test_loss.value();
+    EXPECT_TRUE(final_loss < initial) << entry.label;
+    EXPECT_EQ(entry.termination, "max_iterations") << entry.label;
   }
   return context.runs().size();
 }
@@ -42,7 +42,7 @@ TEST(OscillatorsExperiment, PaperVariantAdamAndHigLowerTheLossGaussNewtonIsRepor
   const RunContext gn = run("oscillators", {{"optimizers", "gn"}, {"train-size", "256"},
                                             {"test-size", "64"}, {"iters", "12"}, {"pretrain", "0"}});
   ASSERT_EQ(gn.runs().size(), 1u);
-  const std::string end = gn.runs()[0]["termination"];
+  const std::string end = gn.runs()[0].termination;
   EXPECT_TRUE(end == "max_iterations" || end == "numerical_failure" || end == "diverged") << end;
 }
 
@@ -70,17 +70,17 @@ TEST(PoissonExperiment, PretrainedRunFollowsTheAdamRunThenInvertsTheJacobian) {
                       {"test-size", "32"}, {"iters", "12"}, {"eval-every", "2"},
                       {"pretrain", "6"}});
   ASSERT_EQ(context.runs().size(), 3u);
-  const nlohmann::json& entry = context.runs()[2];
-  EXPECT_EQ(entry["label"], "Adam→HIG (4x4)");
-  EXPECT_EQ(entry["optimizer"], "adam-hig");
-  EXPECT_EQ(entry["iterations"], 12);
-  EXPECT_EQ(entry["params"]["pretrain_iterations"], 6);
-  EXPECT_EQ(entry["params"]["pretrain_batch"], 64);  // the Adam run's
-  EXPECT_EQ(entry["params"]["pretrain_lr"], context.runs()[0]["params"]["lr"]);
-  EXPECT_EQ(entry["params"]["lr"], context.runs()[1]["params"]["lr"]);  // the HIG run's
-  EXPECT_EQ(entry["params"]["batch"], 64);
-  EXPECT_EQ(entry["params"]["switched"], true);
-  EXPECT_DOUBLE_EQ(context.runs()[1]["params"]["lr"].get<double>(), 0.64);
+  const RunEntry& entry = context.runs()[2];
+  EXPECT_EQ(entry.label, "Adam→HIG (4x4)");
+  EXPECT_EQ(entry.optimizer, "adam-hig");
+  EXPECT_EQ(entry.iterations, 12);
+  EXPECT_EQ(entry.params["pretrain_iterations"], 6);
+  EXPECT_EQ(entry.params["pretrain_batch"], 64);  // the Adam run's
+  EXPECT_EQ(entry.params["pretrain_lr"], context.runs()[0].params["lr"]);
+  EXPECT_EQ(entry.params["lr"], context.runs()[1].params["lr"]);  // the HIG run's
+  EXPECT_EQ(entry.params["batch"], 64);
+  EXPECT_EQ(entry.params["switched"], true);
+  EXPECT_DOUBLE_EQ(context.runs()[1].params["lr"].get<double>(), 0.64);
 
   std::map<long long, const nlohmann::json*> adam;
   for (const nlohmann::json& row : context.metrics()) {

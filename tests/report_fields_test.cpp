@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "physgrad/error.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/field_plot.hpp"
 #include "physgrad/report/isolines.hpp"
 #include "physgrad/report/landscape.hpp"

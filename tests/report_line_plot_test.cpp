@@ -16,7 +16,7 @@
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
-#include "physgrad/run/rule_colors.hpp"
+#include "physgrad/run/cases/rule_colors.hpp"
 #include "physgrad/report/line_plot.hpp"
 #include "physgrad/report/plot_marks.hpp"
 #include "physgrad/report/svg_document.hpp"

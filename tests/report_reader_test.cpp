@@ -14,7 +14,7 @@
 
 #include "cli_fixture.hpp"
 #include "physgrad/report/line_plot.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "registry.hpp"
 #include "report_pages_fixture.hpp"
 

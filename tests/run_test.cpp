@@ -13,7 +13,7 @@
 
 #include "cli_fixture.hpp"
 #include "physgrad/error.hpp"
-#include "physgrad/run/config_file.hpp"
+#include "physgrad/run/life/config_file.hpp"
 #include "registry.hpp"
 #include "physgrad/stop.hpp"
 
@@ -63,10 +63,13 @@ TEST_F(RunCall, StartWritesTheFolderAndReturnsItsSummary) {
   EXPECT_EQ(outcome.folder, dir_ / "a");
   EXPECT_EQ(outcome.report, dir_ / "a" / "report.html");
   EXPECT_TRUE(is_finished(dir_ / "a"));
-  EXPECT_EQ(nlohmann::json::parse(read_file(dir_ / "a" / "summary.json")), outcome.summary);
-  EXPECT_EQ(outcome.summary["experiment"], "comparison");
-  ASSERT_FALSE(outcome.summary["runs"].empty());
-  for (const auto& run : outcome.summary["runs"]) EXPECT_TRUE(run.contains("termination"));
+  ASSERT_TRUE(outcome.summary.has_value());
+  const nlohmann::json written = nlohmann::json::parse(read_file(dir_ / "a" / "summary.json"));
+  EXPECT_EQ(written, ex::run_summary_json(*outcome.summary));
+  EXPECT_EQ(ex::run_summary_json(ex::read_run_summary(written)), written);
+  EXPECT_EQ(outcome.summary->experiment, "comparison");
+  ASSERT_FALSE(outcome.summary->runs.empty());
+  for (const auto& run : outcome.summary->runs) EXPECT_FALSE(run.termination.empty());
   EXPECT_FALSE(outcome.tables.empty());
   EXPECT_FALSE(progress.empty());
   EXPECT_TRUE(notices.empty());
@@ -120,7 +123,7 @@ TEST_F(RunCall, AStoppedRunResumesToTheResultsOfAnUninterruptedOne) {
   EXPECT_NE(stopped.stopped.find("checkpoint kept, continue with: physgrad resume"),
             std::string::npos)
       << stopped.stopped;
-  EXPECT_TRUE(stopped.summary.is_null());
+  EXPECT_FALSE(stopped.summary.has_value());
   EXPECT_TRUE(fs::exists(dir_ / "part" / "checkpoint.pgc"));
   EXPECT_FALSE(fs::exists(dir_ / "part" / "summary.json"));
 
@@ -130,9 +133,12 @@ TEST_F(RunCall, AStoppedRunResumesToTheResultsOfAnUninterruptedOne) {
   EXPECT_TRUE(is_finished(dir_ / "part"));
   EXPECT_EQ(metrics_without_time(dir_ / "part"), metrics_without_time(dir_ / "whole"));
   EXPECT_EQ(read_file(dir_ / "part" / "networks.json"), read_file(dir_ / "whole" / "networks.json"));
-  ASSERT_EQ(resumed.summary["runs"].size(), whole.summary["runs"].size());
-  for (std::size_t i = 0; i < whole.summary["runs"].size(); ++i) {
-    EXPECT_EQ(resumed.summary["runs"][i]["final"], whole.summary["runs"][i]["final"]) << i;
+  ASSERT_TRUE(resumed.summary && whole.summary);
+  ASSERT_EQ(resumed.summary->runs.size(), whole.summary->runs.size());
+  for (std::size_t i = 0; i < whole.summary->runs.size(); ++i) {
+    EXPECT_EQ(ex::run_entry_json(resumed.summary->runs[i])["final"],
+              ex::run_entry_json(whole.summary->runs[i])["final"])
+        << i;
   }
 }
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "registry.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
 

@@ -6,9 +6,9 @@
 
 #include <cmath>
 
-#include "physgrad/run/crossing.hpp"
-#include "physgrad/run/learning_runs.hpp"
-#include "physgrad/run/learning_verdict.hpp"
+#include "physgrad/run/pages/crossing.hpp"
+#include "physgrad/run/cases/learning_runs.hpp"
+#include "physgrad/run/pages/learning_verdict.hpp"
 
 namespace physgrad::run {
 namespace {

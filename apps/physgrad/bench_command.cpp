@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/memory.hpp"

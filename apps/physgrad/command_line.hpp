@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "bench_command.hpp"
-#include "physgrad/run/config_file.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/config_file.hpp"
+#include "physgrad/run/life/experiment.hpp"
 
 namespace physgrad::cli {
 

@@ -7,7 +7,7 @@
 #include <thread>
 
 #include "physgrad/error.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 #include "physgrad/text.hpp"
 
 #ifdef PHYSGRAD_WITH_MPI

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "physgrad/parallel/communicator.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
 
 namespace physgrad::cli {
 

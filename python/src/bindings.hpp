@@ -9,7 +9,7 @@
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/physics/checked_simulator.hpp"
-#include "physgrad/run/registry.hpp"
+#include "physgrad/run/cases/registry.hpp"
 
 namespace physgrad::python {
 

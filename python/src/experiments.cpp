@@ -15,7 +15,7 @@
 #include "physgrad/io/json_file.hpp"
 #include "registry.hpp"
 #include "physgrad/run/run.hpp"
-#include "physgrad/run/run_index.hpp"
+#include "physgrad/run/pages/run_index.hpp"
 #include "physgrad/stop.hpp"
 #include "python_simulator.hpp"
 
@@ -24,7 +24,7 @@ namespace physgrad::python {
 namespace {
 
 // What open_metrics and open_summary read at most: the limits `physgrad report` reads a run
-// folder's files with (src/run/run_index.cpp), so that a file of any size, a FIFO or a device
+// folder's files with (src/run/pages/run_index.cpp), so that a file of any size, a FIFO or a device
 // neither fills the memory nor blocks.
 constexpr std::size_t kMaxSummaryBytes = std::size_t{8} << 20;
 constexpr std::size_t kMaxSummaryDepth = 64;
@@ -156,9 +156,9 @@ py::dict outcome_dict(const experiments::RunOutcome& outcome, const py::object& 
   out["finished"] = outcome.finished;
   out["report"] = outcome.report.string();
   out["stopped"] = python_resume_text(outcome.stopped, own);
-  out["summary"] = outcome.summary.is_null()
-                       ? py::object(py::none())
-                       : py::module_::import("json").attr("loads")(outcome.summary.dump());
+  out["summary"] = !outcome.summary ? py::object(py::none())
+                                     : py::module_::import("json").attr("loads")(
+                                           run::run_summary_json(*outcome.summary).dump());
   return out;
 }
 

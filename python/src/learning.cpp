@@ -187,7 +187,7 @@ py::object hig_params(const std::string& rule, const py::dict& given) {
   return to_python(HigUpdate(options).params());
 }
 
-// A reference case's first batch (run/registry.hpp): the stacked Jacobian as
+// A reference case's first batch (run/cases/registry.hpp): the stacked Jacobian as
 // (B, m, P) and ∂(mean L)/∂y as (B, m), both sample-major, θ, and the first step of rule `rule`
 // with the case's options computed by the library twice: "delta" from the network's own stacked
 // Jacobian (J Jᵀ from the layer factors, as train() steps), "delta_formed" from the formed J

@@ -18,7 +18,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/catalogue.hpp"
 #include "physgrad/loss/loss.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/text.hpp"
 #include "own_network.hpp"
 #include "python_simulator.hpp"

@@ -13,7 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "physgrad/nn/conv_net.hpp"
-#include "physgrad/run/learning_experiment.hpp"
+#include "physgrad/run/cases/learning_experiment.hpp"
 
 namespace physgrad::python {
 

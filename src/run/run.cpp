@@ -13,13 +13,14 @@
 #include "physgrad/io/atomic_file.hpp"
 #include "physgrad/io/checkpoint_file.hpp"
 #include "physgrad/parallel/distributed_eigen.hpp"
-#include "physgrad/run/checkpoint.hpp"
-#include "physgrad/run/config_file.hpp"
-#include "physgrad/run/interrupt.hpp"
-#include "physgrad/run/registry.hpp"
-#include "physgrad/run/run_folder.hpp"
-#include "fault_point.hpp"
+#include "physgrad/run/cases/registry.hpp"
+#include "physgrad/run/life/checkpoint.hpp"
+#include "physgrad/run/life/config_file.hpp"
+#include "physgrad/run/life/interrupt.hpp"
+#include "physgrad/run/life/run_folder.hpp"
+#include "physgrad/run/pages/report_page.hpp"
 #include "physgrad/threads.hpp"
+#include "life/fault_point.hpp"
 
 namespace physgrad::run {
 
@@ -94,13 +95,15 @@ RunOutcome run_in(const Experiment& experiment, const Settings& settings,
     if (writer) context.set_progress(hooks.progress, hooks.progress_end, hooks.progress_event);
     experiment.run(settings, context);
     outcome.finished = true;
-    outcome.summary = summary_document(experiment, context);
+    outcome.summary = run_summary(experiment, context);
     outcome.tables = context.tables();
     if (!writer) return outcome;
-    write_run_folder(folder->staging(), experiment, settings, context, command, outcome.summary);
+    const FolderHandle& staging = folder->staging();  // made anew by each call
+    write_run_folder(staging, experiment, settings, context, command, *outcome.summary);
+    write_report_file(staging, experiment, settings, context, command, *outcome.summary);
     folder->commit();
     outcome.folder = folder->shown_now();
-    outcome.report = outcome.folder / "report.html";
+    outcome.report = outcome.folder / kReportFile;
   } catch (const Interrupted& e) {
     // A rank that stopped answering (RanksNotAnswering, or a training run that ended on it and
     // saved its checkpoint) is an error, not a stop: the job cannot go on.

@@ -7,11 +7,13 @@
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "physgrad/parallel/communicator.hpp"
-#include "physgrad/run/experiment.hpp"
+#include "physgrad/run/life/experiment.hpp"
+#include "physgrad/run/life/run_summary.hpp"
 
 namespace physgrad::run {
 
@@ -39,9 +41,8 @@ struct RunOutcome {
   // The run folder as messages name it (as given, or where it is now when it was moved); empty on
   // the ranks that do not write.
   std::filesystem::path folder;
-  // The summary.json document {"experiment", "runs": [{"label", "optimizer", "final",
-  // "termination", …}]}: how each rule's run ended. Null when the run stopped.
-  nlohmann::json summary;
+  // summary.json: how each rule's run ended (run_summary.hpp). None when the run stopped.
+  std::optional<RunSummary> summary;
   // The experiment's tables (final losses, time per step, …), as the CLI prints them.
   std::vector<RunContext::Table> tables;
   std::filesystem::path report;  // FOLDER/report.html; empty when stopped or not writing

@@ -1,0 +1,82 @@
+// Learning verdict — the sentence under a learning experiment's message figure: which rule ends
+// lowest in the same budget, and per rule against Adam the update advantage N (Adam's updates to
+// reach a level over the rule's, within the evaluations' brackets), the step-cost ratio M and the
+// wall time to that level measured at the same evaluations (not N/M: costs vary along a run).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "physgrad/report/significant.hpp"
+#include "physgrad/run/pages/crossing.hpp"
+#include "physgrad/train/trainer.hpp"
+
+namespace physgrad::run {
+
+struct LearningResult;
+
+// A run counts in a verdict when a limit ended it (not a numerical failure, a divergence or a
+// stop) and, for a rule that switches from Adam, when it switched: a twin that never did is
+// Adam's run and is not ranked as the rule.
+bool credited(const LearningResult& run);
+
+// Every rule's runs (one group per rule, over seeds) and what is compared: `value` of an
+// evaluation (lower is better; the test loss, say), named `what` ("final test loss").
+struct VerdictInput {
+  std::vector<std::vector<const LearningResult*>> groups;
+  std::function<double(const TrainingRecord&)> value;
+  std::string what;
+};
+
+// Per rule (group): the median and spread over its credited runs of the final value, and the
+// median of the seconds per update of the rule (rule_seconds_per_update); the counts of credited
+// and of other runs.
+struct RuleStanding {
+  std::string label;
+  std::string id;
+  double final_value = NAN;
+  Spread finals;  // of the final values, whose digits the ratio of two rules' medians keeps
+  // The upper median of the finals (the median for an odd count): a level that at least half the
+  // runs reached, so that the median of their counts to reach it is a number for any seed count.
+  double reach_level = NAN;
+  double seconds_per_update = NAN;
+  int credited = 0, failed = 0;
+  bool never_switched = false;  // a twin whose rule never took over
+  bool twin = false;            // a rule that follows Adam (its cost is its own phase's)
+};
+RuleStanding standing(const std::vector<const LearningResult*>& group,
+                      const std::function<double(const TrainingRecord&)>& value);
+
+// The updates and the training seconds in which a run brought `value` down to `level`: the
+// bracket between the evaluations that straddle it and the estimate inside (crossing_of).
+Crossing updates_crossing(const TrainingSummary& run, double level,
+                          const std::function<double(const TrainingRecord&)>& value);
+Crossing seconds_crossing(const TrainingSummary& run, double level,
+                          const std::function<double(const TrainingRecord&)>& value);
+// The estimates alone (interpolated between evaluations, log-linearly in the value); NaN when it
+// never did.
+double updates_to_reach(const TrainingSummary& run, double level,
+                        const std::function<double(const TrainingRecord&)>& value);
+double seconds_to_reach(const TrainingSummary& run, double level,
+                        const std::function<double(const TrainingRecord&)>& value);
+
+// The training seconds per update of a run's rule: the whole run's, or for a twin (params with
+// "pretrain_iterations") its evaluations' from the switch on, so that Adam's cheaper updates
+// before it are not mixed in; NaN when the rule made no update between two evaluations.
+double rule_seconds_per_update(const LearningResult& run);
+
+// A ratio with two significant digits ("12×", "1.5×", "480×"), a value with three.
+std::string ratio_text(double ratio);
+std::string value_text(double value);
+
+// The sentence: "HIG's final test loss is 12× below Adam's (0.031 vs 0.37); …. Per update and per
+// second against Adam: to reach 0.37 HIG needs between 100 and 200 updates, Adam 3300 (17–33×
+// fewer); its update costs 480× Adam's; in wall time (measured at the same evaluations) Adam gets
+// there 10–20× sooner (between 48 and 96 vs 4.7 s). …" The ratio of two rules' finals is the
+// ratio of their medians with the digits their spreads support (as the table of finals); counts,
+// seconds and their ratios carry no digit finer than the evaluations' brackets. Failed runs are
+// counted and never ranked; values within 10 % of each other are called about equal.
+std::string verdict_sentence(const VerdictInput& input);
+
+}  // namespace physgrad::run
