@@ -9,6 +9,7 @@
 #include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
 #include "physgrad/rule_step.hpp"
+#include "physgrad/spectral_cut.hpp"
 #include "physgrad/stop.hpp"
 #include "physgrad/text.hpp"
 #include "physgrad/threads.hpp"
