@@ -42,15 +42,6 @@ std::string machine_blas_library() {
   return text;
 }
 
-std::string machine_date_now() {
-  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm utc{};
-  ::gmtime_r(&now, &utc);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M UTC", &utc);
-  return text;
-}
-
 }  // namespace
 
 nlohmann::json run_machine() {
@@ -62,7 +53,7 @@ nlohmann::json run_machine() {
           {"blas_threads", blas_threads()},
           {"jacobian_threads", jacobian_threads()},
           {"hardware_threads", std::thread::hardware_concurrency()},
-          {"date", machine_date_now()}};
+          {"date", utc_minute_now()}};
 }
 
 std::string run_machine_text(const nlohmann::json& machine) {
@@ -74,6 +65,15 @@ std::string run_machine_text(const nlohmann::json& machine) {
          " (kernel " + text("blas_kernel") + ") · threads: BLAS " + text("blas_threads") +
          ", Jacobian " + text("jacobian_threads") + ", hardware " + text("hardware_threads") +
          " · " + text("date");
+}
+
+std::string utc_minute_now() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm utc{};
+  ::gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M UTC", &utc);
+  return text;
 }
 
 }  // namespace physgrad::run

@@ -4,9 +4,7 @@
 #include <unistd.h>
 
 #include <charconv>
-#include <chrono>
 #include <cmath>
-#include <ctime>
 #include <sstream>
 
 #include "physgrad/error.hpp"
@@ -26,16 +24,6 @@ constexpr const char* kReportCompareText =
     "click a legend entry to hide a run, drag a box or turn the wheel to zoom (double-click "
     "resets), read the shown runs' values at the pointer, log y, x per second, EMA smoothing, "
     "CSV download of the shown curves. At most 2000 points per run (every k-th row kept).";
-
-// "2026-11-27 08:40 UTC": now.
-std::string report_time_now() {
-  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm utc{};
-  ::gmtime_r(&now, &utc);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%d %H:%M UTC", &utc);
-  return text;
-}
 
 // The links to the folder's files and, when it exists, to the index of the folder above.
 std::vector<HtmlLink> report_links(const RunContext& context, bool index_exists) {
@@ -189,7 +177,7 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
   const bool leads = !message.figures.empty();
   if (leads) sections.push_back(std::move(message));
   sections.push_back({"", (leads ? experiment.description() + "\n\n" : std::string()) +
-                              "Written " + report_time_now() + " by physgrad " +
+                              "Written " + utc_minute_now() + " by physgrad " +
                               PHYSGRAD_VERSION + " (" + machine +
                               "); the command and every option are under Settings at the end.",
                       {}, {}, report_links(context, index_exists)});
@@ -212,7 +200,7 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
                       {{"metrics.csv: every evaluation of every run", "metrics.csv"}}});
   sections.push_back({"Settings",
                       "physgrad " + std::string(PHYSGRAD_VERSION) + ", report written " +
-                          report_time_now() + ".\n\nMachine: " + machine +
+                          utc_minute_now() + ".\n\nMachine: " + machine +
                           ".\n\nTo run it again (into a new folder under runs/): " +
                           reproduce_command(experiment, settings) + "\n\nCommand as typed: " +
                           (command_line.empty() ? "(not recorded)" : command_line),

@@ -14,6 +14,9 @@ namespace physgrad::run {
 // time now ("2026-11-27 08:40 UTC").
 nlohmann::json run_machine();
 
+// The UTC time now to the minute, "2026-11-27 08:40 UTC" (summary.json's date, a page's "Written").
+std::string utc_minute_now();
+
 // One line for a page: "commit abc1234 · CPU … · BLAS … (kernel Haswell) · threads: BLAS 1, …".
 std::string run_machine_text(const nlohmann::json& machine);
 
