@@ -10,7 +10,7 @@
 
 namespace physgrad::bench {
 
-using experiments::ReferenceCase;
+using run::ReferenceCase;
 
 // The reference configurations: the experiment and the batch size.
 struct CaseSpec {

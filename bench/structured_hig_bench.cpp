@@ -19,7 +19,7 @@
 namespace {
 
 using namespace physgrad;
-using experiments::ReferenceCase;
+using run::ReferenceCase;
 
 struct CaseSpec {
   const char* experiment;

@@ -6,6 +6,7 @@
 
 #include "physgrad/run/cases/direct_runs.hpp"
 #include "physgrad/run/pages/learning_verdict.hpp"  // ratio_text, value_text
+#include "framework.hpp"
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "heat_inverse_figures.hpp"
+#include "framework.hpp"
 #include "registry.hpp"
 #include "unet_case.hpp"
 #include "physgrad/run/cases/learning_experiment.hpp"

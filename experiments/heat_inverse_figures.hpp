@@ -10,6 +10,7 @@
 #include "physgrad/nn/network.hpp"
 #include "physgrad/run/life/experiment.hpp"
 #include "physgrad/run/cases/learning_runs.hpp"
+#include "framework.hpp"
 
 namespace physgrad::experiments {
 

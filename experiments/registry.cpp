@@ -1,3 +1,4 @@
+#include "framework.hpp"
 #include "registry.hpp"
 
 namespace physgrad::experiments {

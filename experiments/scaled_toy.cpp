@@ -6,6 +6,7 @@
 #include "physgrad/run/cases/direct_runs.hpp"
 #include "physgrad/run/pages/learning_verdict.hpp"  // ratio_text
 #include "physgrad/run/cases/rule_colors.hpp"
+#include "framework.hpp"
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"

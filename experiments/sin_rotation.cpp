@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "framework.hpp"
 #include "registry.hpp"
 #include "physgrad/run/cases/learning_experiment.hpp"
 #include "physgrad/loss/loss.hpp"

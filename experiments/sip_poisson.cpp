@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "heat_inverse_figures.hpp"
+#include "framework.hpp"
 #include "registry.hpp"
 #include "unet_case.hpp"
 #include "physgrad/loss/loss.hpp"

@@ -9,6 +9,7 @@
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/run/cases/direct_runs.hpp"
+#include "framework.hpp"
 #include "registry.hpp"
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"

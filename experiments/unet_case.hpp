@@ -8,6 +8,7 @@
 
 #include "physgrad/nn/conv_net.hpp"
 #include "physgrad/run/cases/learning_experiment.hpp"
+#include "framework.hpp"
 
 namespace physgrad::experiments {
 

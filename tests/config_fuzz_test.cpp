@@ -17,7 +17,7 @@
 #include "physgrad/run/life/experiment.hpp"
 #include "physgrad/error.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 namespace {
 
 using json = nlohmann::json;
@@ -213,7 +213,7 @@ TEST(FuzzConfig, RandomDocumentsResolveOrThrowErrorOnly) {
   int documents = 0;
   for (; documents < 2000; ++documents) {
     if (std::chrono::steady_clock::now() - start > std::chrono::seconds(4)) break;
-    const Experiment& experiment = *random.pick(builtin_registry().experiments());
+    const Experiment& experiment = *random.pick(experiments::builtin_registry().experiments());
     const auto [text, kind] = random.document(experiment);
     try {
       const Settings settings = resolve_settings(
@@ -242,7 +242,7 @@ TEST(FuzzOptions, RandomTextsParseToValidValuesOrThrowErrorOnly) {
   RandomInput random(77);
   int accepted = 0, rejected = 0;
   for (int i = 0; i < 5000; ++i) {
-    const Experiment& experiment = *random.pick(builtin_registry().experiments());
+    const Experiment& experiment = *random.pick(experiments::builtin_registry().experiments());
     const OptionSpec spec = random.pick(all_options(experiment));
     const std::string text = random.option_text(spec);
     try {
@@ -271,4 +271,4 @@ TEST(FuzzOptions, RandomTextsParseToValidValuesOrThrowErrorOnly) {
 }
 
 }  // namespace
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -14,7 +14,7 @@
 #include "physgrad/run/life/experiment.hpp"
 #include "physgrad/error.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 namespace {
 
 namespace fs = std::filesystem;
@@ -22,7 +22,7 @@ using json = nlohmann::json;
 
 Settings resolve_json(const std::string& name, const std::string& text,
                       const OptionTexts& flags = {}) {
-  const Experiment& experiment = builtin_registry().find(name);
+  const Experiment& experiment = experiments::builtin_registry().find(name);
   OptionTexts given = config_options(experiment, parse_config_json(text));
   given.insert(given.end(), flags.begin(), flags.end());
   return resolve_settings(experiment, given);
@@ -44,7 +44,7 @@ std::string config_error(const std::string& name, const std::string& text) {
 
 std::string option_names(const std::string& name) {
   std::string names;
-  for (const OptionSpec& spec : all_options(builtin_registry().find(name))) {
+  for (const OptionSpec& spec : all_options(experiments::builtin_registry().find(name))) {
     names += (names.empty() ? "" : ", ") + spec.name;
   }
   return names;
@@ -68,13 +68,13 @@ TEST(ConfigFile, ResolvesToTheSameSettingsAsTheSameValuesGivenAsFlags) {
   };
   for (const auto& [name, text, flags] : cases) {
     EXPECT_EQ(resolve_json(name, text).json(),
-              resolve_settings(builtin_registry().find(name), flags).json())
+              resolve_settings(experiments::builtin_registry().find(name), flags).json())
         << name;
   }
 }
 
 TEST(ConfigFile, SavedSettingsResolveToThemselvesBareOrAsAWholeConfig) {
-  for (const auto& experiment : builtin_registry()) {
+  for (const auto& experiment : experiments::builtin_registry()) {
     const Settings settings =
         resolve_settings(*experiment, {{"iters", "3"}, {"lr", "0.1"}, {"seed", "12"}});
     const json whole = {{"experiment", experiment->name()},
@@ -214,7 +214,7 @@ TEST(ConfigFile, EveryBadValueIsOneErrorWithAnExactMessage) {
 TEST(ConfigFile, FileErrorsNameThePath) {
   const fs::path dir = fs::temp_directory_path() / ("physgrad_config_" + std::to_string(getpid()));
   fs::create_directories(dir);
-  const Experiment& comparison = builtin_registry().find("comparison");
+  const Experiment& comparison = experiments::builtin_registry().find("comparison");
   const auto file_error = [&](const fs::path& path) {
     return error_of([&] { read_config_file(comparison, path); });
   };
@@ -232,7 +232,7 @@ TEST(ConfigFile, FileErrorsNameThePath) {
 }
 
 TEST(DescribeExperiment, TableHasEveryOptionWithKindDefaultAndRange) {
-  for (const auto& experiment : builtin_registry()) {
+  for (const auto& experiment : experiments::builtin_registry()) {
     const RunContext::Table table = options_table(*experiment);
     EXPECT_EQ(table.title, experiment->name() + " — " + experiment->description());
     const std::vector<OptionSpec> specs = all_options(*experiment);
@@ -243,7 +243,7 @@ TEST(DescribeExperiment, TableHasEveryOptionWithKindDefaultAndRange) {
       EXPECT_EQ(table.rows[i][2], specs[i].default_text.empty() ? "unset" : specs[i].default_text);
     }
   }
-  const RunContext::Table table = options_table(builtin_registry().find("scaled-toy"));
+  const RunContext::Table table = options_table(experiments::builtin_registry().find("scaled-toy"));
   const auto row = [&](const std::string& name) {
     for (const auto& r : table.rows) {
       if (r[0] == name) return r;
@@ -262,4 +262,4 @@ TEST(DescribeExperiment, TableHasEveryOptionWithKindDefaultAndRange) {
 }
 
 }  // namespace
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

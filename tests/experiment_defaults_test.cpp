@@ -18,13 +18,14 @@ namespace {
 using physgrad::testing::Cli;
 using physgrad::testing::Outcome;
 using physgrad::testing::read_file;
-namespace ex = physgrad::experiments;
+namespace ex = physgrad::run;
+using physgrad::experiments::builtin_registry;
 namespace fs = std::filesystem;
 
 class Defaults : public Cli, public ::testing::WithParamInterface<std::string> {};
 
 TEST_P(Defaults, RunToTheEndWithACompleteResult) {
-  const ex::Experiment& experiment = ex::builtin_registry().find(GetParam());
+  const ex::Experiment& experiment = builtin_registry().find(GetParam());
   std::string args = "run " + experiment.name() + " --out result";
   for (const ex::OptionSpec& spec : ex::all_options(experiment)) {
     if (!spec.quick_text.empty()) args += " --" + spec.name + " " + spec.quick_text;
@@ -67,7 +68,7 @@ TEST_P(Defaults, RunToTheEndWithACompleteResult) {
 
 std::vector<std::string> registered() {
   std::vector<std::string> names;
-  for (const auto& experiment : ex::builtin_registry()) names.push_back(experiment->name());
+  for (const auto& experiment : builtin_registry()) names.push_back(experiment->name());
   return names;
 }
 

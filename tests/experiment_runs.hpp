@@ -9,14 +9,14 @@
 #include "registry.hpp"
 #include "physgrad/run/life/experiment.hpp"
 
-namespace physgrad::experiments::testing {
+namespace physgrad::run::testing {
 
 inline RunContext run_experiment(const std::string& name,
                                  const std::vector<std::pair<std::string, std::string>>& given) {
-  const Experiment& experiment = builtin_registry().find(name);
+  const Experiment& experiment = experiments::builtin_registry().find(name);
   RunContext context;
   experiment.run(resolve_settings(experiment, given), context);
   return context;
 }
 
-}  // namespace physgrad::experiments::testing
+}  // namespace physgrad::run::testing

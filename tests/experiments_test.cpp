@@ -9,7 +9,7 @@
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 namespace {
 
 using testing::run_experiment;
@@ -114,7 +114,7 @@ TEST(HigToyExperiment, HalfInverseGradientsBeatAdamAndGaussNewtonWhenIllConditio
 // --lr and --rcond take the range every rule with that option takes, from the rules' option
 // descriptions; an experiment option named like a rule option is that shared option.
 TEST(ExperimentSettings, TheSharedRuleOptionsTakeTheRulesRanges) {
-  const Experiment& experiment = builtin_registry().find("hig-toy");
+  const Experiment& experiment = experiments::builtin_registry().find("hig-toy");
   const std::vector<OptionSpec> specs = all_options(experiment);
   const OptionSpec& rcond = find_option(experiment, specs, "rcond");
   int rules = 0;
@@ -141,7 +141,7 @@ TEST(ExperimentSettings, TheSharedRuleOptionsTakeTheRulesRanges) {
                             "rule's own)"),
             std::string::npos)
       << rcond.help;
-  for (const auto& any : builtin_registry()) {
+  for (const auto& any : experiments::builtin_registry()) {
     const std::string& name = any->name();
     for (const OptionSpec& spec : all_options(*any)) {
       for (const RuleKind kind : {RuleKind::kDirect, RuleKind::kLearning}) {
@@ -156,7 +156,7 @@ TEST(ExperimentSettings, TheSharedRuleOptionsTakeTheRulesRanges) {
 }
 
 TEST(ExperimentSettings, DefaultsResolveAndBadValuesNameTheOption) {
-  const Experiment& experiment = builtin_registry().find("scaled-toy");
+  const Experiment& experiment = experiments::builtin_registry().find("scaled-toy");
   const Settings settings = resolve_settings(experiment, {});
   EXPECT_EQ(settings.integer("iters"), 1000);
   EXPECT_FALSE(settings.has("lr"));
@@ -179,13 +179,13 @@ TEST(ExperimentSettings, DefaultsResolveAndBadValuesNameTheOption) {
   EXPECT_EQ(message("alpha", "1,,2"), "--alpha: empty entry in list '1,,2'");
   EXPECT_EQ(message("tol-mode", "loose"),
             "--tol-mode: unknown value 'loose' (known: relative, absolute)");
-  EXPECT_THROW(builtin_registry().find("scaled_toy"), Error);
+  EXPECT_THROW(experiments::builtin_registry().find("scaled_toy"), Error);
 }
 
 // One number syntax for reals and integers, on the command line and in config files: decimal,
 // with an optional sign; what strtod reads besides is not a number.
 TEST(ExperimentSettings, NumbersAreDecimal) {
-  const Experiment& experiment = builtin_registry().find("scaled-toy");
+  const Experiment& experiment = experiments::builtin_registry().find("scaled-toy");
   const auto read = [&](const std::string& name, const std::string& text) {
     return resolve_settings(experiment, {{name, text}});
   };
@@ -213,4 +213,4 @@ TEST(ExperimentSettings, NumbersAreDecimal) {
 }
 
 }  // namespace
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -7,7 +7,7 @@
 
 #include "experiment_runs.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 namespace {
 
 RunContext run(const std::string& name,
@@ -114,4 +114,4 @@ TEST(PoissonExperiment, PretrainedRunFollowsTheAdamRunThenInvertsTheJacobian) {
 }
 
 }  // namespace
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

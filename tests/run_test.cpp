@@ -20,7 +20,8 @@
 namespace {
 
 namespace fs = std::filesystem;
-namespace ex = physgrad::experiments;
+namespace ex = physgrad::run;
+using physgrad::experiments::builtin_registry;
 using physgrad::testing::is_finished;
 using physgrad::testing::metrics_without_time;
 using physgrad::testing::read_file;
@@ -38,7 +39,7 @@ class RunCall : public ::testing::Test {
   }
 
   static ex::Settings settings(const std::string& name, const ex::OptionTexts& given) {
-    return ex::resolve_settings(ex::builtin_registry().find(name), given);
+    return ex::resolve_settings(builtin_registry().find(name), given);
   }
 
   fs::path dir_;
@@ -51,7 +52,7 @@ const ex::OptionTexts kLearning = {{"seeds", "1"},       {"lambda", "0.01"},
                                    {"checkpoint-every", "25"}};
 
 TEST_F(RunCall, StartWritesTheFolderAndReturnsItsSummary) {
-  const ex::Experiment& experiment = ex::builtin_registry().find("comparison");
+  const ex::Experiment& experiment = builtin_registry().find("comparison");
   std::vector<std::string> progress, notices;
   ex::RunHooks hooks;
   hooks.progress = [&](const std::string& line) { progress.push_back(line); };
@@ -85,11 +86,11 @@ TEST_F(RunCall, StartWritesTheFolderAndReturnsItsSummary) {
     EXPECT_NE(std::string(e.what()).find((dir_ / "a").string()), std::string::npos) << e.what();
   }
   EXPECT_EQ(physgrad::testing::snapshot(dir_ / "a"), before);
-  EXPECT_THROW(ex::Run::resume(ex::builtin_registry(), dir_ / "a"), physgrad::Error);
+  EXPECT_THROW(ex::Run::resume(builtin_registry(), dir_ / "a"), physgrad::Error);
 }
 
 TEST_F(RunCall, TheOutFolderComesFromTheCallThenTheSettings) {
-  const ex::Experiment& experiment = ex::builtin_registry().find("comparison");
+  const ex::Experiment& experiment = builtin_registry().find("comparison");
   const fs::path from_settings = dir_ / "from-settings";
   const ex::RunOutcome outcome = ex::Run::start(
       experiment, settings("comparison", {{"iters", "2"}, {"out", from_settings.string()}}), {});
@@ -105,7 +106,7 @@ TEST_F(RunCall, TheOutFolderComesFromTheCallThenTheSettings) {
 }
 
 TEST_F(RunCall, AStoppedRunResumesToTheResultsOfAnUninterruptedOne) {
-  const ex::Experiment& experiment = ex::builtin_registry().find("hig-toy");
+  const ex::Experiment& experiment = builtin_registry().find("hig-toy");
   const ex::RunOutcome whole =
       ex::Run::start(experiment, settings("hig-toy", kLearning), dir_ / "whole");
   ASSERT_TRUE(whole.finished);
@@ -128,7 +129,7 @@ TEST_F(RunCall, AStoppedRunResumesToTheResultsOfAnUninterruptedOne) {
   EXPECT_FALSE(fs::exists(dir_ / "part" / "summary.json"));
 
   physgrad::clear_stop_request();
-  const ex::RunOutcome resumed = ex::Run::resume(ex::builtin_registry(), dir_ / "part");
+  const ex::RunOutcome resumed = ex::Run::resume(builtin_registry(), dir_ / "part");
   ASSERT_TRUE(resumed.finished);
   EXPECT_TRUE(is_finished(dir_ / "part"));
   EXPECT_EQ(metrics_without_time(dir_ / "part"), metrics_without_time(dir_ / "whole"));
@@ -145,7 +146,7 @@ TEST_F(RunCall, AStoppedRunResumesToTheResultsOfAnUninterruptedOne) {
 TEST_F(RunCall, ResumeNamesWhatIsWrongWithTheFolder) {
   const auto message = [](const fs::path& dir) -> std::string {
     try {
-      ex::Run::resume(ex::builtin_registry(), dir);
+      ex::Run::resume(builtin_registry(), dir);
     } catch (const physgrad::Error& e) {
       return e.what();
     }

@@ -12,7 +12,7 @@
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 namespace {
 
 using testing::run_experiment;
@@ -104,7 +104,7 @@ TEST(SipPoissonExperiment, BothRulesBringTheSolutionNearerTheTruth) {
 }
 
 TEST(HeatExperiment, RejectsTwoDimensionalGridsTooLargeForTheNetwork) {
-  const Experiment& experiment = builtin_registry().find("heat-inverse");
+  const Experiment& experiment = experiments::builtin_registry().find("heat-inverse");
   try {
     resolve_settings(experiment, {{"network", "mlp"}, {"dims", "2"}, {"n", "40"}});
     FAIL() << "no error";
@@ -114,4 +114,4 @@ TEST(HeatExperiment, RejectsTwoDimensionalGridsTooLargeForTheNetwork) {
 }
 
 }  // namespace
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -6,7 +6,7 @@
 #include "experiment_runs.hpp"
 #include "physgrad/error.hpp"
 
-namespace physgrad::experiments {
+namespace physgrad::run {
 namespace {
 
 using testing::run_experiment;
@@ -59,4 +59,4 @@ TEST(TimeReversalExperiment, ReversalPgBeatsTheNumericalInverseInSimulatorPasses
 }
 
 }  // namespace
-}  // namespace physgrad::experiments
+}  // namespace physgrad::run

@@ -21,7 +21,8 @@ namespace physgrad::cli {
 
 namespace {
 
-namespace ex = physgrad::experiments;
+namespace ex = physgrad::run;
+using physgrad::experiments::builtin_registry;
 using Clock = std::chrono::steady_clock;
 
 constexpr double kMaxSteps = 1e6;  // timed or warm-up steps (their sum stays far from overflow)
@@ -114,7 +115,7 @@ BenchCommand::BenchCommand(CLI::App& app)
                    "NAME [--optimizer U] [--batch B] [--steps N] [--warmup W] [--threads T]")) {
   command_->add_option("NAME", name_,
                        "reference experiment: " +
-                           comma_list(ex::builtin_registry().reference_names()))
+                           comma_list(builtin_registry().reference_names()))
       ->required();
   command_->add_option("--optimizer", optimizer_,
                        "update rule: " + comma_list(rule_ids(RuleKind::kLearning)))
@@ -138,7 +139,7 @@ void BenchCommand::run(std::ostream& out) const {
   const long long warmup = read_integer("warmup", warmup_, 0, kMaxSteps);
   const long long threads = read_integer("threads", threads_, 1, 1024);
   // The case at one sample: throws for an unknown NAME, naming the known ones.
-  const ex::ReferenceCase single = ex::builtin_registry().reference(name_, 1);
+  const ex::ReferenceCase single = builtin_registry().reference(name_, 1);
   find_rule(RuleKind::kLearning, optimizer_);  // throws for an unknown rule, naming the known ones
   if (std::getenv("OPENBLAS_NUM_THREADS") == nullptr && std::getenv("OMP_NUM_THREADS") == nullptr) {
     set_blas_threads(1);
@@ -146,7 +147,7 @@ void BenchCommand::run(std::ostream& out) const {
   set_jacobian_threads(static_cast<int>(threads));
 
   const Index batch = bench_batch(single, optimizer_, batch_);
-  ex::ReferenceCase reference = ex::builtin_registry().reference(name_, batch);
+  ex::ReferenceCase reference = builtin_registry().reference(name_, batch);
   const auto update = reference.update(optimizer_);
   const Mlp& network = reference.network;
 

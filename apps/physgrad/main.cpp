@@ -33,7 +33,8 @@
 
 namespace {
 
-namespace ex = physgrad::experiments;
+namespace ex = physgrad::run;
+using physgrad::experiments::builtin_registry;
 namespace fs = std::filesystem;
 
 constexpr int kUsageError = 2;
@@ -217,7 +218,7 @@ std::optional<int> parse_command_line(physgrad::cli::CommandLine& command, int a
     check_arguments(argc, argv);
     if (argc == 1 || argv[1][0] != '-') check_subcommand(command.app, argc > 1 ? argv[1] : "");
     if (argc > 2 && std::string(argv[1]) == "run" && argv[2][0] != '-') {
-      ex::builtin_registry().find(argv[2]);
+      builtin_registry().find(argv[2]);
     }
     command.app.parse(argc, argv);
   } catch (const CLI::Success& e) {  // --help: the ranks compare it too, then print it
@@ -231,10 +232,10 @@ std::optional<int> parse_command_line(physgrad::cli::CommandLine& command, int a
 
 void print_experiments() {
   std::size_t width = 0;
-  for (const auto& experiment : ex::builtin_registry()) {
+  for (const auto& experiment : builtin_registry()) {
     width = std::max(width, experiment->name().size());
   }
-  for (const auto& experiment : ex::builtin_registry()) {
+  for (const auto& experiment : builtin_registry()) {
     std::cout << std::left << std::setw(static_cast<int>(width + 2)) << experiment->name()
               << experiment->description() << '\n';
   }
@@ -257,19 +258,19 @@ int carry_out(const physgrad::cli::CommandLine& command, const physgrad::cli::Ch
     return 0;
   }
   if (command.report->parsed()) {
-    const ex::RunIndex index = ex::write_run_index(ex::builtin_registry(), command.report_folder);
+    const ex::RunIndex index = ex::write_run_index(builtin_registry(), command.report_folder);
     std::cout << "index of " << index.folders << " run folders: " << index.page.string() << '\n';
     return 0;
   }
   if (command.describe->parsed()) {
-    print_table(ex::options_table(ex::builtin_registry().find(command.describe_name)));
+    print_table(ex::options_table(builtin_registry().find(command.describe_name)));
     return 0;
   }
   reserve_blas_buffer();
   ex::install_interrupt_handlers();
   if (command.resume->parsed()) {
     StderrProgress progress;
-    return report_outcome(ex::Run::resume(ex::builtin_registry(), command.resume_folder,
+    return report_outcome(ex::Run::resume(builtin_registry(), command.resume_folder,
                                           cli_hooks(progress, command_line)));
   }
   if (chosen.experiment != nullptr) {

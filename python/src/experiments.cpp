@@ -150,7 +150,7 @@ std::string python_resume_text(const std::string& text, const py::object& own) {
 }
 
 // What a run returns to Python: where it is, whether it finished, and its summary.json as a dict.
-py::dict outcome_dict(const experiments::RunOutcome& outcome, const py::object& own) {
+py::dict outcome_dict(const run::RunOutcome& outcome, const py::object& own) {
   py::dict out;
   out["folder"] = outcome.folder.string();
   out["finished"] = outcome.finished;
@@ -171,8 +171,8 @@ struct PythonHooks {
   py::object progress;
   bool interrupted = false;
 
-  experiments::RunHooks hooks() {
-    experiments::RunHooks h;
+  run::RunHooks hooks() {
+    run::RunHooks h;
     h.progress = [this](const std::string& line) { deliver(line, false); };
     h.progress_event = [this](const std::string& line) { deliver(line, true); };
     h.log = [this](const std::string& line) { deliver(line, true); };
@@ -202,7 +202,7 @@ struct PythonHooks {
 // Raises KeyboardInterrupt naming the stopped run (and how to continue it) when Ctrl-C stopped
 // it: seen by a progress hook, or by a callback of one of `own`'s experiments. The stop request
 // is cleared whenever Ctrl-C made it, also when the run finished before it stopped.
-py::dict finished_outcome(const experiments::RunOutcome& outcome, const PythonHooks& hooks,
+py::dict finished_outcome(const run::RunOutcome& outcome, const PythonHooks& hooks,
                           const py::object& own) {
   const bool interrupted = own_interrupted(own) || hooks.interrupted;
   if (interrupted) clear_stop_request();
@@ -219,19 +219,19 @@ py::dict finished_outcome(const experiments::RunOutcome& outcome, const PythonHo
 // runs/NAME-<timestamp>) through the library's run lifecycle (run/run.hpp).
 py::dict run_experiment(const std::string& name, const py::dict& options, const std::string& out,
                         const py::object& progress, const py::object& own) {
-  const experiments::Registry registry = registry_with(own);
-  const experiments::Experiment& experiment = registry.find(name);
+  const run::Registry registry = registry_with(own);
+  const run::Experiment& experiment = registry.find(name);
   std::vector<std::pair<std::string, std::string>> given;
   for (const auto& [key, value] : options) {
     const std::string key_text = py::str(key).cast<std::string>();
     given.emplace_back(key_text, option_text(key_text, value));
   }
-  const experiments::Settings settings = experiments::resolve_settings(experiment, given);
+  const run::Settings settings = run::resolve_settings(experiment, given);
   PythonHooks hooks{progress};
-  experiments::RunOutcome outcome;
+  run::RunOutcome outcome;
   try {
     py::gil_scoped_release released;
-    outcome = experiments::Run::start(experiment, settings, out, hooks.hooks());
+    outcome = run::Run::start(experiment, settings, out, hooks.hooks());
   } catch (const Error& e) {
     if (own_interrupted(own) || hooks.interrupted) clear_stop_request();
     const std::string message = python_resume_text(e.what(), own);
@@ -244,12 +244,12 @@ py::dict run_experiment(const std::string& name, const py::dict& options, const 
 
 py::dict resume_experiment(const std::string& folder, const py::object& progress,
                            const py::object& own) {
-  const experiments::Registry registry = registry_with(own);
+  const run::Registry registry = registry_with(own);
   PythonHooks hooks{progress};
-  experiments::RunOutcome outcome;
+  run::RunOutcome outcome;
   try {
     py::gil_scoped_release released;
-    outcome = experiments::Run::resume(registry, folder, hooks.hooks());
+    outcome = run::Run::resume(registry, folder, hooks.hooks());
   } catch (const Error& e) {
     if (own_interrupted(own) || hooks.interrupted) clear_stop_request();
     const std::string message = python_resume_text(e.what(), own);
@@ -263,12 +263,12 @@ py::dict resume_experiment(const std::string& folder, const py::object& progress
 // `physgrad report FOLDER` with the reference experiments and `own`: {folders, page}; what is
 // left out, one line each, on sys.stderr.
 py::dict write_index(const std::string& folder, const py::object& own) {
-  const experiments::Registry registry = registry_with(own);
+  const run::Registry registry = registry_with(own);
   std::ostringstream warnings;
-  experiments::RunIndex index;
+  run::RunIndex index;
   {
     py::gil_scoped_release released;
-    index = experiments::write_run_index(registry, folder, warnings);
+    index = run::write_run_index(registry, folder, warnings);
   }
   if (!warnings.str().empty()) {
     py::module_::import("sys").attr("stderr").attr("write")(warnings.str());

@@ -193,7 +193,7 @@ py::object hig_params(const std::string& rule, const py::dict& given) {
 // Jacobian (J Jᵀ from the layer factors, as train() steps), "delta_formed" from the formed J
 // returned here (J Jᵀ by dsyrk on it, as a step on a given Jacobian computes it).
 py::dict reference_step(const std::string& name, Index batch, const std::string& rule) {
-  const experiments::ReferenceCase c = experiments::builtin_registry().reference(name, batch);
+  const run::ReferenceCase c = experiments::builtin_registry().reference(name, batch);
   const std::unique_ptr<LearningUpdate> update = c.update(rule);
   if (update->need() != UpdateNeed::kStackedJacobian) {
     throw Error("reference_step: rule '" + rule + "' does not step on the stacked Jacobian");
