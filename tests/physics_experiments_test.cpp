@@ -52,6 +52,15 @@ TEST(QuantumDipoleExperiment, AdamAndHigLowerTheInfidelity) {
   EXPECT_EQ(expect_every_run_improves(context), 2u);
 }
 
+// The default verdict compares the rules per update, so the default budget is updates, not
+// seconds a loaded machine would shorten.
+TEST(QuantumDipoleExperiment, TheDefaultBudgetIsUpdatesNotSeconds) {
+  const Settings settings =
+      resolve_settings(experiments::builtin_registry().find("quantum-dipole"), {});
+  EXPECT_EQ(settings.integer("iters"), 400);
+  EXPECT_FALSE(settings.has("time"));
+}
+
 TEST(PoissonExperiment, AdamHigAndSipLowerTheLoss) {
   const RunContext context =
       run("poisson", {{"optimizers", "adam,hig,sip"}, {"grid", "4"}, {"train-size", "128"},
