@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
@@ -97,6 +98,15 @@ void require_learning_sizes(const Settings& settings, const LearningExperiment::
 // The options every learning experiment has, after the common ones: optional, so that each rule
 // keeps its own defaults unless one is given; an experiment may give time and eval-every
 // defaults.
+// The flags of the learning rules' options `names`, each offered for every learning rule that
+// has it (rule_option_spec), in this order.
+std::vector<OptionSpec> learning_rule_flags(std::initializer_list<const char*> names) {
+  const std::vector<std::string> ids = rule_ids(RuleKind::kLearning);
+  std::vector<OptionSpec> flags;
+  for (const char* name : names) flags.push_back(rule_option_spec(name, RuleKind::kLearning, ids));
+  return flags;
+}
+
 std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
   std::vector<OptionSpec> options = {
       integer_option("batch", "",
@@ -104,13 +114,6 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
                      "one step may take at most 10¹² multiply-adds (docs/cli.md, forming J Jᵀ "
                      "and its eigendecomposition; a few minutes)")
           .at_least(1),
-      rule_option_spec("rcond", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("precision", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("eigensolver", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("products", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("refresh", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("damping", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("factor_decay", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
       integer_option("epochs", "", "epochs per run (at most 10⁹, as --iters)")
           .at_least(1)
           .at_most(1e9),
@@ -151,14 +154,14 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
                   "them")
           .above(0)
           .below(1),
-      rule_option_spec("schedule", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("decay", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("decay_every", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("t_max", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("min_lr", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("patience", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
-      rule_option_spec("threshold", RuleKind::kLearning, rule_ids(RuleKind::kLearning)),
   };
+  // After --batch, the inverses' options; after the pretraining options, the schedule's.
+  const std::vector<OptionSpec> inverses = learning_rule_flags(
+      {"rcond", "precision", "eigensolver", "products", "refresh", "damping", "factor_decay"});
+  options.insert(options.begin() + 1, inverses.begin(), inverses.end());
+  const std::vector<OptionSpec> schedule = learning_rule_flags(
+      {"schedule", "decay", "decay_every", "t_max", "min_lr", "patience", "threshold"});
+  options.insert(options.end(), schedule.begin(), schedule.end());
   if (!defaults.data.empty()) {
     options.push_back(text_option("data", defaults.data,
                                   "training samples: fixed (the --train-size samples, in shuffled "

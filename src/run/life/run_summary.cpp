@@ -10,31 +10,14 @@ namespace {
 
 using nlohmann::json;
 
-// "a number", "an array", … for messages.
-std::string summary_type_name(const json& value) {
-  return (value.is_array() || value.is_object() ? "an " : "a ") + std::string(value.type_name());
-}
-
-// The field `key` of `object` (null when absent or null) when it is of one type; Error
-// "WHEREKEY is a number, not text" when it has another.
-const json* summary_field(const json& object, const char* key, const std::string& where,
-                          bool (json::*is_type)() const noexcept, const char* type) {
-  const auto it = object.find(key);
-  if (it == object.end() || it->is_null()) return nullptr;
-  if (!((*it).*is_type)()) {
-    throw Error(where + key + " is " + summary_type_name(*it) + ", not " + type);
-  }
-  return &*it;
-}
-
 std::string summary_text(const json& object, const char* key, const std::string& where) {
-  const json* value = summary_field(object, key, where, &json::is_string, "text");
+  const json* value = typed_json_field(object, key, where, &json::is_string, "text");
   return value ? value->get<std::string>() : std::string();
 }
 
 std::optional<double> summary_number(const json& object, const char* key,
                                       const std::string& where) {
-  const json* value = summary_field(object, key, where, &json::is_number, "a number");
+  const json* value = typed_json_field(object, key, where, &json::is_number, "a number");
   return value ? std::optional(value->get<double>()) : std::nullopt;
 }
 
@@ -45,7 +28,7 @@ double summary_real(const json& object, const char* key, const std::string& wher
 // A count: a whole number (as written: an integer), or none.
 std::optional<long long> summary_count(const json& object, const char* key,
                                        const std::string& where) {
-  const json* value = summary_field(object, key, where, &json::is_number, "a number");
+  const json* value = typed_json_field(object, key, where, &json::is_number, "a number");
   if (value == nullptr) return std::nullopt;
   if (value->is_number_integer() && !(value->is_number_unsigned() &&
                                       value->get<std::uint64_t>() > std::uint64_t{1} << 62)) {
@@ -60,7 +43,7 @@ std::optional<long long> summary_count(const json& object, const char* key,
 
 const json& summary_object(const json& object, const char* key, const std::string& where) {
   static const json empty = json::object();
-  const json* value = summary_field(object, key, where, &json::is_object, "an object");
+  const json* value = typed_json_field(object, key, where, &json::is_object, "an object");
   return value ? *value : empty;
 }
 
@@ -95,7 +78,7 @@ bool is_entry_member(const std::string& key) {
 }
 
 RunEntry read_run_entry(const json& run, const std::string& where) {
-  if (!run.is_object()) throw Error(where + " is " + summary_type_name(run) + ", not an object");
+  if (!run.is_object()) throw Error(where + " is " + json_type_words(run) + ", not an object");
   const std::string in = where + ".";
   RunEntry entry;
   entry.label = summary_text(run, "label", in);
@@ -110,7 +93,7 @@ RunEntry read_run_entry(const json& run, const std::string& where) {
   entry.termination = summary_text(run, "termination", in);
   entry.message = summary_text(run, "message", in);
   entry.step_halvings = summary_count(run, "step_halvings", in);
-  if (summary_field(run, "seconds_per_part", in, &json::is_object, "an object") != nullptr) {
+  if (typed_json_field(run, "seconds_per_part", in, &json::is_object, "an object") != nullptr) {
     const json& parts = run.at("seconds_per_part");
     const std::string at = in + "seconds_per_part.";
     entry.seconds_per_part = SecondsPerPart{
@@ -124,7 +107,7 @@ RunEntry read_run_entry(const json& run, const std::string& where) {
 }
 
 std::optional<RunMessage> read_run_message(const json& document) {
-  const json* given = summary_field(document, "message", "", &json::is_object, "an object");
+  const json* given = typed_json_field(document, "message", "", &json::is_object, "an object");
   if (given == nullptr) return std::nullopt;
   RunMessage message{summary_text(*given, "figure", "message."),
                      summary_text(*given, "sentence", "message."),
@@ -132,10 +115,10 @@ std::optional<RunMessage> read_run_message(const json& document) {
                      summary_text(*given, "metric_text", "message."),
                      {}};
   if (const json* labels =
-          summary_field(*given, "labels", "message.", &json::is_array, "an array")) {
+          typed_json_field(*given, "labels", "message.", &json::is_array, "an array")) {
     for (const json& label : *labels) {
       if (!label.is_string()) {
-        throw Error("message.labels holds " + summary_type_name(label) + ", not text");
+        throw Error("message.labels holds " + json_type_words(label) + ", not text");
       }
       message.labels.push_back(label.get<std::string>());
     }
@@ -216,6 +199,20 @@ RunSummary read_run_summary(const json& document, std::size_t max_runs) {
     summary.runs.push_back(read_run_entry(runs[k], "runs[" + std::to_string(k) + "]"));
   }
   return summary;
+}
+
+std::string json_type_words(const json& value) {
+  return (value.is_array() || value.is_object() ? "an " : "a ") + std::string(value.type_name());
+}
+
+const json* typed_json_field(const json& object, const char* key, const std::string& where,
+                             bool (json::*is_type)() const noexcept, const char* type) {
+  const auto it = object.find(key);
+  if (it == object.end() || it->is_null()) return nullptr;
+  if (!((*it).*is_type)()) {
+    throw Error(where + key + " is " + json_type_words(*it) + ", not " + type);
+  }
+  return &*it;
 }
 
 }  // namespace physgrad::run

@@ -21,11 +21,11 @@ namespace {
 // The colour rule `id` has in every figure (the catalogue's; a pretrained run's, color_for's),
 // or a palette colour for an id that names no rule.
 std::string rule_colour(const std::string& id, std::size_t fallback) {
-  for (const RuleInfo& rule : rule_catalogue()) {
-    if (rule.id == id) return rule.colour;
-  }
-  if (!pretrained_rule(id).empty()) return color_for(id);
-  return palette_color(fallback);
+  const auto& rules = rule_catalogue();
+  const bool known = !pretrained_rule(id).empty() ||
+                     std::any_of(rules.begin(), rules.end(),
+                                 [&](const RuleInfo& rule) { return rule.id == id; });
+  return known ? color_for(id) : palette_color(fallback);
 }
 
 // Dashed as in the reports: a pretrained run, and PG through a numerical local inverse.

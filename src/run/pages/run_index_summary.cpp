@@ -40,30 +40,15 @@ std::string index_clipped(std::string text, std::size_t bytes) {
 
 namespace {
 
-// "a number", "an array", … for messages.
-std::string index_type_name(const json& value) {
-  return (value.is_array() || value.is_object() ? "an " : "a ") + std::string(value.type_name());
-}
-
-// A field of a JSON object (null when absent or null) of one type; Error "WHERE.KEY is a number,
-// not text" when it has another.
-const json* index_field(const json& object, const char* key, const std::string& where,
-                  bool (json::*is_type)() const noexcept, const char* type) {
-  const auto it = object.find(key);
-  if (it == object.end() || it->is_null()) return nullptr;
-  if (!((*it).*is_type)()) throw Error(where + key + " is " + index_type_name(*it) + ", not " + type);
-  return &*it;
-}
-
 std::string index_text_field(const json& object, const char* key, const std::string& where,
                        const std::string& absent) {
-  const json* value = index_field(object, key, where, &json::is_string, "text");
+  const json* value = typed_json_field(object, key, where, &json::is_string, "text");
   return value ? value->get<std::string>() : absent;
 }
 
 const json& index_object_field(const json& object, const char* key, const std::string& where) {
   static const json empty = json::object();
-  const json* value = index_field(object, key, where, &json::is_object, "an object");
+  const json* value = typed_json_field(object, key, where, &json::is_object, "an object");
   return value ? *value : empty;
 }
 
@@ -274,7 +259,7 @@ void add_index_compared(IndexedFolder& folder, const std::vector<RunRecord>& run
 
 void read_index_config(const json& config, IndexedFolder& folder, std::vector<std::string>& notes,
                        const fs::path& file) {
-  if (!config.is_object()) throw Error("holds " + index_type_name(config) + ", not an object");
+  if (!config.is_object()) throw Error("holds " + json_type_words(config) + ", not an object");
   folder.command = index_clipped(index_text_field(config, "command", "", ""), kIndexMaxSentence);
   const json& settings = index_object_field(config, "settings", "");
   const std::size_t bytes = settings.dump().size();

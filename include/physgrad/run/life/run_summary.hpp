@@ -63,6 +63,16 @@ struct RunSummary {
   nlohmann::json machine;  // run_machine()'s document; null when the file has none
 };
 
+// The field `key` of a JSON object when it has type `is_type` (nullptr when absent or null); an
+// Error "WHEREKEY is a number, not text" (`type` the expected type's words) when it has another.
+// The one typed read of the run folder's JSON files (summary.json here, config.json by the index).
+const nlohmann::json* typed_json_field(const nlohmann::json& object, const char* key,
+                                       const std::string& where,
+                                       bool (nlohmann::json::*is_type)() const noexcept,
+                                       const char* type);
+// "a number", "an array", … of a JSON value, for such messages.
+std::string json_type_words(const nlohmann::json& value);
+
 // The summary.json document {"experiment", "runs": [...], "machine", "message"}.
 nlohmann::json run_summary_json(const RunSummary& summary);
 nlohmann::json run_entry_json(const RunEntry& entry);
