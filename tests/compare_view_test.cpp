@@ -1,5 +1,6 @@
 // The interactive comparison's data block and policy: escaping that no value can close the
-// block, the script's hash (FIPS 180-4 vectors), and the data read from a metrics.csv.
+// block, the script's hash (FIPS 180-4 vectors), the data read from a metrics.csv, and what a
+// report page says when it leaves the comparison out.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -8,7 +9,10 @@
 
 #include "physgrad/error.hpp"
 #include "physgrad/report/compare_view.hpp"
+#include "physgrad/run/life/run_machine.hpp"
+#include "physgrad/run/pages/report_page.hpp"
 #include "physgrad/run/pages/run_compare_data.hpp"
+#include "registry.hpp"
 
 namespace {
 
@@ -75,6 +79,19 @@ TEST(CompareData, RunsPerLabelSeedAndRestartWithNumericColumnsThinned) {
   EXPECT_EQ(parsed[2].at("c").at("test_loss").at(0), 3.0);
   EXPECT_TRUE(notes.empty());
   EXPECT_THROW(physgrad::run::compare_runs_json("f", "a,b\n1\n", notes), physgrad::Error);
+}
+
+// A metrics.csv the comparison cannot read leaves the report without it, and the page says why.
+TEST(CompareView, AReportPageSaysWhyItHasNoInteractiveComparison) {
+  namespace run = physgrad::run;
+  const run::Experiment& experiment = physgrad::experiments::builtin_registry().find("comparison");
+  const run::Settings settings = run::resolve_settings(experiment, {});
+  const run::RunContext context;
+  const std::string page =
+      run::report_page_html(experiment, settings, context, "", false, run::run_machine(),
+                            "a,b\n1\n");
+  EXPECT_NE(page.find("The interactive comparison is left out: "), std::string::npos);
+  EXPECT_EQ(page.find("Interactive comparison"), std::string::npos);
 }
 
 }  // namespace

@@ -163,6 +163,17 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
                              const RunContext& context, const std::string& command_line,
                              bool index_exists, const nlohmann::json& machine_json,
                              std::string_view metrics) {
+  // The interactive comparison over the folder's runs, after the static sections; what it leaves
+  // out is said under "Every run". A metrics.csv beyond its limits (e.g. a header of 2·10⁵
+  // columns) leaves the page without it, with the reason: the results are written either way.
+  std::vector<std::string> left_out;
+  std::string runs;
+  try {
+    if (!metrics.empty()) runs = compare_runs_json(experiment.name(), metrics, left_out);
+  } catch (const Error& e) {
+    runs.clear();
+    left_out.push_back(std::string("The interactive comparison is left out: ") + e.what() + ".");
+  }
   std::vector<HtmlSection> sections;
   // The message figure first, its sentence above it, so that the sentence is on the first
   // screen; then what the page is of, when, by what and on what machine, and the links.
@@ -196,7 +207,9 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
   sections.push_back(std::move(results));
 
   if (!figures.figures.empty()) sections.push_back(std::move(figures));
-  sections.push_back({"Every run", "", {runs_table(context)}, {},
+  std::string left_out_text;
+  for (const std::string& note : left_out) left_out_text += note + "\n\n";
+  sections.push_back({"Every run", left_out_text, {runs_table(context)}, {},
                       {{"metrics.csv: every evaluation of every run", "metrics.csv"}}});
   sections.push_back({"Settings",
                       "physgrad " + std::string(PHYSGRAD_VERSION) + ", report written " +
@@ -207,16 +220,6 @@ std::string report_page_html(const Experiment& experiment, const Settings& setti
                       {report_options_table(experiment, settings)},
                       {},
                       {{"config.json", kConfigFile}}});
-  // The interactive comparison over the folder's runs, after the static sections.
-  // A metrics.csv beyond the comparison's limits (e.g. a header of 2·10⁵ columns) leaves the
-  // page without it: the run's results are written either way.
-  std::vector<std::string> left_out;
-  std::string runs;
-  try {
-    if (!metrics.empty()) runs = compare_runs_json(experiment.name(), metrics, left_out);
-  } catch (const Error&) {
-    runs.clear();
-  }
   const std::string compare =
       runs.empty() ? std::string()
                    : compare_section_open("Interactive comparison", kReportCompareText) +
