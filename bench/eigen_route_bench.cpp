@@ -72,7 +72,8 @@ void power_pinv_backend(benchmark::State& state) {
   const Matrix j = Matrix::Random(rows, cols);
   const Vector g = Vector::Random(rows);
   for (auto _ : state) {
-    benchmark::DoNotOptimize(power_pinv_apply(j, g, {0.5, 1e-6, backend}).data());
+    benchmark::DoNotOptimize(
+        power_pinv_apply(j, g, {.cut = {.kappa = 0.5, .rcond = 1e-6}, .backend = backend}).data());
   }
   state.SetLabel(to_string(backend));
 }

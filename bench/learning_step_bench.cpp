@@ -62,8 +62,8 @@ void learning_step_precision(benchmark::State& state) {
   const nlohmann::json params = c.update("hig")->params();
   const PowerPinvOptions options = eigensolve_options(state.range(1), 0.5, 0.0);
   HigUpdate update({.lr = params.at("lr").get<double>(),
-                    .kappa = params.at("kappa").get<double>(),
-                    .rcond = params.at("rcond").get<double>(),
+                    .cut = {.kappa = params.at("kappa").get<double>(),
+                            .rcond = params.at("rcond").get<double>()},
                     .precision = options.precision,
                     .eigensolver = options.eigensolver});
   time_steps(state, c, update);

@@ -59,7 +59,9 @@ inline constexpr EigensolveMode kEigensolveModes[] = {
 
 inline PowerPinvOptions eigensolve_options(std::int64_t mode, double kappa, double rcond) {
   const EigensolveMode& m = kEigensolveModes[mode];
-  return {.kappa = kappa, .rcond = rcond, .precision = m.precision, .eigensolver = m.eigensolver};
+  return {.cut = {.kappa = kappa, .rcond = rcond},
+          .precision = m.precision,
+          .eigensolver = m.eigensolver};
 }
 
 inline const char* eigensolve_label(std::int64_t mode) { return kEigensolveModes[mode].label; }

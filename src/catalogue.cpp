@@ -163,6 +163,20 @@ std::vector<std::string> rule_option_names(Kind kind) {
   return {names.begin(), names.end()};
 }
 
+std::vector<std::string> grouped_rule_options(Kind kind, OptionGroup group) {
+  std::vector<std::string> names;
+  for (const RuleInfo& rule : rule_catalogue()) {
+    if (rule.kind != kind) continue;
+    for (const OptionDescription& option : rule_options(rule)) {
+      if (option.group == group &&
+          std::find(names.begin(), names.end(), option.name) == names.end()) {
+        names.push_back(option.name);
+      }
+    }
+  }
+  return names;
+}
+
 SharedRuleOption shared_rule_option(const std::string& name, std::optional<Kind> kind) {
   SharedRuleOption shared;
   shared.option.name = name;

@@ -130,14 +130,17 @@ const OptionDescription& rcond_option_description() {
       "rcond", fraction(),
       "relative cut τ on singular values σ of J, with λ = σ² for a curvature (JᵀJ, J Jᵀ, a "
       "Kronecker factor, the Hessian's |λ|): directions with σ ≤ τ·σ_max (λ ≤ τ²λ_max) are "
-      "dropped"};
+      "dropped",
+      {},
+      OptionGroup::kInversion};
   return description;
 }
 
 const OptionDescription& damping_option_description() {
   static const OptionDescription description{
       "damping", non_negative(),
-      "added to every kept eigenvalue λ = σ², relative to the largest (λ + damping·λ_max)"};
+      "added to every kept eigenvalue λ = σ², relative to the largest (λ + damping·λ_max)", {},
+      OptionGroup::kInversion};
   return description;
 }
 

@@ -167,12 +167,12 @@ TEST(ConvFactors, KfacIsTheExactStepOnOneConvLayerWithIdentityPhysics) {
     const BatchState state =
         evaluate_batch(s.network, s.problem, s.data, UpdateNeed::kStackedJacobian, *cache);
     for (const double kappa : {0.5, 1.0}) {
-      HigUpdate exact({.lr = 0.7, .kappa = kappa, .rcond = 1e-6});
-      KroneckerHigUpdate kronecker({.lr = 0.7, .kappa = kappa, .rcond = 1e-6, .damping = 0});
+      HigUpdate exact({.lr = 0.7, .cut = {.kappa = kappa, .rcond = 1e-6}});
+      KroneckerHigUpdate kronecker({.lr = 0.7, .cut = {.kappa = kappa, .rcond = 1e-6, .damping = 0}});
       const Vector expected = exact.step(state).delta;
       EXPECT_LT(factor_test_difference(kronecker.step(state).delta, expected), 1e-10)
           << "n " << n << ", batch " << batch << ", κ " << kappa;
-      KroneckerHigUpdate damped({.lr = 0.7, .kappa = kappa, .rcond = 1e-6, .damping = 0.1});
+      KroneckerHigUpdate damped({.lr = 0.7, .cut = {.kappa = kappa, .rcond = 1e-6, .damping = 0.1}});
       EXPECT_GT(factor_test_difference(damped.step(state).delta, expected), 1e-3);
     }
   }
@@ -215,10 +215,10 @@ TEST(ConvFactors, LanczosWithAsManyProductsAsRowsIsTheExactStep) {
   ASSERT_EQ(state.jacobian->rows(), 8);
   for (const double kappa : {0.5, 1.0}) {
     const Vector expected =
-        HigUpdate({.lr = 0.3, .kappa = kappa, .rcond = 1e-3, .backend = PinvBackend::kGram})
+        HigUpdate({.lr = 0.3, .cut = {.kappa = kappa, .rcond = 1e-3}, .backend = PinvBackend::kGram})
             .step(state)
             .delta;
-    LanczosHigUpdate full({.lr = 0.3, .kappa = kappa, .rcond = 1e-3, .products = 8});
+    LanczosHigUpdate full({.lr = 0.3, .cut = {.kappa = kappa, .rcond = 1e-3}, .products = 8});
     EXPECT_LT(factor_test_difference(full.step(state).delta, expected), 1e-10) << "κ " << kappa;
   }
 }

@@ -7,6 +7,7 @@
 #include "registry.hpp"
 #include "physgrad/run/life/experiment.hpp"
 #include "experiment_runs.hpp"
+#include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
 
 namespace physgrad::run {
@@ -153,6 +154,33 @@ TEST(ExperimentSettings, TheSharedRuleOptionsTakeTheRulesRanges) {
       }
     }
   }
+}
+
+// Besides --lr, a learning experiment offers the learning rules' options of the inversion and
+// schedule groups (OptionGroup), each once and in the catalogue's order: the command line code
+// names none of them.
+TEST(ExperimentSettings, TheLearningRuleFlagsAreTheRulesGroupedOptions) {
+  const Experiment& experiment = experiments::builtin_registry().find("hig-toy");
+  const std::vector<std::string> names = rule_option_names(RuleKind::kLearning);
+  std::vector<std::string> flags;  // the rule options among the experiment's, in their order
+  for (const OptionSpec& spec : all_options(experiment)) {
+    std::string name = spec.name;
+    std::replace(name.begin(), name.end(), '-', '_');
+    if (name != "lr" && std::binary_search(names.begin(), names.end(), name)) {
+      flags.push_back(name);
+    }
+  }
+  const std::vector<std::string> inversion =
+      grouped_rule_options(RuleKind::kLearning, OptionGroup::kInversion);
+  const std::vector<std::string> schedule =
+      grouped_rule_options(RuleKind::kLearning, OptionGroup::kSchedule);
+  EXPECT_EQ(inversion, (std::vector<std::string>{"rcond", "precision", "eigensolver", "damping",
+                                                 "refresh", "factor_decay", "products"}));
+  EXPECT_EQ(schedule, (std::vector<std::string>{"schedule", "decay", "decay_every", "t_max",
+                                                "min_lr", "patience", "threshold"}));
+  std::vector<std::string> expected = inversion;
+  expected.insert(expected.end(), schedule.begin(), schedule.end());
+  EXPECT_EQ(flags, expected);
 }
 
 TEST(ExperimentSettings, DefaultsResolveAndBadValuesNameTheOption) {

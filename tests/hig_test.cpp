@@ -42,7 +42,7 @@ TEST(HigUpdate, OneStepIsThePapersFormulaOnEveryBackend) {
   const Vector expected = paper_step(s, 0.7, 0.5, kTau);
   for (const PinvBackend backend : {PinvBackend::kAuto, PinvBackend::kSvd, PinvBackend::kGram,
                                     PinvBackend::kNormal}) {
-    HigUpdate hig({.lr = 0.7, .kappa = 0.5, .rcond = kTau, .backend = backend});
+    HigUpdate hig({.lr = 0.7, .cut = {.kappa = 0.5, .rcond = kTau}, .backend = backend});
     const Vector delta = hig.step(state).delta;
     // The finite-difference J is good to ~1e-9; the kept spectrum spans < 1e3.
     EXPECT_LT((delta - expected).norm(), 1e-6 * expected.norm()) << to_string(backend);
@@ -60,7 +60,7 @@ TEST(HigUpdate, TheLastStepsInversionIsItsStateAndStepInfo) {
   MlpCache cache;
   const BatchState state = s.evaluate(UpdateNeed::kStackedJacobian, cache);
   HigUpdate hig({.lr = 0.1,
-                 .rcond = 1e-3,
+                 .cut = {.kappa = 0.5, .rcond = 1e-3},
                  .precision = PinvPrecision::kAuto,
                  .eigensolver = PinvEigensolver::kAuto});
   EXPECT_TRUE(hig.state().is_null());
@@ -73,7 +73,7 @@ TEST(HigUpdate, TheLastStepsInversionIsItsStateAndStepInfo) {
   EXPECT_EQ(info.at("pinv_precision"), to_string(hig.last_info().precision));
   EXPECT_EQ(info.at("pinv_eigensolver"), "tridiagonal");  // no previous step
   HigUpdate restored({.lr = 0.1,
-                      .rcond = 1e-3,
+                      .cut = {.kappa = 0.5, .rcond = 1e-3},
                       .precision = PinvPrecision::kAuto,
                       .eigensolver = PinvEigensolver::kAuto});
   restored.restore(nlohmann::json::parse(hig.state().dump()), s.network.num_parameters());
@@ -95,11 +95,11 @@ TEST(HigUpdate, KappaOneIsGaussNewtonAndKappaMinusOneTheGradient) {
   const Vector& g = state.loss_gradient_y;
   // κ = 1 with nothing truncated: −η J⁺ g, here from a complete orthogonal decomposition.
   const Vector least_squares = j.completeOrthogonalDecomposition().solve(g);
-  HigUpdate gn({.lr = 0.5, .kappa = 1.0, .rcond = 0.0, .backend = PinvBackend::kSvd});
+  HigUpdate gn({.lr = 0.5, .cut = {.kappa = 1.0, .rcond = 0.0}, .backend = PinvBackend::kSvd});
   EXPECT_EQ(gn.id(), "gn");
   EXPECT_LT((gn.step(state).delta + 0.5 * least_squares).norm(), 1e-8 * least_squares.norm());
   // κ = −1: V Σ Uᵀ g = Jᵀ g, the plain gradient of the mean loss.
-  HigUpdate gradient({.lr = 1.0, .kappa = -1.0, .rcond = 0.0, .backend = PinvBackend::kSvd});
+  HigUpdate gradient({.lr = 1.0, .cut = {.kappa = -1.0, .rcond = 0.0}, .backend = PinvBackend::kSvd});
   EXPECT_LT((gradient.step(state).delta + j.transpose() * g).norm(),
             1e-12 * (j.transpose() * g).norm());
 }
@@ -117,8 +117,8 @@ TEST(HigUpdate, ANonFiniteJacobianIsANumericalError) {
 
 TEST(HigUpdate, RejectsOptionsOutOfRangeAndABatchWithoutJacobian) {
   EXPECT_THROW(HigUpdate({.lr = 0.0}), Error);
-  EXPECT_THROW(HigUpdate({.rcond = 1.0}), Error);
-  EXPECT_THROW(HigUpdate({.kappa = NAN}), Error);
+  EXPECT_THROW(HigUpdate({.cut = {.kappa = 0.5, .rcond = 1.0}}), Error);
+  EXPECT_THROW(HigUpdate({.cut = {.kappa = NAN, .rcond = 1e-6}}), Error);
   HigUpdate hig;
   EXPECT_THROW(hig.step(BatchState{}), Error);
   EXPECT_THROW(hig.set_learning_rate(-1.0), Error);

@@ -169,9 +169,10 @@ TEST(Catalogue, AValueOutsideItsRangeIsAnErrorNamingRuleOptionValueAndRange) {
             "sip: inverse_tolerance must be > 0, got 0");
   // The constructors check the same ranges, naming the rule.
   EXPECT_EQ(error_of([] { Momentum({.beta = 1.0}); }), "momentum: beta must be in [0, 1), got 1");
-  EXPECT_EQ(error_of([] { HigUpdate({.kappa = 1.0, .rcond = -0.5}); }),
+  EXPECT_EQ(error_of([] { HigUpdate({.cut = {.kappa = 1.0, .rcond = -0.5}}); }),
             "gn: rcond must be in [0, 1), got -0.5");
-  EXPECT_EQ(error_of([] { HigUpdate({.kappa = NAN}); }), "hig: kappa must be finite, got nan");
+  EXPECT_EQ(error_of([] { HigUpdate({.cut = {.kappa = NAN, .rcond = 1e-6}}); }),
+            "hig: kappa must be finite, got nan");
   EXPECT_EQ(error_of([] { make_learning_update("sgd")->set_learning_rate(0); }),
             "sgd: lr must be > 0, got 0");
 }

@@ -50,9 +50,10 @@ TEST(MappedJacobian, TheHigStepIsTheStepOnTheFormedJacobian) {
   state.jacobian = std::make_shared<MappedJacobian>(b.mapped());
   state.loss_gradient_y = Vector::Random(12);
   for (const double kappa : {0.5, 1.0}) {
-    HigUpdate update({.lr = 0.5, .kappa = kappa, .rcond = 1e-6});
-    const Vector expected = -0.5 * power_pinv_apply(b.formed(), state.loss_gradient_y,
-                                                    {kappa, 1e-6, PinvBackend::kSvd});
+    HigUpdate update({.lr = 0.5, .cut = {.kappa = kappa, .rcond = 1e-6}});
+    const Vector expected =
+        -0.5 * power_pinv_apply(b.formed(), state.loss_gradient_y,
+                                {.cut = {.kappa = kappa, .rcond = 1e-6}, .backend = PinvBackend::kSvd});
     const Vector step = update.step(state).delta;
     EXPECT_LT((step - expected).norm(), 1e-10 * expected.norm()) << kappa;
   }

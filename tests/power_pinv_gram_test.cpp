@@ -24,8 +24,7 @@ constexpr double kFloatEps = std::numeric_limits<float>::epsilon();
 
 PowerPinvOptions eigensolve(double kappa, double rcond, PinvPrecision precision,
                             PinvEigensolver eigensolver, const PowerPinvInfo* previous = nullptr) {
-  return {.kappa = kappa,
-          .rcond = rcond,
+  return {.cut = {.kappa = kappa, .rcond = rcond},
           .backend = PinvBackend::kGram,
           .precision = precision,
           .eigensolver = eigensolver,
@@ -104,14 +103,14 @@ TEST(PowerPinvPrecision, TheFloatCheckSeparatesResolvedFromUnresolvedSpectra) {
   const Index n = 100;
   const double delta = 10 * kFloatEps;  // √100·ε_f·λ_max with λ_max = 1
   Vector lambda = Vector::LinSpaced(n, 1e-2, 1.0);
-  EXPECT_TRUE(float_resolves_spectrum(lambda, n, 1e-6));
+  EXPECT_TRUE(float_resolves_spectrum(lambda, n, {.rcond = 1e-6}));
   lambda(0) = 0.5 * kFloatAccuracy * delta;  // kept but not accurate enough
-  EXPECT_FALSE(float_resolves_spectrum(lambda, n, 1e-6));
+  EXPECT_FALSE(float_resolves_spectrum(lambda, n, {.rcond = 1e-6}));
   lambda(0) = 0;  // an exact zero: dropped clearly only when the cut is above δ
-  EXPECT_FALSE(float_resolves_spectrum(lambda, n, 1e-6));
-  EXPECT_TRUE(float_resolves_spectrum(lambda, n, 0.1));
+  EXPECT_FALSE(float_resolves_spectrum(lambda, n, {.rcond = 1e-6}));
+  EXPECT_TRUE(float_resolves_spectrum(lambda, n, {.rcond = 0.1}));
   lambda(0) = 0.01 - 0.5 * delta;  // within δ of the cut² = 0.01
-  EXPECT_FALSE(float_resolves_spectrum(lambda, n, 0.1));
+  EXPECT_FALSE(float_resolves_spectrum(lambda, n, {.rcond = 0.1}));
 }
 
 // Half the singular values far below the cut: the subset eigensolver (dsyevr above a lower

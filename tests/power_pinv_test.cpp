@@ -34,7 +34,7 @@ using testing::relative_error;
 
 Vector apply(const Matrix& j, const Vector& g, double kappa, double rcond, PinvBackend backend,
              PowerPinvInfo* info = nullptr) {
-  return power_pinv_apply(j, g, {kappa, rcond, backend}, info);
+  return power_pinv_apply(j, g, {.cut = {.kappa = kappa, .rcond = rcond}, .backend = backend}, info);
 }
 
 // Wide and tall shapes of a Jacobian with min(rows, cols) = 40.
@@ -234,10 +234,15 @@ TEST(PowerPinvValidation, RejectsBadInputAndNamesBackends) {
   Vector inf_g = g;
   inf_g(0) = std::numeric_limits<double>::infinity();
   expect_error([&] { power_pinv_apply(j, inf_g); }, "non-finite entry in the vector");
-  expect_error([&] { power_pinv_apply(j, g, {1.0, 1.0}); }, "rcond must be in [0, 1), got 1");
-  expect_error([&] { power_pinv_apply(j, g, {1.0, -0.1}); }, "got -0.1");
-  expect_error([&] { power_pinv_apply(j, g, {std::nan(""), 1e-6}); }, "kappa must be finite");
-  EXPECT_NO_THROW(power_pinv_apply(j, g, {1.0, 0.0}));
+  expect_error([&] { power_pinv_apply(j, g, {.cut = {.rcond = 1.0}}); },
+               "rcond must be in [0, 1), got 1");
+  expect_error([&] { power_pinv_apply(j, g, {.cut = {.rcond = -0.1}}); }, "got -0.1");
+  // J^{−κ} has no damping: a cut with one is refused, not applied on some paths only.
+  expect_error([&] { power_pinv_apply(j, g, {.cut = {.rcond = 0.0, .damping = 0.5}}); },
+               "power_pinv_apply: damping must be 0 (J^{−κ} is undamped), got 0.5");
+  expect_error([&] { power_pinv_apply(j, g, {.cut = {.kappa = std::nan(""), .rcond = 1e-6}}); },
+               "kappa must be finite");
+  EXPECT_NO_THROW(power_pinv_apply(j, g, {.cut = {.rcond = 0.0}}));
 
   const Vector empty = power_pinv_apply(Matrix(0, 4), Vector(0));
   EXPECT_EQ(empty.size(), 4);
@@ -289,7 +294,7 @@ TEST(PowerPinv, EachPathAsksTheOperatorForItsOneFormAndAgreesWithTheMatrix) {
       {PinvBackend::kNormal, {"normal"}},
       {PinvBackend::kSvd, {"materialize"}}};
   for (const auto& [backend, forms] : paths) {
-    const PowerPinvOptions options{0.5, 1e-6, backend};
+    const PowerPinvOptions options{.cut = {.kappa = 0.5, .rcond = 1e-6}, .backend = backend};
     CountingJacobian counted(j);
     PowerPinvInfo info;
     PowerPinvTiming timing;
@@ -303,7 +308,7 @@ TEST(PowerPinv, EachPathAsksTheOperatorForItsOneFormAndAgreesWithTheMatrix) {
   }
   // kAuto on a wide J at this cutoff: the Gram path.
   CountingJacobian wide(j);
-  power_pinv_apply(wide, g, {0.5, 1e-6});
+  power_pinv_apply(wide, g, {.cut = {.kappa = 0.5, .rcond = 1e-6}});
   EXPECT_EQ(wide.calls, (std::vector<std::string>{"gram", "apply_transpose"}));
 }
 

@@ -23,9 +23,10 @@ TEST(RcondMeaning, TheNormalEquationSolveDropsTheDirectionsTheSvdDrops) {
   const Factored f = factored(6, 4, s, 11);
   const Vector g = testing::random_normal(6, 1, 12).col(0);
   const double rcond = 1e-5;
-  const Vector by_svd = power_pinv_apply(f.j, g, {1.0, rcond, PinvBackend::kSvd});
+  const Vector by_svd =
+      power_pinv_apply(f.j, g, {.cut = {.rcond = rcond}, .backend = PinvBackend::kSvd});
   const Vector by_normal_equations =
-      symmetric_pinv_apply(f.j.transpose() * f.j, f.j.transpose() * g, rcond);
+      symmetric_pinv_apply(f.j.transpose() * f.j, f.j.transpose() * g, {.rcond = rcond});
   EXPECT_LT(relative_error(by_normal_equations, by_svd), 1e-6);
   EXPECT_LT(relative_error(by_svd, testing::formula(f, g, 1.0, rcond)), 1e-8);
 }
@@ -38,9 +39,9 @@ TEST(RcondMeaning, NewtonsHessianSolveCutsAbsoluteEigenvaluesAtRcondSquared) {
   lambda << -1, 1e-9, 1e-11;
   const Matrix h = q * lambda.asDiagonal() * q.transpose();
   const Vector g = q * Vector::Ones(3);
-  const Vector x = symmetric_pinv_apply(h, g, 1e-4);  // keeps |λ| > 1e-8: only −1
+  const Vector x = symmetric_pinv_apply(h, g, {.rcond = 1e-4});  // keeps |λ| > 1e-8: only −1
   EXPECT_LT((x - q.col(0) * -1.0).norm(), 1e-6);
-  const Vector y = symmetric_pinv_apply(h, g, 1e-5);  // keeps |λ| > 1e-10: −1 and 1e-9
+  const Vector y = symmetric_pinv_apply(h, g, {.rcond = 1e-5});  // keeps |λ| > 1e-10: −1 and 1e-9
   const Vector expected = q.col(0) * -1.0 + q.col(1) * 1e9;
   EXPECT_LT((y - expected).norm(), 1e-5 * expected.norm());
 }

@@ -39,8 +39,8 @@ TEST(RuleDescriptor, TheCatalogueIsTheDescriptorsOfBothLists) {
     EXPECT_EQ(catalogue[i].colour, expected[i].second) << i;
   }
   // A class of several ids gives each its own defaults.
-  EXPECT_EQ(std::get<HigOptions>(find_rule(RuleKind::kLearning, "gn").defaults).kappa, 1.0);
-  EXPECT_EQ(std::get<HigOptions>(find_rule(RuleKind::kLearning, "hig").defaults).kappa, 0.5);
+  EXPECT_EQ(std::get<HigOptions>(find_rule(RuleKind::kLearning, "gn").defaults).cut.kappa, 1.0);
+  EXPECT_EQ(std::get<HigOptions>(find_rule(RuleKind::kLearning, "hig").defaults).cut.kappa, 0.5);
 }
 
 // Within a kind, ids, labels and colours are non-empty and each rule's own; an id in both kinds
@@ -81,11 +81,11 @@ TEST(RuleDescriptor, ARuleBuiltByIdReportsThatId) {
     update->set_learning_rate(0.25);
     EXPECT_EQ(update->id(), id);
   }
-  EXPECT_EQ(HigUpdate({.kappa = 0.5}, "gn").id(), "gn");
-  EXPECT_EQ(HigUpdate({.kappa = 1.0}).id(), "gn");
-  EXPECT_EQ(HigUpdate({.kappa = 0.25}).id(), "hig");
-  EXPECT_EQ(KroneckerHigUpdate({.kappa = 1.0}).id(), "kfac");
-  EXPECT_EQ(make_learning_update(HigOptions{.kappa = 1.0})->id(), "gn");
+  EXPECT_EQ(HigUpdate({.cut = {.kappa = 0.5}}, "gn").id(), "gn");
+  EXPECT_EQ(HigUpdate({.cut = {.kappa = 1.0}}).id(), "gn");
+  EXPECT_EQ(HigUpdate({.cut = {.kappa = 0.25}}).id(), "hig");
+  EXPECT_EQ(KroneckerHigUpdate({.cut = {.kappa = 1.0}}).id(), "kfac");
+  EXPECT_EQ(make_learning_update(HigOptions{.cut = {.kappa = 1.0}})->id(), "gn");
   // An id the class has no rule of, and an option out of range, are named.
   try {
     HigUpdate({}, "kfac");

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
+#include <variant>
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
@@ -167,6 +169,52 @@ TEST(SpectralCut, EveryRuleDescribesItsCutOptionsAlike) {
     }
   }
   EXPECT_EQ(rcond_rules, 9);  // newton, gn, ig; gn, hig, kfac, kfac-hig, lanczos-gn, lanczos-hig
+}
+
+// The learning rules hold their cut as one SpectralCut: the options kappa, rcond and damping are
+// its members, set by name and reported by params(); the κ = 1 id of each class has the cut of
+// its κ = ½ id at κ = 1, everything else the same.
+TEST(SpectralCut, TheLearningRulesOptionsAreTheirCutsMembers) {
+  const RuleSettings settings = {{"kappa", 0.75}, {"rcond", 0.25}, {"damping", 0.125}};
+  const auto hig = std::get<HigOptions>(with_settings(find_rule(RuleKind::kLearning, "hig"),
+                                                      settings));
+  EXPECT_EQ(hig.cut.kappa, 0.75);
+  EXPECT_EQ(hig.cut.rcond, 0.25);
+  EXPECT_EQ(hig.cut.damping, 0.0);  // hig has no damping option
+  const auto kfac = std::get<KroneckerHigOptions>(
+      with_settings(find_rule(RuleKind::kLearning, "kfac-hig"), settings));
+  EXPECT_EQ(kfac.cut.kappa, 0.75);
+  EXPECT_EQ(kfac.cut.rcond, 0.25);
+  EXPECT_EQ(kfac.cut.damping, 0.125);
+  const auto lanczos = std::get<LanczosHigOptions>(
+      with_settings(find_rule(RuleKind::kLearning, "lanczos-hig"), settings));
+  EXPECT_EQ(lanczos.cut.rcond, 0.25);
+  const nlohmann::json params = KroneckerHigUpdate(kfac).params();
+  EXPECT_EQ(params.at("kappa"), 0.75);
+  EXPECT_EQ(params.at("rcond"), 0.25);
+  EXPECT_EQ(params.at("damping"), 0.125);
+  for (const auto& [one, half] : {std::pair{"gn", "hig"}, std::pair{"kfac", "kfac-hig"},
+                                  std::pair{"lanczos-gn", "lanczos-hig"}}) {
+    const auto cut_of = [](const char* id) {
+      return std::visit(
+          [](const auto& o) -> SpectralCut {
+            if constexpr (requires { o.cut; }) {
+              return o.cut;
+            } else {
+              return {};
+            }
+          },
+          find_rule(RuleKind::kLearning, id).defaults);
+    };
+    const SpectralCut a = cut_of(one), b = cut_of(half);
+    EXPECT_EQ(a.kappa, 1.0) << one;
+    EXPECT_EQ(b.kappa, 0.5) << half;
+    EXPECT_EQ(a.rcond, b.rcond) << one;
+    EXPECT_EQ(a.damping, b.damping) << one;
+    EXPECT_EQ(a.floor, b.floor) << one;
+  }
+  EXPECT_EQ(KroneckerHigOptions{}.cut.damping, 1e-2);
+  EXPECT_EQ(HigOptions{}.cut.rcond, 1e-6);
 }
 
 }  // namespace

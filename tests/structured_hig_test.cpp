@@ -119,13 +119,13 @@ TEST(KroneckerHig, IsTheExactStepOnASingleDenseLayerWithIdentityPhysics) {
     MlpCache cache;
     const BatchState state = s.evaluate(cache);
     for (const double kappa : {0.5, 1.0}) {
-      HigUpdate exact({.lr = 0.7, .kappa = kappa, .rcond = 1e-6});
-      KroneckerHigUpdate kronecker({.lr = 0.7, .kappa = kappa, .rcond = 1e-6, .damping = 0});
+      HigUpdate exact({.lr = 0.7, .cut = {.kappa = kappa, .rcond = 1e-6}});
+      KroneckerHigUpdate kronecker({.lr = 0.7, .cut = {.kappa = kappa, .rcond = 1e-6, .damping = 0}});
       const Vector expected = exact.step(state).delta;
       EXPECT_LT(relative_difference(kronecker.step(state).delta, expected), 1e-10)
           << "batch " << batch << ", κ " << kappa;
       // With damping it is not.
-      KroneckerHigUpdate damped({.lr = 0.7, .kappa = kappa, .rcond = 1e-6, .damping = 0.1});
+      KroneckerHigUpdate damped({.lr = 0.7, .cut = {.kappa = kappa, .rcond = 1e-6, .damping = 0.1}});
       EXPECT_GT(relative_difference(damped.step(state).delta, expected), 1e-3);
     }
   }
@@ -137,8 +137,9 @@ TEST(KroneckerHig, ApproximatesTheExactStepElsewhere) {
   const NetworkThroughPhysics s(6);
   MlpCache cache;
   const BatchState state = s.evaluate(UpdateNeed::kStackedJacobian, cache);
-  const Vector exact = HigUpdate({.lr = 1.0, .rcond = 1e-6}).step(state).delta;
-  const Vector approx = KroneckerHigUpdate({.rcond = 1e-6, .damping = 0}).step(state).delta;
+  const Vector exact = HigUpdate({.lr = 1.0, .cut = {.kappa = 0.5, .rcond = 1e-6}}).step(state).delta;
+  const Vector approx =
+      KroneckerHigUpdate({.cut = {.kappa = 0.5, .rcond = 1e-6, .damping = 0}}).step(state).delta;
   EXPECT_GT(relative_difference(approx, exact), 1e-3);
   const Vector gradient = state.jacobian->apply_transpose(state.loss_gradient_y);
   EXPECT_LT(approx.dot(gradient), 0.0);
@@ -156,15 +157,15 @@ TEST(LanczosHig, WithAsManyStepsAsRowsIsTheExactStep) {
     const auto rows = static_cast<int>(state.jacobian->rows());
     for (const double kappa : {0.5, 1.0}) {
       const Vector expected =
-          HigUpdate({.lr = 0.3, .kappa = kappa, .rcond = 1e-3, .backend = PinvBackend::kGram})
+          HigUpdate({.lr = 0.3, .cut = {.kappa = kappa, .rcond = 1e-3}, .backend = PinvBackend::kGram})
               .step(state)
               .delta;
-      LanczosHigUpdate full({.lr = 0.3, .kappa = kappa, .rcond = 1e-3, .products = rows});
+      LanczosHigUpdate full({.lr = 0.3, .cut = {.kappa = kappa, .rcond = 1e-3}, .products = rows});
       EXPECT_LT(relative_difference(full.step(state).delta, expected), 1e-10)
           << "batch " << batch << ", κ " << kappa;
       // Fewer steps: an approximation, closer with more of them.
-      LanczosHigUpdate two({.lr = 0.3, .kappa = kappa, .rcond = 1e-3, .products = 2});
-      LanczosHigUpdate six({.lr = 0.3, .kappa = kappa, .rcond = 1e-3, .products = 6});
+      LanczosHigUpdate two({.lr = 0.3, .cut = {.kappa = kappa, .rcond = 1e-3}, .products = 2});
+      LanczosHigUpdate six({.lr = 0.3, .cut = {.kappa = kappa, .rcond = 1e-3}, .products = 6});
       const double c2 = cosine(two.step(state).delta, expected);
       const double c6 = cosine(six.step(state).delta, expected);
       EXPECT_LT(c2, 1 - 1e-6);

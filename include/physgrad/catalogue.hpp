@@ -174,6 +174,11 @@ std::vector<OptionDescription> rule_options(const RuleInfo& rule);
 // The names settings may give the rules of one kind (each option's name and alias), sorted.
 std::vector<std::string> rule_option_names(RuleKind kind);
 
+// The names of the options of group `group` (OptionGroup, rule_option.hpp) the rules of one
+// kind declare, each once, in the catalogue's order and each rule's: the flags a front end
+// offers for all those rules at once.
+std::vector<std::string> grouped_rule_options(RuleKind kind, OptionGroup group);
+
 // One option as a front end offers it for every rule of `kind` that has it (by name or alias;
 // every kind when none is given): the range all of them take, the help of the first, the ids.
 struct SharedRuleOption {

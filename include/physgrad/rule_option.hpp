@@ -46,12 +46,19 @@ OptionRange open_fraction();     // (0, 1)
 OptionRange integer_at_least(int min);  // [min, 2³¹ − 1]: what the option's int holds
 OptionRange any_finite();
 
+// Which options a front end offers once for every rule of a kind that has them (the learning
+// command line's flags; docs/cli.md), and where: kNone, only per rule (Python keywords,
+// settings); kInversion, how a rule cuts and solves its inverse (rcond, precision, damping, …);
+// kSchedule, the step-size schedule.
+enum class OptionGroup { kNone, kInversion, kSchedule };
+
 // What every option says about itself, whichever options struct it belongs to.
 struct OptionDescription {
   std::string name;   // as params() reports it and settings name it
   OptionRange range;
   std::string help;
   std::string alias{};  // a second name settings may give it ("lr" for a line search's first step)
+  OptionGroup group = OptionGroup::kNone;
 };
 
 // One option of the options struct `Options`: its description, how to read it as params()
@@ -97,6 +104,27 @@ RuleOption<Options> rule_option(std::string name, int Options::*member, OptionRa
   option.set = [member](Options& o, const nlohmann::json& v) {
     o.*member = static_cast<int>(v.get<double>());
   };
+  return option;
+}
+
+// An option that is the real `member` of the struct member `outer` of `Options` (the κ or τ of a
+// rule's SpectralCut `cut`), as `description` describes it.
+template <class Options, class Inner>
+RuleOption<Options> rule_option(const OptionDescription& description, Inner Options::*outer,
+                                double Inner::*member) {
+  RuleOption<Options> option;
+  static_cast<OptionDescription&>(option) = description;
+  option.get = [outer, member](const Options& o) { return nlohmann::json((o.*outer).*member); };
+  option.set = [outer, member](Options& o, const nlohmann::json& v) {
+    (o.*outer).*member = v.get<double>();
+  };
+  return option;
+}
+
+// `option` in the front ends' group `group` (OptionGroup).
+template <class Options>
+RuleOption<Options> in_group(OptionGroup group, RuleOption<Options> option) {
+  option.group = group;
   return option;
 }
 

@@ -39,6 +39,12 @@ struct SpectralCut {
   // The weight of a kept λ = σ² of J Jᵀ or JᵀJ for J^{−κ} through it: σ̃^{−1−κ}, σ̃ = √(λ⁺ + d·λ_max),
   // λ⁺ = max(λ, 0) (rounding can leave λ slightly < 0) — (λ + d·λ_max)^{−(1+κ)/2}.
   double lambda_weight(double lambda, double lambda_max) const;
+  // This cut with the power κ = `power` (the defaults of a rule's κ = 1 id: gn is hig's cut at 1).
+  constexpr SpectralCut with_kappa(double power) const {
+    SpectralCut out = *this;
+    out.kappa = power;
+    return out;
+  }
 };
 
 // What the cut kept of one spectrum (the diagnostics rules report: kept count, condition).
@@ -69,22 +75,26 @@ const OptionDescription& kappa_option_description();
 const OptionDescription& rcond_option_description();
 const OptionDescription& damping_option_description();
 
-// The cut's options as options of a rule's struct `Options` (a double member each).
+// The cut's options as options of a rule's struct `Options` whose SpectralCut member `cut` holds
+// them (rcond_option(&HigOptions::cut) is the option "rcond", HigOptions::cut.rcond).
 template <class Options>
-RuleOption<Options> cut_option(const OptionDescription& description, double Options::*member) {
-  return rule_option(description.name, member, description.range, description.help);
+RuleOption<Options> kappa_option(SpectralCut Options::*cut) {
+  return rule_option(kappa_option_description(), cut, &SpectralCut::kappa);
 }
 template <class Options>
-RuleOption<Options> kappa_option(double Options::*member) {
-  return cut_option(kappa_option_description(), member);
+RuleOption<Options> rcond_option(SpectralCut Options::*cut) {
+  return rule_option(rcond_option_description(), cut, &SpectralCut::rcond);
 }
+template <class Options>
+RuleOption<Options> damping_option(SpectralCut Options::*cut) {
+  return rule_option(damping_option_description(), cut, &SpectralCut::damping);
+}
+// The relative cut of a rule that has no other part of the cut (the direct Gauss-Newton and
+// Newton, the inverse gradient: κ = 1), as its double member.
 template <class Options>
 RuleOption<Options> rcond_option(double Options::*member) {
-  return cut_option(rcond_option_description(), member);
-}
-template <class Options>
-RuleOption<Options> damping_option(double Options::*member) {
-  return cut_option(damping_option_description(), member);
+  const OptionDescription& description = rcond_option_description();
+  return rule_option(description.name, member, description.range, description.help);
 }
 
 }  // namespace physgrad

@@ -121,8 +121,7 @@ py::tuple jacobian_step(const py::array& jacobian, const py::object& loss_gradie
   check_jacobian_finite(j);
   const Vector g = read_loss_gradient_y(loss_gradient_y, j.batch * j.outputs);
   HigUpdate update({.lr = lr,
-                    .kappa = kappa,
-                    .rcond = rcond,
+                    .cut = {.kappa = kappa, .rcond = rcond},
                     .backend = parse_pinv_backend(backend),
                     .precision = parse_pinv_precision(precision),
                     .eigensolver = parse_pinv_eigensolver(eigensolver)});
@@ -162,8 +161,7 @@ double time_jacobian_step(const py::array_t<double, py::array::c_style>& jacobia
     throw Error("time_jacobian_step: expected J of shape (B, m, P) and repeats ≥ 1");
   }
   HigUpdate update({.lr = lr,
-                    .kappa = kappa,
-                    .rcond = rcond,
+                    .cut = {.kappa = kappa, .rcond = rcond},
                     .precision = parse_pinv_precision(precision),
                     .eigensolver = parse_pinv_eigensolver(eigensolver)});
   BatchState state;
@@ -236,7 +234,8 @@ void bind_learning(py::module_& m) {
   // hig's defaults in the catalogue (HigUpdate::rules()), not written again here.
   const auto hig = std::get<HigOptions>(find_rule(RuleKind::kLearning, "hig").defaults);
   m.def("jacobian_step", &jacobian_step, py::arg("jacobian"), py::arg("loss_gradient_y"),
-        py::arg("lr") = hig.lr, py::arg("kappa") = hig.kappa, py::arg("rcond") = hig.rcond,
+        py::arg("lr") = hig.lr, py::arg("kappa") = hig.cut.kappa,
+        py::arg("rcond") = hig.cut.rcond,
         py::arg("backend") = to_string(hig.backend), py::arg("precision") = to_string(hig.precision),
         py::arg("eigensolver") = to_string(hig.eigensolver), py::arg("previous") = py::none(),
         "Δθ = −lr·J^{−κ}·dL/dy (HigUpdate) for J of shape (B, m, P) or (B·m, P), C-contiguous "

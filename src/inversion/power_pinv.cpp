@@ -193,20 +193,20 @@ double kept_condition(const PowerPinvInfo& info) {
 }
 
 SpectralCut pinv_cut(PinvBackend backend, const PowerPinvOptions& options) {
-  return {.kappa = options.kappa,
-          .rcond = options.rcond,
-          .floor = backend == PinvBackend::kSvd ? 0.0 : kMinGramRcond};
+  SpectralCut cut = options.cut;
+  if (backend != PinvBackend::kSvd) cut.floor = std::max(cut.floor, kMinGramRcond);
+  return cut;
 }
 
-bool float_resolves_spectrum(const Vector& lambda, Index n, double rcond) {
+bool float_resolves_spectrum(const Vector& lambda, Index n, const SpectralCut& cut) {
   if (lambda.size() == 0) return true;
-  return inversion_detail::FloatBounds(n, lambda.maxCoeff(), SpectralCut{.rcond = rcond})
+  return inversion_detail::FloatBounds(n, lambda.maxCoeff(), cut)
       .resolves(lambda);
 }
 
 PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions& options) {
   if (options.backend != PinvBackend::kAuto) return options.backend;
-  return options.rcond < kMinGramRcond ? PinvBackend::kSvd
+  return options.cut.cutoff() < kMinGramRcond ? PinvBackend::kSvd
          : rows <= cols                ? PinvBackend::kGram
                                        : PinvBackend::kNormal;
 }
@@ -228,7 +228,12 @@ Vector power_pinv_apply(const JacobianOperator& j, const Vector& g,
                 " rows but the vector has " + std::to_string(g.size()) + " entries");
   }
   if (!all_finite(g)) throw NumericalError("power_pinv_apply: non-finite entry in the vector");
-  SpectralCut{.kappa = options.kappa, .rcond = options.rcond}.check("power_pinv_apply");
+  options.cut.check("power_pinv_apply");
+  if (options.cut.damping != 0) {
+    std::ostringstream msg;
+    msg << "power_pinv_apply: damping must be 0 (J^{−κ} is undamped), got " << options.cut.damping;
+    throw Error(msg.str());
+  }
   PowerPinvInfo local_info;
   PowerPinvInfo& out = info != nullptr ? *info : local_info;
   PowerPinvTiming local_timing;
@@ -271,9 +276,8 @@ Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions
   return power_pinv_apply(DenseJacobian(j), g, options, info);
 }
 
-Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, double rcond) {
+Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, const SpectralCut& cut) {
   check_operands(a, g, "symmetric_pinv_apply");
-  const SpectralCut cut{.kappa = 1.0, .rcond = rcond};
   cut.check("symmetric_pinv_apply");
   if (a.rows() != a.cols()) throw Error("symmetric_pinv_apply: matrix is not square");
   if (a.size() == 0) return Vector::Zero(0);

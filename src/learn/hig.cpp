@@ -9,27 +9,27 @@ namespace physgrad {
 const OptionList<HigOptions>& HigOptions::descriptors() {
   static const OptionList<HigOptions> options = {
       rule_option("lr", &HigOptions::lr, positive(), "step size η"),
-      kappa_option(&HigOptions::kappa),
-      rcond_option(&HigOptions::rcond),
+      kappa_option(&HigOptions::cut),
+      rcond_option(&HigOptions::cut),
       rule_option("backend", &HigOptions::backend,
                   {PinvBackend::kAuto, PinvBackend::kSvd, PinvBackend::kGram, PinvBackend::kNormal},
                   "how J^{−κ} is computed (inversion/power_pinv.hpp)"),
-      rule_option("precision", &HigOptions::precision,
+      in_group(OptionGroup::kInversion, rule_option("precision", &HigOptions::precision,
                   {PinvPrecision::kDouble, PinvPrecision::kFloat, PinvPrecision::kAuto},
                   "precision of the eigendecomposition (auto: float where the last spectrum "
-                  "allows it)"),
-      rule_option("eigensolver", &HigOptions::eigensolver,
+                  "allows it)")),
+      in_group(OptionGroup::kInversion, rule_option("eigensolver", &HigOptions::eigensolver,
                   {PinvEigensolver::kAuto, PinvEigensolver::kTridiagonal, PinvEigensolver::kFull,
                    PinvEigensolver::kSubset},
                   "eigenvalues with rotations applied to the one vector (tridiagonal), all "
-                  "eigenpairs (full) or only the kept ones (subset); auto by the last step"),
+                  "eigenpairs (full) or only the kept ones (subset); auto by the last step")),
   };
   return options;
 }
 
 HigUpdate::HigUpdate(Options options, const std::string& id)
     : options_(options),
-      id_(listed_rule_id(rules(), id, rules()[options.kappa == 1.0 ? 0 : 1].id)) {
+      id_(listed_rule_id(rules(), id, rules()[options.cut.kappa == 1.0 ? 0 : 1].id)) {
   check_options(id_, options_);
 }
 
@@ -90,18 +90,17 @@ Step HigUpdate::step(const BatchState& batch) {
   PowerPinvTiming timing;
   // The previous step's spectrum guides the auto choices when it came from the same path.
   const PowerPinvInfo previous = info_;
-  const bool same_path =
-      previous.backend == resolve_pinv_backend(batch.jacobian->rows(), batch.jacobian->cols(),
-                                               {.rcond = options_.rcond, .backend = options_.backend});
+  PowerPinvOptions pinv{.cut = options_.cut,
+                        .backend = options_.backend,
+                        .precision = options_.precision,
+                        .eigensolver = options_.eigensolver};
+  if (previous.backend ==
+      resolve_pinv_backend(batch.jacobian->rows(), batch.jacobian->cols(), pinv)) {
+    pinv.previous = &previous;
+  }
   Step step;
-  step.delta = -options_.lr * power_pinv_apply(*batch.jacobian, batch.loss_gradient_y,
-                                               {.kappa = options_.kappa,
-                                                .rcond = options_.rcond,
-                                                .backend = options_.backend,
-                                                .precision = options_.precision,
-                                                .eigensolver = options_.eigensolver,
-                                                .previous = same_path ? &previous : nullptr},
-                                               &info_, &timing);
+  step.delta =
+      -options_.lr * power_pinv_apply(*batch.jacobian, batch.loss_gradient_y, pinv, &info_, &timing);
   step.jacobian_seconds = timing.forming_seconds;
   step.inversion_seconds = timing.inversion_seconds;
   return step;

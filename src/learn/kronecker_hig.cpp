@@ -63,20 +63,22 @@ std::string layer_key(std::size_t l, const char* what) {
 const OptionList<KroneckerHigOptions>& KroneckerHigOptions::descriptors() {
   static const OptionList<KroneckerHigOptions> options = {
       rule_option("lr", &KroneckerHigOptions::lr, positive(), "step size η"),
-      kappa_option(&KroneckerHigOptions::kappa),
-      rcond_option(&KroneckerHigOptions::rcond),
-      damping_option(&KroneckerHigOptions::damping),
-      rule_option("refresh", &KroneckerHigOptions::refresh, integer_at_least(1),
-                  "steps from one refresh of the Kronecker factors to the next"),
-      rule_option("factor_decay", &KroneckerHigOptions::factor_decay, fraction(),
-                  "weight of the old Kronecker factors in their running average"),
+      kappa_option(&KroneckerHigOptions::cut),
+      rcond_option(&KroneckerHigOptions::cut),
+      damping_option(&KroneckerHigOptions::cut),
+      in_group(OptionGroup::kInversion,
+               rule_option("refresh", &KroneckerHigOptions::refresh, integer_at_least(1),
+                           "steps from one refresh of the Kronecker factors to the next")),
+      in_group(OptionGroup::kInversion,
+               rule_option("factor_decay", &KroneckerHigOptions::factor_decay, fraction(),
+                           "weight of the old Kronecker factors in their running average")),
   };
   return options;
 }
 
 KroneckerHigUpdate::KroneckerHigUpdate(Options options, const std::string& id)
     : options_(options),
-      id_(listed_rule_id(rules(), id, rules()[options.kappa == 1.0 ? 0 : 1].id)) {
+      id_(listed_rule_id(rules(), id, rules()[options.cut.kappa == 1.0 ? 0 : 1].id)) {
   check_options(id_, options_);
 }
 
@@ -101,8 +103,7 @@ void KroneckerHigUpdate::reset() {
 
 void KroneckerHigUpdate::refresh_powers() {
   // Each factor takes the whole exponent (1+κ)/2 on its λ = σ².
-  const SpectralCut cut{
-      .kappa = options_.kappa, .rcond = options_.rcond, .damping = options_.damping};
+  const SpectralCut& cut = options_.cut;
   std::vector<Matrix> inputs, cotangents;
   for (const Layer& layer : layers_) {
     inputs.push_back(kronecker_factor_power(layer.input_factor, cut));

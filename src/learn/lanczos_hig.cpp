@@ -16,17 +16,18 @@ namespace physgrad {
 const OptionList<LanczosHigOptions>& LanczosHigOptions::descriptors() {
   static const OptionList<LanczosHigOptions> options = {
       rule_option("lr", &LanczosHigOptions::lr, positive(), "step size η"),
-      kappa_option(&LanczosHigOptions::kappa),
-      rcond_option(&LanczosHigOptions::rcond),
-      rule_option("products", &LanczosHigOptions::products, integer_at_least(1),
-                  "J Jᵀ products (Lanczos steps) per update of the Krylov rules"),
+      kappa_option(&LanczosHigOptions::cut),
+      rcond_option(&LanczosHigOptions::cut),
+      in_group(OptionGroup::kInversion,
+               rule_option("products", &LanczosHigOptions::products, integer_at_least(1),
+                           "J Jᵀ products (Lanczos steps) per update of the Krylov rules")),
   };
   return options;
 }
 
 LanczosHigUpdate::LanczosHigUpdate(Options options, const std::string& id)
     : options_(options),
-      id_(listed_rule_id(rules(), id, rules()[options.kappa == 1.0 ? 0 : 1].id)) {
+      id_(listed_rule_id(rules(), id, rules()[options.cut.kappa == 1.0 ? 0 : 1].id)) {
   check_options(id_, options_);
 }
 
@@ -69,7 +70,8 @@ Step LanczosHigUpdate::step(const BatchState& batch) {
     return out;
   };
   // The Ritz values approximate λ = σ² of J Jᵀ: the Gram path's cut, floor included.
-  const SpectralCut cut{.kappa = options_.kappa, .rcond = options_.rcond, .floor = kMinGramRcond};
+  SpectralCut cut = options_.cut;
+  cut.floor = std::max(cut.floor, kMinGramRcond);
   Index kept = 0;
   const auto f = [&](const Vector& ritz) {
     CutSpectrum spectrum = cut_squared(cut, ritz);

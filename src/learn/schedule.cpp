@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "physgrad/error.hpp"
 #include "physgrad/io/serialize.hpp"
@@ -19,11 +20,11 @@ constexpr NameTable<ScheduleKind, 4> kScheduleNames{{
     {ScheduleKind::kPlateau, "plateau"},
 }};
 
-// An option that applies to the schedules `kinds` only.
+// An option of the schedule group (OptionGroup) that applies to the schedules `kinds` only.
 template <class... Kinds>
 RuleOption<ScheduleOptions> for_kinds(RuleOption<ScheduleOptions> option, Kinds... kinds) {
   option.applies = [=](const ScheduleOptions& o) { return ((o.schedule == kinds) || ...); };
-  return option;
+  return in_group(OptionGroup::kSchedule, std::move(option));
 }
 
 }  // namespace
@@ -33,11 +34,12 @@ std::string to_string(ScheduleKind kind) { return name_of(kScheduleNames, kind, 
 const OptionList<ScheduleOptions>& ScheduleOptions::descriptors() {
   using K = ScheduleKind;
   static const OptionList<ScheduleOptions> options = {
-      rule_option("schedule", &ScheduleOptions::schedule,
-                  {K::kConstant, K::kStep, K::kCosine, K::kPlateau},
-                  "step-size schedule, as torch.optim.lr_scheduler: constant, step (StepLR), "
-                  "cosine (CosineAnnealingLR), plateau (ReduceLROnPlateau on the evaluated "
-                  "training loss)"),
+      in_group(OptionGroup::kSchedule,
+               rule_option("schedule", &ScheduleOptions::schedule,
+                           {K::kConstant, K::kStep, K::kCosine, K::kPlateau},
+                           "step-size schedule, as torch.optim.lr_scheduler: constant, step "
+                           "(StepLR), cosine (CosineAnnealingLR), plateau (ReduceLROnPlateau on "
+                           "the evaluated training loss)")),
       for_kinds(rule_option("decay", &ScheduleOptions::decay, open_fraction(),
                             "factor γ of each decay (step, plateau)"),
                 K::kStep, K::kPlateau),

@@ -23,7 +23,8 @@ Step GaussNewton::propose(const Objective& objective, const Vector& x, const Dom
   // In the free variables z_F (the transformed variable): J_z = J[:, F] D_F.
   const FreeSubspace free(domain, x, gradient);
   const Vector dz = -options_.lr * symmetric_pinv_apply(free.square(curvature),
-                                                        free.covector(gradient), options_.rcond);
+                                                        free.covector(gradient),
+                                                        {.rcond = options_.rcond});
   return {free.step(dz), Step::Status::kOk, {}, 1};
 }
 

@@ -27,7 +27,8 @@ Step InverseGradient::propose(const Objective& objective, const Vector& x, const
                               ? Vector(j.transpose() * objective.loss().gradient(y, objective.target()))
                               : Vector::Zero(x.size());
   const FreeSubspace free(domain, x, gradient);
-  const Vector dz = power_pinv_apply(free.columns(j), dy, {1.0, options_.rcond});
+  const Vector dz =
+      power_pinv_apply(free.columns(j), dy, {.cut = {.kappa = 1.0, .rcond = options_.rcond}});
   return {free.step(dz), Step::Status::kOk, {}, 1};
 }
 

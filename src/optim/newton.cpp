@@ -20,7 +20,8 @@ Step Newton::propose(const Objective& objective, const Vector& x, const Domain& 
   const Vector g = objective.gradient(x);
   const FreeSubspace free(domain, x, g);
   const Vector dz = -options_.lr * symmetric_pinv_apply(free.square(objective.hessian(x)),
-                                                        free.covector(g), options_.rcond);
+                                                        free.covector(g),
+                                                        {.rcond = options_.rcond});
   return {free.step(dz), Step::Status::kOk, {}, 2};
 }
 

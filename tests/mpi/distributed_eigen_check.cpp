@@ -77,7 +77,9 @@ int main(int argc, char** argv) {
     for (Index i = 0; i < c.n; ++i) g(i) = normal(random);
     physgrad::PowerPinvInfo reference_info;
     const Vector reference = physgrad::power_pinv_apply(
-        GivenGram(a), g, {c.kappa, c.rcond, physgrad::PinvBackend::kGram}, &reference_info);
+        GivenGram(a), g,
+        {.cut = {.kappa = c.kappa, .rcond = c.rcond}, .backend = physgrad::PinvBackend::kGram},
+        &reference_info);
     const std::vector<Index> columns =
         physgrad::block_cyclic_columns(c.n, solver->block(), solver->rank(), solver->size());
     Matrix local(c.n, static_cast<Index>(columns.size()));

@@ -66,8 +66,9 @@ inline constexpr double kSubsetKeptFraction = 0.1;
 struct PowerPinvInfo;
 
 struct PowerPinvOptions {
-  double kappa = 1.0;    // exponent: 1 = pseudo-inverse (Gauss-Newton, IG), 0.5 = HIG, −1 = Jᵀ
-  double rcond = 1e-10;  // keep σᵢ > rcond·σ_max (strictly); 0 ≤ rcond < 1
+  // κ: 1 = pseudo-inverse (Gauss-Newton, IG), 0.5 = HIG, −1 = Jᵀ; keep σᵢ > rcond·σ_max
+  // (strictly), 0 ≤ rcond < 1. No damping (Error otherwise); the path sets the floor (pinv_cut).
+  SpectralCut cut{};
   PinvBackend backend = PinvBackend::kAuto;
   PinvPrecision precision = PinvPrecision::kDouble;
   PinvEigensolver eigensolver = PinvEigensolver::kAuto;
@@ -95,9 +96,9 @@ double kept_condition(const PowerPinvInfo& info);
 
 // The float check: with δ = √n·ε_f·λ_max, every eigenvalue λᵢ of the n × n matrix is either
 // kept clearly and accurately, λᵢ ≥ max(kFloatAccuracy·δ, cut² + δ), or dropped clearly,
-// λᵢ ≤ cut² − δ (cut² = (rcond·σ_max)² = rcond²·λ_max). Eigenvalues within δ of these true
+// λᵢ ≤ cut² − δ (cut² = `cut`.lambda_cut(λ_max) = τ²·λ_max). Eigenvalues within δ of these true
 // values then keep the same directions, each λ to 1/kFloatAccuracy relative.
-bool float_resolves_spectrum(const Vector& lambda, Index n, double rcond);
+bool float_resolves_spectrum(const Vector& lambda, Index n, const SpectralCut& cut);
 
 // Where the time of a call went.
 struct PowerPinvTiming {
@@ -105,7 +106,7 @@ struct PowerPinvTiming {
   double inversion_seconds = 0;  // the factorization and the products around it
 };
 
-// The cut of the path `backend` (spectral_cut.hpp): κ and rcond of `options`, floored at
+// The cut of the path `backend` (spectral_cut.hpp): `options.cut`, its floor raised to
 // kMinGramRcond on the Gram and normal paths.
 SpectralCut pinv_cut(PinvBackend backend, const PowerPinvOptions& options);
 
@@ -115,8 +116,8 @@ PinvBackend resolve_pinv_backend(Index rows, Index cols, const PowerPinvOptions&
 // J^{−κ} g for g of J.rows() entries, on the path resolve_pinv_backend() picks: the Gram path
 // from J.gram() and J.apply_transpose(), the normal path from J.normal(g), the SVD of
 // J.materialize(). An empty J gives the zero vector of J.cols() entries. Throws Error on
-// mismatched sizes, rcond outside [0, 1) or non-finite κ, and NumericalError on non-finite
-// entries of g or of what the operator forms, or a LAPACK routine that fails to converge.
+// mismatched sizes, rcond outside [0, 1), non-finite κ or a damping; NumericalError on
+// non-finite entries of g or of what the operator forms, or a LAPACK routine that fails.
 Vector power_pinv_apply(const JacobianOperator& j, const Vector& g,
                         const PowerPinvOptions& options = {}, PowerPinvInfo* info = nullptr,
                         PowerPinvTiming* timing = nullptr);
@@ -126,8 +127,9 @@ Vector power_pinv_apply(const Matrix& j, const Vector& g, const PowerPinvOptions
                         PowerPinvInfo* info = nullptr);
 
 // Truncated pseudo-inverse of a symmetric matrix applied to g (the normal-equation solve of
-// Gauss-Newton, Newton's Hessian solve): A⁺ g over the eigenvalues |λᵢ| > rcond²·|λ|max, i.e.
-// rcond on σ = √|λ| as everywhere (cut_symmetric in spectral_cut.hpp).
-Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, double rcond);
+// Gauss-Newton, Newton's Hessian solve): A⁺ g over the eigenvalues |λᵢ| > τ²·|λ|max, i.e. the
+// cut's τ on σ = √|λ| as everywhere (cut_symmetric in spectral_cut.hpp, which also applies a κ
+// other than 1 and a damping; the direct rules give only τ).
+Vector symmetric_pinv_apply(const Matrix& a, const Vector& g, const SpectralCut& cut);
 
 }  // namespace physgrad

@@ -13,9 +13,11 @@ namespace physgrad {
 // the HIG paper's code (docs/reference_experiments.md). The path (Gram, normal, SVD) follows J's
 // shape (inversion/power_pinv.hpp); on the Gram path J Jᵀ comes from the network's layer factors.
 struct HigOptions {
-  double lr = 1.0;      // η > 0
-  double kappa = 0.5;   // ½: HIG; 1: Gauss-Newton (id "gn")
-  double rcond = 1e-6;  // relative truncation τ, in [0, 1)
+  double lr = 1.0;  // η > 0
+  // κ ½: HIG, 1: Gauss-Newton (id "gn"); the relative truncation τ in [0, 1). Without damping;
+  // the path sets the floor (inversion/power_pinv.hpp). A braced {.rcond = …} starts from
+  // SpectralCut's own defaults (κ = 1); `options.cut.rcond = …` changes the rule's default cut.
+  SpectralCut cut{.kappa = 0.5, .rcond = 1e-6};
   PinvBackend backend = PinvBackend::kAuto;
   // The eigensolve of the Gram and normal paths (inversion/power_pinv.hpp); each step's auto
   // choice follows the previous step's spectrum. Double by default: float changes a step by up to
@@ -35,7 +37,8 @@ class HigUpdate final : public LearningUpdate {
     static const RuleDescriptors<Options> list = {
         {.id = "gn", .label = "Gauss-Newton",
          .formula = "Δθ = −η J⁺ ∂L/∂y, J the stacked Jacobian, σ ≤ τσ_max dropped",
-         .colour = "#8c564b", .defaults = {.kappa = 1.0}, .derivative = RuleDerivative::kJacobian,
+         .colour = "#8c564b", .defaults = {.cut = HigOptions{}.cut.with_kappa(1.0)},
+         .derivative = RuleDerivative::kJacobian,
          .pretrained_colour = "#c51b7d"},
         {.id = "hig", .label = "HIG",
          .formula = "Δθ = −η V Σ^{−1/2} Uᵀ ∂L/∂y, J = UΣVᵀ, σ ≤ τσ_max dropped",

@@ -7,6 +7,7 @@
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
+#include "physgrad/spectral_cut.hpp"
 
 namespace physgrad {
 
@@ -27,9 +28,9 @@ namespace physgrad {
 // two products per layer, O(Σ w_out·w_in·(w_out + w_in)).
 struct KroneckerHigOptions {
   double lr = 1.0;         // η > 0
-  double kappa = 0.5;      // ½: id "kfac-hig"; 1: K-FAC, id "kfac"
-  double rcond = 1e-6;     // relative cut τ: factor eigenvalues λ ≤ τ²λ_max dropped, in [0, 1)
-  double damping = 1e-2;   // added to every kept factor eigenvalue, times λ_max, ≥ 0
+  // κ ½: id "kfac-hig", 1: K-FAC, id "kfac"; the relative cut τ in [0, 1) (factor eigenvalues
+  // λ ≤ τ²λ_max dropped); the damping ≥ 0 added to every kept factor eigenvalue, times λ_max.
+  SpectralCut cut{.kappa = 0.5, .rcond = 1e-6, .damping = 1e-2};
   int refresh = 10;        // steps from one factor refresh to the next, ≥ 1
   double factor_decay = 0.9;      // weight of the old factors in the running average, in [0, 1)
 
@@ -44,7 +45,7 @@ class KroneckerHigUpdate final : public LearningUpdate {
     static const RuleDescriptors<Options> list = {
         {.id = "kfac", .label = "K-FAC",
          .formula = "Δ[W b] = −η S⁻¹ ∇[W b] A⁻¹ per dense layer, JᵀJ ≈ A ⊗ S (running averages)",
-         .colour = "#9e6b3b", .defaults = {.kappa = 1.0},
+         .colour = "#9e6b3b", .defaults = {.cut = KroneckerHigOptions{}.cut.with_kappa(1.0)},
          .derivative = RuleDerivative::kJacobianProducts, .settings_from = "gn"},
         {.id = "kfac-hig", .label = "Kronecker HIG",
          .formula = "Δ[W b] = −η S^{−3/4} ∇[W b] A^{−3/4} per dense layer, JᵀJ ≈ A ⊗ S (running averages)",

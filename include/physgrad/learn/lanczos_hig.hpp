@@ -5,6 +5,7 @@
 #include "physgrad/learn/learning_update.hpp"
 #include "physgrad/rule_descriptor.hpp"
 #include "physgrad/rule_option.hpp"
+#include "physgrad/spectral_cut.hpp"
 
 namespace physgrad {
 
@@ -18,8 +19,9 @@ namespace physgrad {
 // the exact step up to rounding.
 struct LanczosHigOptions {
   double lr = 1.0;      // η > 0
-  double kappa = 0.5;   // ½: HIG-like (id "lanczos-hig"); 1: Gauss-Newton (id "lanczos-gn")
-  double rcond = 1e-6;  // relative truncation τ, in [0, 1)
+  // κ ½: HIG-like (id "lanczos-hig"), 1: Gauss-Newton (id "lanczos-gn"); the relative
+  // truncation τ in [0, 1). No damping; the floor is the Gram path's (kMinGramRcond).
+  SpectralCut cut{.kappa = 0.5, .rcond = 1e-6};
   int products = 20;    // q, the J Jᵀ products (Lanczos steps) per update, ≥ 1
 
   static const OptionList<LanczosHigOptions>& descriptors();
@@ -33,7 +35,7 @@ class LanczosHigUpdate final : public LearningUpdate {
     static const RuleDescriptors<Options> list = {
         {.id = "lanczos-gn", .label = "Lanczos GN",
          .formula = "Δθ = −η Jᵀ (J Jᵀ)⁻¹ ∂L/∂y by q Lanczos steps on J Jᵀ, matrix-free",
-         .colour = "#c49c94", .defaults = {.kappa = 1.0},
+         .colour = "#c49c94", .defaults = {.cut = LanczosHigOptions{}.cut.with_kappa(1.0)},
          .derivative = RuleDerivative::kJacobianProducts, .settings_from = "gn"},
         {.id = "lanczos-hig", .label = "Lanczos HIG",
          .formula = "Δθ = −η Jᵀ (J Jᵀ)^{−3/4} ∂L/∂y by q Lanczos steps on J Jᵀ, matrix-free",

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <initializer_list>
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/error.hpp"
@@ -98,12 +97,14 @@ void require_learning_sizes(const Settings& settings, const LearningExperiment::
 // The options every learning experiment has, after the common ones: optional, so that each rule
 // keeps its own defaults unless one is given; an experiment may give time and eval-every
 // defaults.
-// The flags of the learning rules' options `names`, each offered for every learning rule that
-// has it (rule_option_spec), in this order.
-std::vector<OptionSpec> learning_rule_flags(std::initializer_list<const char*> names) {
+// The flags of the learning rules' options of `group`, each offered for every learning rule
+// that has it (rule_option_spec), in the catalogue's order (grouped_rule_options).
+std::vector<OptionSpec> learning_rule_flags(OptionGroup group) {
   const std::vector<std::string> ids = rule_ids(RuleKind::kLearning);
   std::vector<OptionSpec> flags;
-  for (const char* name : names) flags.push_back(rule_option_spec(name, RuleKind::kLearning, ids));
+  for (const std::string& name : grouped_rule_options(RuleKind::kLearning, group)) {
+    flags.push_back(rule_option_spec(name, RuleKind::kLearning, ids));
+  }
   return flags;
 }
 
@@ -156,11 +157,9 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
           .below(1),
   };
   // After --batch, the inverses' options; after the pretraining options, the schedule's.
-  const std::vector<OptionSpec> inverses = learning_rule_flags(
-      {"rcond", "precision", "eigensolver", "products", "refresh", "damping", "factor_decay"});
+  const std::vector<OptionSpec> inverses = learning_rule_flags(OptionGroup::kInversion);
   options.insert(options.begin() + 1, inverses.begin(), inverses.end());
-  const std::vector<OptionSpec> schedule = learning_rule_flags(
-      {"schedule", "decay", "decay_every", "t_max", "min_lr", "patience", "threshold"});
+  const std::vector<OptionSpec> schedule = learning_rule_flags(OptionGroup::kSchedule);
   options.insert(options.end(), schedule.begin(), schedule.end());
   if (!defaults.data.empty()) {
     options.push_back(text_option("data", defaults.data,

@@ -1,7 +1,7 @@
 // Learning experiment — the base of the experiments that train a network through a simulator. It
-// declares the learning options once (--batch, --rcond, --precision, --eigensolver, --epochs,
-// --time, --eval-every, the checkpoint options, --pretrain, the step-size schedule and --data),
-// offers every learning rule,
+// declares the learning options once (--batch, the learning rules' inversion options, --epochs,
+// --time, --eval-every, the checkpoint options, --pretrain, the step-size schedule and --data;
+// the rules' flags as the catalogue groups their options), offers every learning rule,
 // checks before a run that it is limited and that its Jacobian steps and evaluations fit, and
 // gives the experiment's problem at one batch (its reference case) to `physgrad bench` and the
 // micro-benchmarks.
