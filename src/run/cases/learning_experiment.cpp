@@ -87,6 +87,7 @@ void require_learning_sizes(const Settings& settings, const LearningExperiment::
       for (const std::string& id : ids) {
         runs += pretrained && make_learning_update(id)->need() == UpdateNeed::kStackedJacobian;
       }
+      runs += runs > static_cast<double>(ids.size());  // the control arm beside the twins
     }
     const long long every = settings.integer("eval-every");
     require_memory(1024 * runs * (iterations / static_cast<double>(every) + 2),
@@ -104,6 +105,32 @@ std::vector<OptionSpec> learning_rule_flags(std::initializer_list<const char*> n
   const std::vector<std::string> ids = rule_ids(RuleKind::kLearning);
   std::vector<OptionSpec> flags;
   for (const char* name : names) flags.push_back(rule_option_spec(name, RuleKind::kLearning, ids));
+  return flags;
+}
+
+// The options of the Adam part of the Adam→ twins and of the control, one for each option of
+// Adam's table (its moments and its step-size schedule): --pretrain-lr, --pretrain-schedule, …,
+// unset by default (the Adam run's value); and the control arm.
+std::vector<OptionSpec> pretraining_options() {
+  std::vector<OptionSpec> flags;
+  for (const OptionDescription& option :
+       rule_options(find_rule(RuleKind::kLearning, kPretrainingRule))) {
+    flags.push_back(option_in_range(
+        "pretrain-" + flag_name(option.name), option.range,
+        "with --pretrain, the Adam part of the Adam→ twins and of the control: " + option.help +
+            " (default: the Adam run's)"));
+  }
+  flags.push_back(
+      text_option("control", "",
+                  "on or off: with --pretrain, beside the twins a control run Adam→Adam that "
+                  "switches where they do and continues with a fresh Adam at the step "
+                  "--control-lr-factor × the Adam part's (default: on where a twin runs)")
+          .one_of({"on", "off"}));
+  flags.push_back(real_option("control-lr-factor", "",
+                              "the control's step over the Adam part's (default 0.1; 0: no "
+                              "control)")
+                      .at_least(0)
+                      .at_most(1));
   return flags;
 }
 
@@ -137,7 +164,8 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
       text_option("pretrain", defaults.pretrain,
                   "auto or N: each rule that needs the stacked Jacobian (gn, hig, …) gets a twin "
                   "that Adam trains first (Adam→GN, Adam→HIG; Adam with the settings and batch "
-                  "of the Adam run) before the rule continues from that network — auto: once "
+                  "of the Adam run, or --pretrain-<option>) before the rule continues from that "
+                  "network, and a control Adam→Adam runs beside them (--control) — auto: once "
                   "Adam's evaluated training loss has levelled off (--plateau-window, "
                   "--plateau-fraction), N: after N updates (with --iters ≤ N there is no such "
                   "run); a twin that never switched reads as Adam; --iters, --epochs and --time "
@@ -155,10 +183,13 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
           .above(0)
           .below(1),
   };
-  // After --batch, the inverses' options; after the pretraining options, the schedule's.
+  // After --batch, the inverses' options; after the pretraining options, the Adam part's and
+  // the control's, then the schedule's.
   const std::vector<OptionSpec> inverses = learning_rule_flags(
       {"rcond", "precision", "eigensolver", "products", "refresh", "damping", "factor_decay"});
   options.insert(options.begin() + 1, inverses.begin(), inverses.end());
+  const std::vector<OptionSpec> pretraining = pretraining_options();
+  options.insert(options.end(), pretraining.begin(), pretraining.end());
   const std::vector<OptionSpec> schedule = learning_rule_flags(
       {"schedule", "decay", "decay_every", "t_max", "min_lr", "patience", "threshold"});
   options.insert(options.end(), schedule.begin(), schedule.end());
@@ -208,6 +239,15 @@ std::vector<std::string> LearningExperiment::optimizer_choices() const {
 
 void LearningExperiment::validate(const Settings& settings) const {
   if (settings.has("pretrain")) pretrain_iterations(settings.text("pretrain"));
+  // The options of the twins' Adam part and of the control mean nothing without twins.
+  if (!settings.has("pretrain") || settings.text("pretrain") == "0") {
+    for (const OptionSpec& spec : pretraining_options()) {
+      if (settings.has(spec.name)) {
+        throw Error(spec.flag() + ": " + settings.json().at(spec.name).dump() +
+                    " is for the Adam→ twins, which need --pretrain auto or N");
+      }
+    }
+  }
   check(settings);
   require_training_limit(settings, name());
   require_learning_sizes(settings, shape(settings));

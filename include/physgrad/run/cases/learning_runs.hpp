@@ -34,6 +34,29 @@ struct LearningResult {
   TrainingSummary summary;
 };
 
+// The control arm beside the twins (--control, --control-lr-factor): Adam until the twins' switch,
+// then a fresh Adam at a smaller step, "adam-adam" (pretrained_run_id(kPretrainingRule)).
+bool is_control_run(const std::string& id);
+// The rule run `id` with `params` (LearningResult::params) stands for in the verdict, the tables
+// and the notes: learning_run_label(id), for the control with its step, "Adam→Adam (lr ×0.1)"
+// (from params' control_lr_factor).
+std::string run_rule_label(const std::string& id, const nlohmann::json& params);
+// The rule that takes over in a twin: "HIG" in Adam→HIG, "Adam at lr ×0.1" in the control.
+std::string taking_over_label(const std::string& id, const nlohmann::json& params);
+
+// One part of a run made of parts (a twin: Adam, then its rule): the part's rule id, its updates
+// and their training seconds (evaluations excluded).
+struct PhaseCost {
+  std::string rule;
+  long long updates = 0;
+  double seconds = 0;
+  double seconds_per_update() const;  // NaN without updates
+};
+// The parts of a twin (its params have "switched"): Adam's updates up to the switch, measured at
+// the evaluation made there, and its rule's after it (Adam's alone when it never switched); empty
+// for a plain rule.
+std::vector<PhaseCost> phase_costs(const LearningResult& run);
+
 // An experiment's choices for one rule where they differ from the catalogue's defaults, and its
 // mini-batch size (unset: TrainerOptions' default); --lr, --rcond and --batch override them for
 // every rule (the Adam part of a pretrained run included). A rule the experiment gives none takes
@@ -163,8 +186,15 @@ class LearningSweep {
   // A note saying, for every pretrained run, after how many Adam updates its rule took over.
   void add_switch_note() const;
   // Learning rule `rule` as this sweep runs it: the experiment's choices with the settings given
-  // for every rule (--lr, --rcond, …), and its batch size.
-  std::unique_ptr<LearningUpdate> make_update(const std::string& rule) const;
+  // for every rule (--lr, --rcond, …), then `overrides`, and its batch size.
+  std::unique_ptr<LearningUpdate> make_update(const std::string& rule,
+                                              const RuleSettings& overrides = {}) const;
+  // The Adam part of the twins and of the control: the sweep's Adam run with the options given
+  // as --pretrain-<option> (--pretrain-lr, --pretrain-schedule, …) in its place.
+  RuleSettings pretraining_settings() const;
+  // The factor of the control's step over the Adam part's (--control-lr-factor, 0.1 unset);
+  // nullopt when it is off (--control off or a factor of 0).
+  std::optional<double> control_factor() const;
   Index batch_size(const std::string& rule) const;
   // When pretrained runs are made (--pretrain auto, or N > 0 and below the --iters limit), the
   // condition of their switch from Adam to the rule.
