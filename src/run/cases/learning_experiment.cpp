@@ -87,7 +87,11 @@ void require_learning_sizes(const Settings& settings, const LearningExperiment::
       for (const std::string& id : ids) {
         runs += pretrained && make_learning_update(id)->need() == UpdateNeed::kStackedJacobian;
       }
-      runs += runs > static_cast<double>(ids.size());  // the control arm beside the twins
+      // The control arm beside the twins, unless it is off.
+      const bool control = !(settings.has("control") && settings.text("control") == "off") &&
+                           !(settings.has("control-lr-factor") &&
+                             settings.real("control-lr-factor") == 0);
+      runs += control && runs > static_cast<double>(ids.size());
     }
     const long long every = settings.integer("eval-every");
     require_memory(1024 * runs * (iterations / static_cast<double>(every) + 2),
