@@ -59,7 +59,8 @@ std::vector<PhaseCost> phase_costs(const LearningResult& run);
 
 // An experiment's choices for one rule where they differ from the catalogue's defaults, and its
 // mini-batch size (unset: TrainerOptions' default); --lr, --rcond and --batch override them for
-// every rule (the Adam part of a pretrained run included). A rule the experiment gives none takes
+// every rule (the Adam part of a pretrained run included, unless --pretrain-lr, … give it its
+// own). A rule the experiment gives none takes
 // those of its settings_source() (catalogue.hpp): kfac-hig and lanczos-hig those of hig.
 struct RuleDefaults {
   RuleSettings settings;
@@ -88,17 +89,19 @@ class LearningSweep {
 
   // The runs of `rules`, in order: each rule, and after each rule that needs the stacked
   // Jacobian (gn, hig, kfac, lanczos-hig, …), when --pretrain is auto or N (N > 0 and below the
-  // --iters limit), its run pretrained with Adam ("adam-hig"). An experiment trains each of
-  // these ids.
+  // --iters limit), its run pretrained with Adam ("adam-hig"), and after them all, when any ran
+  // and --control is not off, the control ("adam-adam"). An experiment trains each of these ids.
   std::vector<std::string> run_ids(const std::vector<std::string>& rules) const;
 
   // Trains `network` (any Network: an Mlp, a ConvNetwork, …) with rule `id` and records it (its
   // describe() and trained θ go to networks.json); `params` (e.g. {"lambda", "seed"}) are
   // added to the summary entry and to every metrics row. A pretrained run ("adam-hig") is a
-  // SwitchingUpdate: Adam, with the settings and batch size of this sweep's Adam run, until
-  // --pretrain's condition holds (N updates, or a plateau of its evaluated training loss:
-  // --plateau-window, --plateau-fraction), then the rule continues from that network to the end
-  // of the run's limits (which count the whole run); its history is one curve. With --data
+  // SwitchingUpdate: Adam, with the settings and batch size of this sweep's Adam run (or those
+  // --pretrain-<option> give), until --pretrain's condition holds (N updates, or a plateau of its
+  // evaluated training loss: --plateau-window, --plateau-fraction), then the rule continues from
+  // that network to the end of the run's limits (which count the whole run); its history is one
+  // curve. The control ("adam-adam") continues with a fresh Adam at --control-lr-factor × the
+  // Adam part's step instead. With --data
   // fresh (and draw_from() called), every batch is drawn afresh.
   const LearningResult& run(const std::string& id, const std::string& tag,
                             const nlohmann::json& params, Network& network,
