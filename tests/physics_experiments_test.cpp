@@ -77,7 +77,7 @@ TEST(PoissonExperiment, PretrainedRunFollowsTheAdamRunThenInvertsTheJacobian) {
   const RunContext context =
       run("poisson", {{"optimizers", "adam,hig"}, {"grid", "4"}, {"train-size", "128"},
                       {"test-size", "32"}, {"iters", "12"}, {"eval-every", "2"},
-                      {"pretrain", "6"}});
+                      {"pretrain", "6"}, {"control", "off"}});
   ASSERT_EQ(context.runs().size(), 3u);
   const RunEntry& entry = context.runs()[2];
   EXPECT_EQ(entry.label, "Adam→HIG (4x4)");

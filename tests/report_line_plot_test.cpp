@@ -123,15 +123,17 @@ TEST(SvgLinePlot, InvalidInputThrows) {
 
 TEST(SvgColor, EveryRuleHasTheCatalogueColourAndNoOtherRulesColour) {
   // A figure draws each rule in the catalogue's colour; distinct ids never share one (the same
-  // id in both kinds, adam or gn, is one rule), and no Adam→rule twin takes a rule's colour.
+  // id in both kinds, adam or gn, is one rule), and no Adam→rule twin, nor the control
+  // Adam→Adam, takes a rule's colour.
   std::map<std::string, std::string> by_id;
   for (const RuleInfo& rule : rule_catalogue()) {
     EXPECT_EQ(color_for(rule.id), rule.colour) << rule.id;
     by_id[rule.id] = color_for(rule.id);
   }
   for (const std::string& id : rule_ids(RuleKind::kLearning)) {
-    if (id != kPretrainingRule) by_id[pretrained_run_id(id)] = color_for(pretrained_run_id(id));
+    by_id[pretrained_run_id(id)] = color_for(pretrained_run_id(id));
   }
+  EXPECT_EQ(by_id.count(pretrained_run_id(kPretrainingRule)), 1u);
   std::map<std::string, std::string> owner;
   for (const auto& [id, colour] : by_id) {
     const auto [it, fresh] = owner.emplace(colour, id);

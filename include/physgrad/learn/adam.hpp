@@ -23,7 +23,7 @@ class AdamUpdate final : public LearningUpdate {
   static const RuleDescriptors<Options>& rules() {
     static const RuleDescriptors<Options> list = {
         {.id = "adam", .label = "Adam", .formula = "Δθ = −η m̂/(√v̂ + ε) on ∇θL",
-         .colour = "#ff7f0e"},
+         .colour = "#ff7f0e", .pretrained_colour = "#e6ab02"},
     };
     return list;
   }

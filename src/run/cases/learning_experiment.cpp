@@ -86,6 +86,11 @@ void require_learning_sizes(const Settings& settings, const LearningExperiment::
       for (const std::string& id : ids) {
         runs += pretrained && make_learning_update(id)->need() == UpdateNeed::kStackedJacobian;
       }
+      // The control arm beside the twins, unless it is off.
+      const bool control = !(settings.has("control") && settings.text("control") == "off") &&
+                           !(settings.has("control-lr-factor") &&
+                             settings.real("control-lr-factor") == 0);
+      runs += control && runs > static_cast<double>(ids.size());
     }
     const long long every = settings.integer("eval-every");
     require_memory(1024 * runs * (iterations / static_cast<double>(every) + 2),
@@ -94,9 +99,6 @@ void require_learning_sizes(const Settings& settings, const LearningExperiment::
   }
 }
 
-// The options every learning experiment has, after the common ones: optional, so that each rule
-// keeps its own defaults unless one is given; an experiment may give time and eval-every
-// defaults.
 // The flags of the learning rules' options of `group`, each offered for every learning rule
 // that has it (rule_option_spec), in the catalogue's order (grouped_rule_options).
 std::vector<OptionSpec> learning_rule_flags(OptionGroup group) {
@@ -108,6 +110,35 @@ std::vector<OptionSpec> learning_rule_flags(OptionGroup group) {
   return flags;
 }
 
+// The options of the Adam part of the Adam→ twins and of the control, one for each option of
+// Adam's table (its moments and its step-size schedule): --pretrain-lr, --pretrain-schedule, …,
+// unset by default (the Adam run's value); and the control arm.
+std::vector<OptionSpec> pretraining_options() {
+  std::vector<OptionSpec> flags;
+  for (const OptionDescription& option :
+       rule_options(find_rule(RuleKind::kLearning, kPretrainingRule))) {
+    flags.push_back(option_in_range(
+        "pretrain-" + flag_name(option.name), option.range,
+        "with --pretrain, the Adam part of the Adam→ twins and of the control: " + option.help +
+            " (default: the Adam run's)"));
+  }
+  flags.push_back(
+      text_option("control", "",
+                  "on or off: with --pretrain, beside the twins a control run Adam→Adam that "
+                  "switches where they do and continues with a fresh Adam at the step "
+                  "--control-lr-factor × the Adam part's (default: on where a twin runs)")
+          .one_of({"on", "off"}));
+  flags.push_back(real_option("control-lr-factor", "",
+                              "the control's step over the Adam part's (default 0.1; 0: no "
+                              "control)")
+                      .at_least(0)
+                      .at_most(1));
+  return flags;
+}
+
+// The options every learning experiment has, after the common ones: optional, so that each rule
+// keeps its own defaults unless one is given; an experiment may give time and eval-every
+// defaults.
 std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
   std::vector<OptionSpec> options = {
       integer_option("batch", "",
@@ -138,7 +169,8 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
       text_option("pretrain", defaults.pretrain,
                   "auto or N: each rule that needs the stacked Jacobian (gn, hig, …) gets a twin "
                   "that Adam trains first (Adam→GN, Adam→HIG; Adam with the settings and batch "
-                  "of the Adam run) before the rule continues from that network — auto: once "
+                  "of the Adam run, or --pretrain-<option>) before the rule continues from that "
+                  "network, and a control Adam→Adam runs beside them (--control) — auto: once "
                   "Adam's evaluated training loss has levelled off (--plateau-window, "
                   "--plateau-fraction), N: after N updates (with --iters ≤ N there is no such "
                   "run); a twin that never switched reads as Adam; --iters, --epochs and --time "
@@ -156,9 +188,12 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
           .above(0)
           .below(1),
   };
-  // After --batch, the inverses' options; after the pretraining options, the schedule's.
+  // After --batch, the inverses' options; after the pretraining options, the Adam part's and
+  // the control's, then the schedule's.
   const std::vector<OptionSpec> inverses = learning_rule_flags(OptionGroup::kInversion);
   options.insert(options.begin() + 1, inverses.begin(), inverses.end());
+  const std::vector<OptionSpec> pretraining = pretraining_options();
+  options.insert(options.end(), pretraining.begin(), pretraining.end());
   const std::vector<OptionSpec> schedule = learning_rule_flags(OptionGroup::kSchedule);
   options.insert(options.end(), schedule.begin(), schedule.end());
   if (!defaults.data.empty()) {
@@ -207,6 +242,15 @@ std::vector<std::string> LearningExperiment::optimizer_choices() const {
 
 void LearningExperiment::validate(const Settings& settings) const {
   if (settings.has("pretrain")) pretrain_iterations(settings.text("pretrain"));
+  // The options of the twins' Adam part and of the control mean nothing without twins.
+  if (!settings.has("pretrain") || settings.text("pretrain") == "0") {
+    for (const OptionSpec& spec : pretraining_options()) {
+      if (settings.has(spec.name)) {
+        throw Error(spec.flag() + ": " + settings.json().at(spec.name).dump() +
+                    " is for the Adam→ twins, which need --pretrain auto or N");
+      }
+    }
+  }
   check(settings);
   require_training_limit(settings, name());
   require_learning_sizes(settings, shape(settings));

@@ -47,8 +47,14 @@ double run_fraction(const TrainerOptions& options, const TrainingRecord& r, doub
 
 // "run 7/15" (or "run 7" while the count is not known).
 std::string run_number(const RunContext::RunPlan& plan) {
-  return "run " + std::to_string(plan.finished + 1) +
-         (plan.runs > 0 ? "/" + std::to_string(plan.runs) : "");
+  // Appended piece by piece: GCC 12 warns (-Wrestrict, falsely) on "run " + a temporary here.
+  std::string out = "run ";
+  out += std::to_string(plan.finished + 1);
+  if (plan.runs > 0) {
+    out += '/';
+    out += std::to_string(plan.runs);
+  }
+  return out;
 }
 
 // "12 s elapsed, about 3 min 40 s left": the time left extrapolates the wall time per run so far
@@ -152,12 +158,16 @@ std::optional<SwitchCondition> LearningSweep::switch_condition() const {
 
 std::vector<std::string> LearningSweep::run_ids(const std::vector<std::string>& rules) const {
   std::vector<std::string> ids;
+  bool twins = false;
   for (const std::string& id : rules) {
     ids.push_back(id);
     if (switch_condition() && make_learning_update(id)->need() == UpdateNeed::kStackedJacobian) {
       ids.push_back(pretrained_run_id(id));
+      twins = true;
     }
   }
+  // The control arm, once beside the twins.
+  if (twins && control_factor()) ids.push_back(pretrained_run_id(kPretrainingRule));
   return ids;
 }
 
@@ -194,7 +204,9 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
   LearningResult result;
   result.id = id;
   result.tag = tag;
-  result.label = learning_run_label(id) + " (" + tag + ")";
+  result.label = learning_run_label(id) + " (" +
+                 (is_control_run(id) ? "lr ×" + format_value(*control_factor()) + "; " : "") +
+                 tag + ")";
   result.seed = params.value("seed", 0LL);
 
   TrainerOptions options = trainer_options(pretrained.empty() ? id : pretrained, result.seed);
@@ -217,7 +229,8 @@ const LearningResult& LearningSweep::run(const std::string& id, const std::strin
 
 std::unique_ptr<LearningUpdate> LearningSweep::run_update(const std::string& id,
                                                           const SwitchingUpdate*& switching) const {
-  // A pretrained run: its Adam part as the Adam run of this sweep, then its rule.
+  // A pretrained run: its Adam part as the Adam run of this sweep (with --pretrain-<option>),
+  // then its rule; the control: then a fresh Adam at control_factor() × the Adam part's step.
   const std::string pretrained = pretrained_rule(id);
   switching = nullptr;
   if (pretrained.empty()) return make_update(id);
@@ -226,8 +239,16 @@ std::unique_ptr<LearningUpdate> LearningSweep::run_update(const std::string& id,
     throw Error(context_.experiment_name() + ": run '" + id +
                 "' needs --pretrain auto or N, N below the --iters limit if one is given");
   }
+  const RuleSettings adam_part = pretraining_settings();
+  std::unique_ptr<LearningUpdate> first = make_update(kPretrainingRule, adam_part);
+  RuleSettings control = adam_part;
+  if (is_control_run(id)) {
+    if (!control_factor()) throw Error(context_.experiment_name() + ": the control is off");
+    control["lr"] = *control_factor() * first->learning_rate();
+  }
   auto composed = std::make_unique<SwitchingUpdate>(
-      make_update(kPretrainingRule), batch_size(kPretrainingRule), make_update(pretrained),
+      std::move(first), batch_size(kPretrainingRule),
+      is_control_run(id) ? make_update(kPretrainingRule, control) : make_update(pretrained),
       batch_size(pretrained), *condition);
   switching = composed.get();
   return composed;
@@ -268,11 +289,12 @@ nlohmann::json LearningSweep::trained_params(const LearningUpdate& update, Index
     // the run is Adam's alone and reads so.
     const auto& phases = result.summary.phases;
     run_params["switched"] = phases.size() > 1;
+    if (is_control_run(result.id)) run_params["control_lr_factor"] = *control_factor();
     if (phases.size() > 1) {
       run_params["pretrain_iterations"] = phases[1].first_iteration;
     } else {
       result.label = learning_run_label(kPretrainingRule) + " (" + result.tag +
-                     "; never switched to " + learning_run_label(pretrained_rule(result.id)) + ")";
+                     "; never switched to " + taking_over_label(result.id, run_params) + ")";
     }
   }
   return run_params;
@@ -314,15 +336,24 @@ void LearningSweep::record_run(const LearningResult& result, const Network& netw
   entry.step_halvings = s.step_halvings;
   entry.seconds_per_part = SecondsPerPart{s.forward_seconds, s.derivative_seconds,
                                           s.inversion_seconds, s.update_seconds};
+  // A twin's cost per part: Adam's updates and its rule's apart.
+  for (const PhaseCost& phase : phase_costs(result)) {
+    entry.more["phases"].push_back({{"rule", phase.rule},
+                                    {"updates", phase.updates},
+                                    {"train_seconds", phase.seconds},
+                                    {"seconds_per_update", phase.seconds_per_update()}});
+  }
   context_.add_run(std::move(entry));
 }
 
-std::unique_ptr<LearningUpdate> LearningSweep::make_update(const std::string& rule) const {
+std::unique_ptr<LearningUpdate> LearningSweep::make_update(const std::string& rule,
+                                                           const RuleSettings& overrides) const {
   const RuleDefaults* own = experiment_setting(defaults_, rule);
   RuleSettings options = own == nullptr ? RuleSettings{} : own->settings;
   for (const auto& [name, value] : rule_settings(settings_, RuleKind::kLearning)) {
     options[name] = value;
   }
+  for (const auto& [name, value] : overrides) options[name] = value;
   return make_learning_update(rule, options);
 }
 

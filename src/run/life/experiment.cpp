@@ -183,15 +183,19 @@ OptionSpec rule_option_spec(const std::string& rule_option, std::optional<RuleKi
   for (const std::string& id : shared.rules) {
     if (std::find(offered.begin(), offered.end(), id) != offered.end()) rules.push_back(id);
   }
-  const OptionRange& range = shared.option.range;
-  std::string help = shared.option.help + " (" + (rules.empty() ? "" : comma_list(rules) + "; ") +
-                     "default: each rule's own)";
+  return option_in_range(name, shared.option.range,
+                         shared.option.help + " (" +
+                             (rules.empty() ? "" : comma_list(rules) + "; ") +
+                             "default: each rule's own)");
+}
+
+OptionSpec option_in_range(std::string name, const OptionRange& range, std::string help) {
   if (range.type == OptionRange::Type::kChoice) {
-    return text_option(name, "", std::move(help)).one_of(range.choices);
+    return text_option(std::move(name), "", std::move(help)).one_of(range.choices);
   }
   OptionSpec spec = range.type == OptionRange::Type::kInteger
-                        ? integer_option(name, "", std::move(help))
-                        : real_option(name, "", std::move(help));
+                        ? integer_option(std::move(name), "", std::move(help))
+                        : real_option(std::move(name), "", std::move(help));
   spec.min = range.min;
   spec.min_exclusive = range.min_open;
   spec.max = range.max;
@@ -320,6 +324,16 @@ std::vector<OptionSpec> common_options(const Experiment& experiment) {
 std::vector<OptionSpec> all_options(const Experiment& experiment) {
   std::vector<OptionSpec> options = common_options(experiment);
   for (OptionSpec& spec : experiment.options()) options.push_back(std::move(spec));
+  // A rule option the Adam part of the Adam→ twins takes apart (--pretrain-lr beside --lr) says
+  // which runs each reaches.
+  for (OptionSpec& spec : options) {
+    const std::string part = "pretrain-" + spec.name;
+    if (std::any_of(options.begin(), options.end(),
+                    [&](const OptionSpec& other) { return other.name == part; })) {
+      spec.help += "; with --pretrain, the Adam part of the Adam→ twins too unless --" + part +
+                   " is given";
+    }
+  }
   return options;
 }
 

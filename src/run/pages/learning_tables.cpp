@@ -81,14 +81,16 @@ void add_final_loss_rows(FinalLossTables& t, const SweepResults& results, const 
                          const std::string& tag, const std::string& id, bool has_saturation) {
   // A pretrained run none of whose seeds switched is Adam's, and reads so.
   bool switched = pretrained_rule(id).empty();
+  nlohmann::json params;  // of a run of the rule, which name its step (the control's)
   for (const long long seed : axes.seeds) {
     const LearningResult* r = find_sweep_result(results, tag, id, seed);
     switched = switched || (r != nullptr && r->params.value("switched", false));
+    if (r != nullptr && params.is_null()) params = r->params;
   }
-  const std::string label = switched ? learning_run_label(id)
+  const std::string label = switched ? run_rule_label(id, params)
                                      : learning_run_label(kPretrainingRule) +
                                            " (never switched to " +
-                                           learning_run_label(pretrained_rule(id)) + ")";
+                                           taking_over_label(id, params) + ")";
   std::vector<std::string> row = {label}, saturated = {label};
   // A run that failed, diverged or never switched is shown, never counted in a median.
   std::vector<double> values;
@@ -141,34 +143,49 @@ void mark_lowest_median(FinalLossTables& t) {
                     "in no median";
 }
 
-// Time per step of every rule and setting, summed over the seeds.
+// Time per step of every rule and setting, summed over the seeds; a twin's total also per part
+// (phase_costs: its Adam updates, then its rule's).
 RunContext::Table step_time_table(const SweepResults& results, const SweepAxes& axes) {
   RunContext::Table timing{"Time per training step in milliseconds, mean over seeds: the "
                            "forward pass of network, physics and loss; the gradient or stacked "
                            "Jacobian; the inversion inside gn/hig; the rest of the update (a "
-                           "pretrained run: over its Adam and its rule's steps together)",
+                           "pretrained run: over its Adam and its rule's steps together); a "
+                           "pretrained run's total also per part, its Adam updates before the "
+                           "switch and its rule's after it",
                            {"rule", "setting", "forward (ms)", "gradient or Jacobian (ms)",
-                            "inversion (ms)", "update (ms)", "total (ms)"},
+                            "inversion (ms)", "update (ms)", "total (ms)", "Adam part (ms)",
+                            "rule part (ms)"},
                            {}};
   for (const std::string& tag : axes.tags) {
     for (const std::string& id : axes.ids) {
       TrainingSummary total;
+      PhaseCost parts[2];
+      nlohmann::json params;
       for (const LearningResult& r : results) {
         if (r.tag != tag || r.id != id) continue;
+        if (params.is_null()) params = r.params;
         total.iterations += r.summary.iterations;
         total.forward_seconds += r.summary.forward_seconds;
         total.derivative_seconds += r.summary.derivative_seconds;
         total.inversion_seconds += r.summary.inversion_seconds;
         total.update_seconds += r.summary.update_seconds;
         total.train_seconds += r.summary.train_seconds;
+        const std::vector<PhaseCost> phases = phase_costs(r);
+        for (std::size_t p = 0; p < phases.size() && p < 2; ++p) {
+          parts[p].updates += phases[p].updates;
+          parts[p].seconds += phases[p].seconds;
+        }
       }
       const long long steps = total.iterations;
-      timing.rows.push_back({learning_run_label(id), tag,
+      const bool twin = !pretrained_rule(id).empty();
+      timing.rows.push_back({run_rule_label(id, params), tag,
                              milliseconds(total.forward_seconds, steps),
                              milliseconds(total.derivative_seconds, steps),
                              milliseconds(total.inversion_seconds, steps),
                              milliseconds(total.update_seconds, steps),
-                             milliseconds(total.train_seconds, steps)});
+                             milliseconds(total.train_seconds, steps),
+                             twin ? milliseconds(parts[0].seconds, parts[0].updates) : "–",
+                             twin ? milliseconds(parts[1].seconds, parts[1].updates) : "–"});
     }
   }
   return timing;
@@ -195,11 +212,18 @@ void LearningSweep::add_tables() const {
 }
 
 void LearningSweep::add_switch_note() const {
-  std::string note;
+  std::string note, control;
   for (const LearningResult& r : results_) {
     const std::string rule = pretrained_rule(r.id);
     if (rule.empty()) continue;
-    const std::string who = learning_run_label(r.id) + " (" + r.tag + ", seed " +
+    if (is_control_run(r.id) && control.empty()) {
+      control = run_rule_label(r.id, r.params);
+      control += " is the control: the same Adam part, switched where the twins switch, then a "
+                 "fresh Adam at " + format_value(r.params.value("control_lr_factor", NAN)) +
+                 " × its step, so that what a rule gains after the switch can be told from what "
+                 "a smaller step gives. ";
+    }
+    const std::string who = run_rule_label(r.id, r.params) + " (" + r.tag + ", seed " +
                             std::to_string(r.seed) + ")";
     if (r.params.value("switched", false)) {
       const long long at = r.params.at("pretrain_iterations").get<long long>();
@@ -208,8 +232,8 @@ void LearningSweep::add_switch_note() const {
         if (record.iteration <= at) seconds = record.train_seconds;
       }
       note += (note.empty() ? "" : " ") + who + ": Adam made " + std::to_string(at) +
-              " updates (" + format_value(seconds) + " s) before " + learning_run_label(rule) +
-              " took over.";
+              " updates (" + format_value(seconds) + " s) before " +
+              taking_over_label(r.id, r.params) + " took over.";
     } else {
       note += (note.empty() ? "" : " ") + who + " never switched within its budget: it is Adam's "
               "run, shown as such and not ranked.";
@@ -225,7 +249,7 @@ void LearningSweep::add_switch_note() const {
                  " evaluations less than " + format_value(100 * settings_.real("plateau-fraction")) +
                  " % below the best before them)"
            : "after --pretrain " + pretrain + " Adam updates") +
-      "; the switch is marked on the curves. " + note);
+      "; the switch is marked on the curves. " + control + note);
 }
 
 }  // namespace physgrad::run

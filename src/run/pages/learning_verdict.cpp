@@ -66,6 +66,34 @@ std::string against_adam(const RuleStanding& rule, const std::vector<const Learn
   return out;
 }
 
+// " After the same switch, Adam→HIG ends 1.3× below the control Adam→Adam (lr ×0.1) (0.05 vs
+// 0.065); …": each ranked twin's median final value against the ranked control's, the ratio with
+// the digits their spreads support; empty without a ranked control or twin.
+std::string against_control(const std::vector<RuleStanding>& all,
+                            const std::vector<std::size_t>& ranked) {
+  const auto control =
+      std::find_if(ranked.begin(), ranked.end(), [&](std::size_t k) { return all[k].control; });
+  if (control == ranked.end()) return {};
+  const RuleStanding& c = all[*control];
+  std::string out;
+  for (const std::size_t k : ranked) {
+    const RuleStanding& twin = all[k];
+    if (!twin.twin || twin.control) continue;
+    const bool below = twin.final_value <= c.final_value;
+    const RuleStanding& low = below ? twin : c;
+    const RuleStanding& high = below ? c : twin;
+    const std::string side = below ? "below" : "above";
+    out += (out.empty() ? "" : "; ") + twin.label + " ends " +
+           (low.final_value > 0 && high.final_value / low.final_value < 1.1
+                ? "about as low as"
+            : low.final_value > 0 ? physgrad::ratio_text(high.finals, low.finals) + "× " + side
+                                  : side) +
+           " the control " + c.label + " (" + value_text(twin.final_value) + " vs " +
+           value_text(c.final_value) + ")";
+  }
+  return out.empty() ? std::string() : " After the same switch, " + out + ".";
+}
+
 }  // namespace
 
 bool credited(const LearningResult& run) {
@@ -116,7 +144,8 @@ RuleStanding standing(const std::vector<const LearningResult*>& group,
                       const std::function<double(const TrainingRecord&)>& value) {
   RuleStanding s;
   s.id = group.front()->id;
-  s.label = learning_run_label(s.id);
+  s.label = run_rule_label(s.id, group.front()->params);
+  s.control = is_control_run(s.id);
   std::vector<double> finals, costs;
   for (const LearningResult* run : group) {
     if (run->params.contains("switched") && run->params.at("switched") == false) {
@@ -209,6 +238,7 @@ std::string verdict_sentence(const VerdictInput& input) {
     }
   }
   out += ".";
+  out += against_control(all, ranked);
   // Per update and per second, each ranked rule against Adam.
   const auto adam = std::find_if(ranked.begin(), ranked.end(),
                                  [&](std::size_t k) { return all[k].id == kPretrainingRule; });

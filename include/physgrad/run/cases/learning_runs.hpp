@@ -34,9 +34,33 @@ struct LearningResult {
   TrainingSummary summary;
 };
 
+// The control arm beside the twins (--control, --control-lr-factor): Adam until the twins' switch,
+// then a fresh Adam at a smaller step, "adam-adam" (pretrained_run_id(kPretrainingRule)).
+bool is_control_run(const std::string& id);
+// The rule run `id` with `params` (LearningResult::params) stands for in the verdict, the tables
+// and the notes: learning_run_label(id), for the control with its step, "Adam→Adam (lr ×0.1)"
+// (from params' control_lr_factor).
+std::string run_rule_label(const std::string& id, const nlohmann::json& params);
+// The rule that takes over in a twin: "HIG" in Adam→HIG, "Adam at lr ×0.1" in the control.
+std::string taking_over_label(const std::string& id, const nlohmann::json& params);
+
+// One part of a run made of parts (a twin: Adam, then its rule): the part's rule id, its updates
+// and their training seconds (evaluations excluded).
+struct PhaseCost {
+  std::string rule;
+  long long updates = 0;
+  double seconds = 0;
+  double seconds_per_update() const;  // NaN without updates
+};
+// The parts of a twin (its params have "switched"): Adam's updates up to the switch, measured at
+// the evaluation made there, and its rule's after it (Adam's alone when it never switched); empty
+// for a plain rule.
+std::vector<PhaseCost> phase_costs(const LearningResult& run);
+
 // An experiment's choices for one rule where they differ from the catalogue's defaults, and its
 // mini-batch size (unset: TrainerOptions' default); --lr, --rcond and --batch override them for
-// every rule (the Adam part of a pretrained run included). A rule the experiment gives none takes
+// every rule (the Adam part of a pretrained run included, unless --pretrain-lr, … give it its
+// own). A rule the experiment gives none takes
 // those of its settings_source() (catalogue.hpp): kfac-hig and lanczos-hig those of hig.
 struct RuleDefaults {
   RuleSettings settings;
@@ -65,17 +89,19 @@ class LearningSweep {
 
   // The runs of `rules`, in order: each rule, and after each rule that needs the stacked
   // Jacobian (gn, hig, kfac, lanczos-hig, …), when --pretrain is auto or N (N > 0 and below the
-  // --iters limit), its run pretrained with Adam ("adam-hig"). An experiment trains each of
-  // these ids.
+  // --iters limit), its run pretrained with Adam ("adam-hig"), and after them all, when any ran
+  // and --control is not off, the control ("adam-adam"). An experiment trains each of these ids.
   std::vector<std::string> run_ids(const std::vector<std::string>& rules) const;
 
   // Trains `network` (any Network: an Mlp, a ConvNetwork, …) with rule `id` and records it (its
   // describe() and trained θ go to networks.json); `params` (e.g. {"lambda", "seed"}) are
   // added to the summary entry and to every metrics row. A pretrained run ("adam-hig") is a
-  // SwitchingUpdate: Adam, with the settings and batch size of this sweep's Adam run, until
-  // --pretrain's condition holds (N updates, or a plateau of its evaluated training loss:
-  // --plateau-window, --plateau-fraction), then the rule continues from that network to the end
-  // of the run's limits (which count the whole run); its history is one curve. With --data
+  // SwitchingUpdate: Adam, with the settings and batch size of this sweep's Adam run (or those
+  // --pretrain-<option> give), until --pretrain's condition holds (N updates, or a plateau of its
+  // evaluated training loss: --plateau-window, --plateau-fraction), then the rule continues from
+  // that network to the end of the run's limits (which count the whole run); its history is one
+  // curve. The control ("adam-adam") continues with a fresh Adam at --control-lr-factor × the
+  // Adam part's step instead. With --data
   // fresh (and draw_from() called), every batch is drawn afresh.
   const LearningResult& run(const std::string& id, const std::string& tag,
                             const nlohmann::json& params, Network& network,
@@ -163,8 +189,15 @@ class LearningSweep {
   // A note saying, for every pretrained run, after how many Adam updates its rule took over.
   void add_switch_note() const;
   // Learning rule `rule` as this sweep runs it: the experiment's choices with the settings given
-  // for every rule (--lr, --rcond, …), and its batch size.
-  std::unique_ptr<LearningUpdate> make_update(const std::string& rule) const;
+  // for every rule (--lr, --rcond, …), then `overrides`, and its batch size.
+  std::unique_ptr<LearningUpdate> make_update(const std::string& rule,
+                                              const RuleSettings& overrides = {}) const;
+  // The Adam part of the twins and of the control: the sweep's Adam run with the options given
+  // as --pretrain-<option> (--pretrain-lr, --pretrain-schedule, …) in its place.
+  RuleSettings pretraining_settings() const;
+  // The factor of the control's step over the Adam part's (--control-lr-factor, 0.1 unset);
+  // nullopt when it is off (--control off or a factor of 0).
+  std::optional<double> control_factor() const;
   Index batch_size(const std::string& rule) const;
   // When pretrained runs are made (--pretrain auto, or N > 0 and below the --iters limit), the
   // condition of their switch from Adam to the rule.

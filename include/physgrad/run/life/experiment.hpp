@@ -87,6 +87,10 @@ std::string describe_range(const OptionSpec& spec);
 OptionSpec rule_option_spec(const std::string& name, std::optional<RuleKind> kind,
                             const std::vector<std::string>& offered);
 
+// An option `name` taking the values of `range` (a real, an integer or one of its names), unset by
+// default.
+OptionSpec option_in_range(std::string name, const OptionRange& range, std::string help);
+
 // The command line's name of rule option `rule_option`: "decay_every" is --decay-every.
 std::string flag_name(std::string rule_option);
 

@@ -42,7 +42,10 @@ struct RunEntry {
   std::string message;
   std::optional<long long> step_halvings;
   std::optional<SecondsPerPart> seconds_per_part;
-  nlohmann::json more = nlohmann::json::object();  // keys of a newer writer, kept as read
+  // Keys of a newer writer, kept as read; and a learning twin's "phases" (its training seconds
+  // per part, written by the learning runs: [{"rule", "updates", "train_seconds",
+  // "seconds_per_update"}, …]).
+  nlohmann::json more = nlohmann::json::object();
 
   // The number `key` names: final's figure of that name, else the run's own ("iterations",
   // "wall_seconds", …); NaN when neither is a number.

@@ -44,6 +44,7 @@ struct RuleStanding {
   int credited = 0, failed = 0;
   bool never_switched = false;  // a twin whose rule never took over
   bool twin = false;            // a rule that follows Adam (its cost is its own phase's)
+  bool control = false;         // the control arm Adam→Adam (is_control_run)
 };
 RuleStanding standing(const std::vector<const LearningResult*>& group,
                       const std::function<double(const TrainingRecord&)>& value);
@@ -76,7 +77,10 @@ std::string value_text(double value);
 // there 10–20× sooner (between 48 and 96 vs 4.7 s). …" The ratio of two rules' finals is the
 // ratio of their medians with the digits their spreads support (as the table of finals); counts,
 // seconds and their ratios carry no digit finer than the evaluations' brackets. Failed runs are
-// counted and never ranked; values within 10 % of each other are called about equal.
+// counted and never ranked; values within 10 % of each other are called about equal. With a
+// ranked control arm (Adam→Adam, RuleStanding::control), each ranked twin's final value is set
+// against it: "After the same switch, Adam→HIG ends 1.3× below the control Adam→Adam (lr ×0.1)
+// (0.05 vs 0.065)."
 std::string verdict_sentence(const VerdictInput& input);
 
 }  // namespace physgrad::run
