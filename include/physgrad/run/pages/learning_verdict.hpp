@@ -76,7 +76,11 @@ std::string value_text(double value);
 // there 10–20× sooner (between 48 and 96 vs 4.7 s). …" The ratio of two rules' finals is the
 // ratio of their medians with the digits their spreads support (as the table of finals); counts,
 // seconds and their ratios carry no digit finer than the evaluations' brackets. Failed runs are
-// counted and never ranked; values within 10 % of each other are called about equal.
+// counted and never ranked; values within 10 % of each other are called about equal. Every
+// comparison says over how many seeds it is ("one seed"); over several it gives the medians and
+// the range of the seeds (min–max, for a count or seconds to reach the level from the lowest to
+// the highest bracket end), and where the two rules' ranges overlap it names no winner: "not
+// separated over 3 seeds".
 std::string verdict_sentence(const VerdictInput& input);
 
 }  // namespace physgrad::run
