@@ -127,15 +127,27 @@ void add_sin_rotation_table(RunContext& context, const std::vector<double>& xis,
   context.add_table(std::move(table));
 }
 
+// A run's budget: "20000 updates", "at most 8 s of training", or both.
+std::string budget_text(const Settings& settings) {
+  std::vector<std::string> parts;
+  if (settings.has("iters")) parts.push_back(std::to_string(settings.integer("iters")) + " updates");
+  if (settings.has("epochs")) parts.push_back(std::to_string(settings.integer("epochs")) + " epochs");
+  if (settings.has("time")) {
+    parts.push_back(format_value(settings.real("time")) + " s of training");
+  }
+  std::string out = "at most ";
+  for (std::size_t k = 0; k < parts.size(); ++k) out += (k ? " or " : "") + parts[k];
+  return out;
+}
+
 // What the run compares with, and why the step sizes are what they are.
 void add_sin_rotation_notes(RunContext& context, const Settings& settings) {
   context.add_note(
       "docs/reference_experiments.md (code form, φ = 45°, 600 s per method on a GPU): at "
       "ξ = 32 SIP reaches an x-distance of ~1e-2 and Adam ~0.2–0.5, SGD ~1.5–2; at ξ = 1 all "
       "methods end below ~2e-3 with Adam best. This run: " + settings.text("form") +
-      " form, φ = " + format_value(settings.real("phi")) + "°, at most " +
-      format_value(settings.real("time")) +
-      " s of training per run on the CPU, so compare the ordering rather than the values. P "
+      " form, φ = " + format_value(settings.real("phi")) + "°, " + budget_text(settings) +
+      " per run on the CPU, so compare the ordering rather than the values. P "
       "reacts ξ² times more strongly to x along the second rotated axis than along the first, "
       "so at large ξ a low loss can go with a large x-distance. The SIP rule here is the "
       "book's (L2 proxy towards the exact local inverse, η = 1); the SIP repository used an L1 "
