@@ -74,10 +74,12 @@ SeedRange crossing_range(const std::vector<const LearningResult*>& group, double
 // "250–300 vs 9000–11000": where two rules' seeds crossed, from the lowest bracket end to the
 // highest; "never" where no seed got there, "from 250 to never" where some did not.
 std::string crossing_ranges_text(const SeedRange& a, const SeedRange& b) {
-  const auto one = [](const SeedRange& r) {
+  // Counts in full ("18300"), seconds with three digits.
+  const auto number = [](double v) { return with_digits(v, 3); };
+  const auto one = [&number](const SeedRange& r) {
     if (!std::isfinite(r.low)) return std::string("never");
-    return std::isfinite(r.high) ? range_text(r.low, r.high)
-                                 : "from " + value_text(r.low) + " to never";
+    if (!std::isfinite(r.high)) return "from " + number(r.low) + " to never";
+    return r.low == r.high ? number(r.low) : number(r.low) + "–" + number(r.high);
   };
   return one(a) + " vs " + one(b);
 }
