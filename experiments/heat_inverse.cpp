@@ -119,8 +119,8 @@ class HeatInverse final : public LearningExperiment {
                                                "U-net; 250 in 1-D, 40 in 2-D otherwise)",
                             .data = "fresh",
                             .seeds = "1",
-                            .seeds_why = "default 1: one run of the 64×64 U-net takes about half "
-                                         "an hour on two cores"}) {}
+                            .seeds_why = "default 1: one run of the 64×64 U-net took about half "
+                                         "an hour on this 2-core machine under load"}) {}
   std::string name() const override { return "heat-inverse"; }
   std::string description() const override {
     return "U-net reconstructs hot boxes x* from their periodic heat diffusion y* = P(x*) on "

@@ -47,8 +47,8 @@ class SipPoisson final : public LearningExperiment {
       : LearningExperiment({.eval_every = "10",
                             .data = "fresh",
                             .seeds = "1",
-                            .seeds_why = "default 1: one run of the 64×64 U-net takes about half "
-                                         "an hour on two cores"}) {}
+                            .seeds_why = "default 1: one run of the 64×64 U-net took about half "
+                                         "an hour on this 2-core machine under load"}) {}
   std::string name() const override { return "sip-poisson"; }
   std::string description() const override {
     return "U-net predicts x from y* where laplace(y*) = x* on 64x64 cells (zero boundary), "
