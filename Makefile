@@ -83,7 +83,8 @@ bench-mpi: build
 	bench/distributed_steps.sh $(BUILD_DIR) 2
 	bench/distributed_hig.sh $(BUILD_DIR) 2 3
 
-# Every reference experiment with its defaults (about 11 minutes): figures, summaries and the
+# Every reference experiment with its defaults (the learning ones on their default seeds; the
+# 64×64 U-net experiments, heat-inverse and sip-poisson, take the longest): figures, summaries and the
 # printed tables in $(RESULTS_DIR), indexed with the reports' captions in $(RESULTS_DIR)/README.md.
 results: build
 	rm -rf $(RESULTS_DIR) && mkdir -p $(RESULTS_DIR)

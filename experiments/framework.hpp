@@ -34,6 +34,7 @@ using run::held_controls;
 using run::integer_option;
 using run::iterations_cell;
 using run::median;
+using run::paired_seeds;
 using run::ratio_text;
 using run::real_list_option;
 using run::real_option;

@@ -80,7 +80,7 @@ ActivationStats activation_stats(const Mlp& network, const Matrix& inputs) {
 
 class HigToy final : public LearningExperiment {
  public:
-  HigToy() : LearningExperiment({.eval_every = "200", .data = "fixed"}) {}
+  HigToy() : LearningExperiment({.eval_every = "200", .data = "fixed", .seeds = "5"}) {}
   std::string name() const override { return "hig-toy"; }
   std::string description() const override {
     return "1-7-2 tanh net learns (sin 6x, cos 9x) through P(y) = (y1, lambda*y2): "
@@ -91,10 +91,6 @@ class HigToy final : public LearningExperiment {
     const auto bytes_each = [](const Settings&) { return sample_bytes({1, kHidden, 2}, 3); };
     return {
         real_list_option("lambda", "1,0.01", "scale λ of the second output").above(0),
-        integer_option("seeds", "5", "number of seeds per configuration (seed, seed+1, …)")
-            .at_least(1)
-            .at_most(1000)
-            .quick("2"),
         sample_count_option("train-size", "512", "training samples", "16", bytes_each),
         sample_count_option("test-size", "256",
                             "test samples (also the activation statistics)", "8", bytes_each),

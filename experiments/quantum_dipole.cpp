@@ -3,6 +3,8 @@
 // fidelity loss 1 − |⟨ψ*|ψ(T)⟩|²): Adam vs HIG (docs/reference_experiments.md).
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <utility>
 
 #include "framework.hpp"
 #include "registry.hpp"
@@ -189,19 +191,23 @@ class QuantumDipoleExperiment final : public LearningExperiment {
   void run(const Settings& settings, RunContext& context) const override {
     const QuantumDipoleConfig config = configuration(settings);
     const LearningCase learning = learning_case(config);
-    const auto seed = static_cast<std::uint64_t>(settings.integer("seed"));
-    const Dataset train_set = learning.training_set(settings.integer("train-size"), seed);
-    const Dataset test_set = learning.test_set(settings.integer("test-size"), seed);
-
     LearningSweep sweep(settings, context, learning);
     const std::string tag = "Nt=" + std::to_string(config.steps);
+    // Every rule on each paired seed; the state figures show the first seed's networks.
+    std::optional<Dataset> first_test;
     std::vector<std::pair<const LearningResult*, Mlp>> trained;
-    for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
-      Mlp network = learning.network(seed);
-      const LearningResult& r =
-          sweep.run(id, tag, {{"seed", seed}}, network, learning.problem(), train_set, &test_set);
-      trained.emplace_back(&r, std::move(network));
+    for (const std::uint64_t seed : paired_seeds(settings)) {
+      const Dataset train_set = learning.training_set(settings.integer("train-size"), seed);
+      const Dataset test_set = learning.test_set(settings.integer("test-size"), seed);
+      for (const std::string& id : sweep.run_ids(settings.texts("optimizers"))) {
+        Mlp network = learning.network(seed);
+        const LearningResult& r =
+            sweep.run(id, tag, {{"seed", seed}}, network, learning.problem(), train_set, &test_set);
+        if (!first_test) trained.emplace_back(&r, std::move(network));
+      }
+      if (!first_test) first_test = test_set;
     }
+    const Dataset& test_set = *first_test;
     sweep.add_loss_figures(context, tag, "dipole", true, "mean test infidelity 1 − |⟨ψ*|ψ(T)⟩|²");
     sweep.set_time_message(tag, "dipole", "final test infidelity");
     add_state_figures(context, config, test_set.inputs.col(0), test_set.context.col(0), trained);

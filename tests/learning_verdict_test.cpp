@@ -51,7 +51,7 @@ TEST(LearningVerdict, StatesTheUpdateAdvantageAndTheStepCostAgainstAdam) {
   const LearningResult hig = run("hig", {1.0, 0.1, 0.05, 0.02}, 10, 0.5);
   const std::string sentence =
       verdict_sentence({{{&adam}, {&hig}}, kTestLoss, "final test loss"});
-  EXPECT_NE(sentence.find("HIG's final test loss is 5× below Adam's (0.02 vs 0.1)"),
+  EXPECT_NE(sentence.find("HIG's final test loss is 5× below Adam's (0.02 vs 0.1, one seed)"),
             std::string::npos)
       << sentence;
   EXPECT_NE(sentence.find("to reach 0.1 HIG needs between 0 and 10 updates, Adam between 6666 "
@@ -89,7 +89,7 @@ TEST(LearningVerdict, FailedDivergedAndUnswitchedRunsAreNeverRanked) {
 
   const LearningResult close = run("sgd", {1.0, 0.52}, 10, 1e-3);
   const std::string equal = verdict_sentence({{{&adam}, {&close}}, kTestLoss, "final test loss"});
-  EXPECT_NE(equal.find("Adam's final test loss is about equal to SGD's (0.5 vs 0.52)"),
+  EXPECT_NE(equal.find("Adam's final test loss is about equal to SGD's (0.5 vs 0.52, one seed)"),
             std::string::npos)
       << equal;
   // Both come down to 0.52 between their evaluations at 0 and 10: neither is told sooner.
@@ -115,6 +115,75 @@ TEST(LearningVerdict, EvenSeedCountsGiveNumbersNotNan) {
   // Adam's seeds reach 0.3 between their evaluations at 100 and 200.
   EXPECT_NE(sentence.find("to reach 0.3 HIG needs"), std::string::npos) << sentence;
   EXPECT_NE(sentence.find(", Adam between 100 and 200 ("), std::string::npos) << sentence;
+}
+
+// Pointers to each of `runs`, one group.
+std::vector<const LearningResult*> group_of(const std::vector<LearningResult>& runs) {
+  std::vector<const LearningResult*> group;
+  for (const LearningResult& r : runs) group.push_back(&r);
+  return group;
+}
+
+// Three paired seeds whose final losses overlap (Adam 0.1–0.3, HIG 0.05–0.25): the medians (0.15
+// below 0.2) crown no winner, and the sentence says the ranges are not separated.
+TEST(LearningVerdict, OverlappingSeedRangesAreNotSeparated) {
+  const std::vector<LearningResult> adam = {run("adam", {1.0, 0.5, 0.1}, 100, 1e-3),
+                                            run("adam", {1.0, 0.5, 0.2}, 100, 1e-3),
+                                            run("adam", {1.0, 0.5, 0.3}, 100, 1e-3)};
+  const std::vector<LearningResult> hig = {run("hig", {1.0, 0.5, 0.05}, 100, 1e-3),
+                                           run("hig", {1.0, 0.5, 0.15}, 100, 1e-3),
+                                           run("hig", {1.0, 0.5, 0.25}, 100, 1e-3)};
+  const std::string sentence =
+      verdict_sentence({{group_of(adam), group_of(hig)}, kTestLoss, "final test loss"});
+  EXPECT_NE(sentence.find("HIG's and Adam's final test loss are not separated over 3 seeds "
+                          "(medians 0.15 vs 0.2, ranges 0.05–0.25 vs 0.1–0.3 over 3 seeds)"),
+            std::string::npos)
+      << sentence;
+  EXPECT_EQ(sentence.find("× below"), std::string::npos) << sentence;
+  // The level is Adam's 0.2: each rule's third seed never reaches it, the others between 100 and
+  // 200 updates.
+  EXPECT_NE(sentence.find("(not separated over 3 seeds; medians, the seeds' brackets spanning "
+                          "from 100 to never vs from 100 to never)"),
+            std::string::npos)
+      << sentence;
+}
+
+// Three paired seeds whose ranges are apart (HIG 0.01–0.03, Adam 0.1–0.3): the ratio of the
+// medians, with both ranges; and the updates to reach Adam's 0.2 apart as well (HIG's seeds within
+// their first 10, Adam's from 100 on, its third never).
+TEST(LearningVerdict, SeparatedSeedRangesGiveTheRatioAndTheRanges) {
+  const std::vector<LearningResult> adam = {run("adam", {1.0, 0.5, 0.1, 0.1}, 100, 1e-3),
+                                            run("adam", {1.0, 0.5, 0.2, 0.2}, 100, 1e-3),
+                                            run("adam", {1.0, 0.5, 0.4, 0.3}, 100, 1e-3)};
+  const std::vector<LearningResult> hig = {run("hig", {1.0, 0.1, 0.01}, 10, 1e-3),
+                                           run("hig", {1.0, 0.1, 0.02}, 10, 1e-3),
+                                           run("hig", {1.0, 0.1, 0.03}, 10, 1e-3)};
+  const std::string sentence =
+      verdict_sentence({{group_of(adam), group_of(hig)}, kTestLoss, "final test loss"});
+  EXPECT_NE(sentence.find("HIG's final test loss is 10× below Adam's (medians 0.02 vs 0.2, ranges "
+                          "0.01–0.03 vs 0.1–0.3 over 3 seeds)"),
+            std::string::npos)
+      << sentence;
+  EXPECT_EQ(sentence.find("not separated"), std::string::npos) << sentence;
+  EXPECT_NE(sentence.find("to reach 0.2 HIG needs between 0 and 10 updates, Adam between 100 and "
+                          "200 (at least 10× fewer; medians over 3 seeds, the seeds' brackets "
+                          "spanning 0–10 vs from 100 to never)"),
+            std::string::npos)
+      << sentence;
+}
+
+// One run per rule: the sentence says so.
+TEST(LearningVerdict, OneSeedIsSaid) {
+  const LearningResult adam = run("adam", {1.0, 0.5, 0.1}, 100, 1e-3);
+  const LearningResult hig = run("hig", {1.0, 0.1, 0.01}, 10, 1e-3);
+  const LearningResult gn = run("gn", {1.0, 0.5, 0.4}, 10, 1e-3);
+  const std::string sentence =
+      verdict_sentence({{{&adam}, {&hig}, {&gn}}, kTestLoss, "final test loss"});
+  EXPECT_NE(sentence.find("HIG's final test loss is 10× below Adam's (0.01 vs 0.1, one seed); "
+                          "Gauss-Newton's is 0.4 (one seed)."),
+            std::string::npos)
+      << sentence;
+  EXPECT_EQ(sentence.find("medians"), std::string::npos) << sentence;
 }
 
 TEST(LearningVerdict, RatiosCarryTwoSignificantDigits) {

@@ -3,6 +3,7 @@
 // diverged) are reported.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 
 #include "experiment_runs.hpp"
@@ -13,6 +14,9 @@ namespace {
 RunContext run(const std::string& name,
                std::vector<std::pair<std::string, std::string>> given) {
   given.emplace_back("time", "1e6");  // stop on the iteration count only
+  const bool seeds = std::any_of(given.begin(), given.end(),
+                                 [](const auto& option) { return option.first == "seeds"; });
+  if (!seeds) given.emplace_back("seeds", "1");  // one run per rule unless a test asks for more
   return testing::run_experiment(name, given);
 }
 
@@ -59,6 +63,46 @@ TEST(QuantumDipoleExperiment, TheDefaultBudgetIsUpdatesNotSeconds) {
       resolve_settings(experiments::builtin_registry().find("quantum-dipole"), {});
   EXPECT_EQ(settings.integer("iters"), 400);
   EXPECT_FALSE(settings.has("time"));
+  EXPECT_EQ(settings.integer("seeds"), 3);
+}
+
+// The former time-limited defaults are updates too, evaluated densely enough to bracket a
+// crossing, and run on three paired seeds.
+TEST(OscillatorsExperiment, TheDefaultBudgetIsUpdatesNotSeconds) {
+  const Settings settings = resolve_settings(experiments::builtin_registry().find("oscillators"), {});
+  EXPECT_EQ(settings.integer("iters"), 1000);
+  EXPECT_EQ(settings.integer("eval-every"), 25);
+  EXPECT_FALSE(settings.has("time"));
+  EXPECT_EQ(settings.integer("seeds"), 3);
+}
+
+TEST(SinRotationExperiment, TheDefaultBudgetIsUpdatesNotSeconds) {
+  const Settings settings =
+      resolve_settings(experiments::builtin_registry().find("sin-rotation"), {});
+  EXPECT_EQ(settings.integer("iters"), 20000);
+  EXPECT_EQ(settings.integer("eval-every"), 500);
+  EXPECT_FALSE(settings.has("time"));
+  EXPECT_EQ(settings.integer("seeds"), 3);
+}
+
+TEST(PoissonExperiment, TheDefaultBudgetIsUpdatesNotSeconds) {
+  const Settings settings = resolve_settings(experiments::builtin_registry().find("poisson"), {});
+  EXPECT_EQ(settings.integer("iters"), 12);
+  EXPECT_EQ(settings.integer("eval-every"), 1);
+  EXPECT_FALSE(settings.has("time"));
+  EXPECT_EQ(settings.integer("seeds"), 3);
+}
+
+// Three paired seeds by default where a run takes a minute or two; the 64×64 U-net experiments
+// one (a run takes about half an hour); hig-toy five.
+TEST(LearningExperiments, SeedsByDefault) {
+  const std::vector<std::pair<std::string, long long>> expected = {
+      {"hig-toy", 5},      {"sin-rotation", 3}, {"oscillators", 3},  {"quantum-dipole", 3},
+      {"poisson", 3},      {"heat-inverse", 1}, {"sip-poisson", 1}};
+  for (const auto& [name, seeds] : expected) {
+    const Settings settings = resolve_settings(experiments::builtin_registry().find(name), {});
+    EXPECT_EQ(settings.integer("seeds"), seeds) << name;
+  }
 }
 
 TEST(PoissonExperiment, AdamHigAndSipLowerTheLoss) {

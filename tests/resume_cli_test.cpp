@@ -6,6 +6,7 @@
 #include <signal.h>
 
 #include <cstdlib>
+#include <tuple>
 #include <nlohmann/json.hpp>
 
 #include "cli_fixture.hpp"
@@ -109,6 +110,37 @@ TEST_F(Resume, PretrainedRunContinuesFromItsAdamPartOrItsRulePart) {
     EXPECT_EQ(read_file(dir_ / folder / "networks.json"),
               read_file(dir_ / "whole" / "networks.json"))
         << kill;
+  }
+}
+
+// poisson on two paired seeds with its Adam→HIG twin (three runs a seed, each checkpointed at
+// iterations 4 and 8 and when it finishes): killed at the 13th checkpoint (the second seed's HIG
+// run at iteration 4) and the 17th (its twin at 8), it continues to the metrics and networks of
+// the uninterrupted run, both seeds' runs numbered as before.
+TEST_F(Resume, SeveralSeedsOfAPretrainedExperimentContinue) {
+  const std::string seeds =
+      "run poisson --grid 4 --train-size 32 --test-size 8 --batch 8 --iters 10 --eval-every 2 "
+      "--pretrain 4 --seeds 2 --checkpoint-every 4 --out ";
+  ASSERT_EQ(run(seeds + "whole").exit_code, 0);
+  for (const auto& [kill, rule, iteration] :
+       {std::tuple{13, "hig", 4}, std::tuple{17, "adam-hig", 8}}) {
+    const std::string folder = "seeds" + std::to_string(kill);
+    ASSERT_EQ(run(seeds + folder, "PHYSGRAD_FAULT=kill@checkpoint:" + std::to_string(kill))
+                  .exit_code,
+              128 + SIGKILL);
+    const std::string saved = read_file(dir_ / folder / "checkpoint.pgc");
+    const nlohmann::json current =
+        nlohmann::json::parse(saved.substr(saved.find('\n') + 1))["current"];
+    EXPECT_EQ(current["key"]["seed"], 1) << kill;
+    EXPECT_EQ(current["key"]["optimizer"], rule) << kill;
+    EXPECT_EQ(current["state"]["summary"]["iterations"], iteration) << kill;
+    const Outcome resumed = run("resume " + folder);
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    EXPECT_EQ(metrics_without_time(dir_ / folder), metrics_without_time(dir_ / "whole")) << kill;
+    EXPECT_EQ(read_file(dir_ / folder / "networks.json"),
+              read_file(dir_ / "whole" / "networks.json"))
+        << kill;
+    EXPECT_EQ(final_losses(dir_ / folder), final_losses(dir_ / "whole")) << kill;
   }
 }
 

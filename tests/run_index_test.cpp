@@ -365,21 +365,25 @@ TEST_F(RunIndex, TheIndexRanksDirectRulesByTheirMessageAndNeverRanksFailedRuns) 
 }
 
 // A pretrained run (Adam for --pretrain iterations, then its rule) is marked ◆ where it switched:
-// in the report's loss curves (with a hover title) and in the index's overlay by updates.
+// in the report's loss curves (with a hover title) and in the index's overlay by updates. Over two
+// paired seeds, each rule's curve is the median of both and the index's row counts both runs.
 TEST_F(RunIndex, APretrainedRunIsMarkedWhereItSwitched) {
   ASSERT_EQ(run("run oscillators --train-size 32 --test-size 16 --iters 8 --eval-every 2 "
-                "--batch 16 --pretrain 4 --out runs/osc")
+                "--batch 16 --pretrain 4 --seeds 2 --out runs/osc")
                 .exit_code,
             0);
   ASSERT_EQ(run("report runs").exit_code, 0);
   const std::string figure = read_file(dir_ / "runs" / "osc" / "loss_vs_time_paper.svg");
   for (const char* rule : {"Adam→Gauss-Newton", "Adam→HIG"}) {
     EXPECT_NE(figure.find("<g class=\"mark\"><title>" + std::string(rule) +
-                          " (paper): switched from Adam after iteration 4</title>"),
+                          " (paper), median of 2: switched from Adam after iteration 4</title>"),
               std::string::npos)
         << rule;
   }
+  EXPECT_NE(figure.find("HIG (paper), median of 2"), std::string::npos);
   const std::string index = read_file(dir_ / "runs" / "index.html");
+  EXPECT_NE(index.find("<td data-h=\"runs\">2</td>"), std::string::npos);
+  EXPECT_EQ(index.find("<td data-h=\"runs\">1</td>"), std::string::npos);
   const std::vector<std::string> overlays = inline_svgs(index.substr(index.find("<h2>oscillators")));
   ASSERT_GE(overlays.size(), 2u);
   EXPECT_NE(overlays[0].find(">updates (iterations)</text>"), std::string::npos);

@@ -207,7 +207,28 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
   return options;
 }
 
+// --seeds with the experiment's default: every rule runs on the same seeds, so that seed s gives
+// each the same initial network and data and the verdict compares them seed by seed.
+OptionSpec seeds_option(const LearningDefaults& defaults) {
+  return integer_option("seeds", defaults.seeds,
+                        "number of paired seeds per configuration (seed, seed+1, …; every rule "
+                        "starts from the same network and data of a seed)" +
+                            (defaults.seeds_why.empty() ? "" : "; " + defaults.seeds_why))
+      .at_least(1)
+      .at_most(1000)
+      .quick("2");
+}
+
 }  // namespace
+
+std::vector<std::uint64_t> paired_seeds(const Settings& settings) {
+  std::vector<std::uint64_t> seeds;
+  const auto first = static_cast<std::uint64_t>(settings.integer("seed"));
+  for (long long s = 0; s < settings.integer("seeds"); ++s) {
+    seeds.push_back(first + static_cast<std::uint64_t>(s));
+  }
+  return seeds;
+}
 
 long long pretrain_iterations(const std::string& text) {
   if (text == "auto") return 0;
@@ -232,6 +253,7 @@ Index ReferenceCase::batch_size(const std::string& id) const {
 
 std::vector<OptionSpec> LearningExperiment::options() const {
   std::vector<OptionSpec> options = own_options();
+  options.push_back(seeds_option(defaults_));
   for (OptionSpec& spec : learning_options(defaults_)) options.push_back(std::move(spec));
   return options;
 }

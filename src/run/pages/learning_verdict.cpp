@@ -28,6 +28,62 @@ Crossing group_crossing(const std::vector<const LearningResult*>& group, double 
   return median_crossing(crossings);
 }
 
+// Where a rule's values lie over its seeds.
+struct SeedRange {
+  double low = NAN, high = NAN;
+};
+
+// Whether two ranges are apart: one ends below where the other starts.
+bool separated(const SeedRange& a, const SeedRange& b) { return a.high < b.low || b.high < a.low; }
+
+SeedRange finals_range(const RuleStanding& s) { return {s.finals.low, s.finals.high}; }
+
+// The credited runs of `group` (the seeds a rule's median is over).
+int credited_count(const std::vector<const LearningResult*>& group) {
+  return static_cast<int>(std::count_if(group.begin(), group.end(),
+                                        [](const LearningResult* run) { return credited(*run); }));
+}
+
+// "3 seeds", "3 and 2 seeds" (the credited runs of two rules), "one seed".
+std::string seeds_text(int a, int b) {
+  if (a <= 1 && b <= 1) return "one seed";
+  return (a == b ? std::to_string(a) : std::to_string(a) + " and " + std::to_string(b)) + " seeds";
+}
+
+// "0.028–0.035", or the one value when the range has no width.
+std::string range_text(double low, double high) {
+  return low == high ? value_text(low) : value_text(low) + "–" + value_text(high);
+}
+
+// The range over the credited seeds of `group` of where each crossed `level`: from the lowest
+// bracket end to the highest (high = ∞ when a seed never got there).
+SeedRange crossing_range(const std::vector<const LearningResult*>& group, double level,
+                         const std::function<double(const TrainingRecord&)>& value,
+                         bool in_seconds) {
+  SeedRange range{INFINITY, -INFINITY};
+  for (const LearningResult* run : group) {
+    if (!credited(*run)) continue;
+    const Crossing c = in_seconds ? seconds_crossing(run->summary, level, value)
+                                  : updates_crossing(run->summary, level, value);
+    range.low = std::min(range.low, c.reached() ? c.low : INFINITY);
+    range.high = std::max(range.high, c.reached() ? c.high : INFINITY);
+  }
+  return range;
+}
+
+// "250–300 vs 9000–11000": where two rules' seeds crossed, from the lowest bracket end to the
+// highest; "never" where no seed got there, "from 250 to never" where some did not.
+std::string crossing_ranges_text(const SeedRange& a, const SeedRange& b) {
+  // Counts in full ("18300"), seconds with three digits.
+  const auto number = [](double v) { return with_digits(v, 3); };
+  const auto one = [&number](const SeedRange& r) {
+    if (!std::isfinite(r.low)) return std::string("never");
+    if (!std::isfinite(r.high)) return "from " + number(r.low) + " to never";
+    return r.low == r.high ? number(r.low) : number(r.low) + "–" + number(r.high);
+  };
+  return one(a) + " vs " + one(b);
+}
+
 // "to reach 0.1 HIG needs 280 updates, Adam 10000 (34–38× fewer); its update costs 3.7× Adam's;
 // in wall time (measured at the same evaluations) HIG gets there 9–11× sooner (0.07 vs 0.72 s)",
 // `rule` against `base`. Counts and seconds are the brackets between the evaluations that
@@ -41,11 +97,23 @@ std::string against_adam(const RuleStanding& rule, const std::vector<const Learn
   const Crossing u_base = group_crossing(base_runs, level, input.value, false);
   const Crossing t_rule = group_crossing(runs, level, input.value, true);
   const Crossing t_base = group_crossing(base_runs, level, input.value, true);
+  // Over several seeds, a rule is ahead only where the seeds' ranges are apart.
+  const int seeds = std::max(credited_count(runs), credited_count(base_runs));
+  const SeedRange s_rule = crossing_range(runs, level, input.value, false);
+  const SeedRange s_base = crossing_range(base_runs, level, input.value, false);
+  const std::string over = seeds_text(credited_count(runs), credited_count(base_runs));
   std::string out = "to reach " + value_text(level) + " " + rule.label + " needs " +
                     crossing_text(u_rule) + " updates, " + base.label + " " +
                     crossing_text(u_base) + " (" +
-                    advantage_text(ratio_range(u_base, u_rule), "fewer", "more", "about as many",
-                                   "the brackets do not tell which needs fewer") +
+                    (seeds > 1 && !separated(s_rule, s_base)
+                         ? "not separated over " + over + "; medians"
+                         : advantage_text(ratio_range(u_base, u_rule), "fewer", "more",
+                                          "about as many",
+                                          "the brackets do not tell which needs fewer") +
+                               (seeds > 1 ? "; medians over " + over : "")) +
+                    (seeds > 1 ? ", the seeds' brackets spanning " +
+                                     crossing_ranges_text(s_rule, s_base)
+                               : "") +
                     ")";
   const double m = rule.seconds_per_update / base.seconds_per_update;
   if (std::isfinite(m) && m > 0) {
@@ -56,7 +124,10 @@ std::string against_adam(const RuleStanding& rule, const std::vector<const Learn
     const RatioRange sooner = ratio_range(t_base, t_rule);
     const bool rule_sooner = sooner.low >= 1.1, base_sooner = sooner.high <= 1 / 1.1;
     out += "; in wall time (measured at the same evaluations) ";
-    out += rule_sooner || base_sooner
+    const bool apart = seeds < 2 || separated(crossing_range(runs, level, input.value, true),
+                                              crossing_range(base_runs, level, input.value, true));
+    out += !apart ? "they are not separated over " + over
+           : rule_sooner || base_sooner
                ? (rule_sooner ? rule.label : base.label) + " gets there " +
                      advantage_text(sooner, "sooner", "sooner", "", "")
                : advantage_text(sooner, "", "", "both get there about together",
@@ -66,9 +137,44 @@ std::string against_adam(const RuleStanding& rule, const std::vector<const Learn
   return out;
 }
 
+// A rule's final value alone: "0.5 (one seed)", "0.5 (range 0.4–0.6 over 3 seeds)".
+std::string finals_text(const RuleStanding& s) {
+  if (s.credited <= 1) return value_text(s.final_value) + " (one seed)";
+  return value_text(s.final_value) + " (range " + range_text(s.finals.low, s.finals.high) +
+         " over " + seeds_text(s.credited, s.credited) + ")";
+}
+
+// The lowest two rules compared: "HIG's final test loss is 5× below Adam's (0.02 vs 0.1, one
+// seed)"; over several seeds with the medians and ranges, and "HIG's and Adam's final test loss
+// are not separated over 3 seeds (…)" where the two ranges overlap.
+std::string ranking_text(const RuleStanding& best, const RuleStanding& next,
+                         const std::string& what) {
+  const int seeds = std::max(best.credited, next.credited);
+  const std::string over = seeds_text(best.credited, next.credited);
+  const std::string values =
+      seeds > 1 ? "medians " + value_text(best.final_value) + " vs " +
+                      value_text(next.final_value) + ", ranges " +
+                      range_text(best.finals.low, best.finals.high) + " vs " +
+                      range_text(next.finals.low, next.finals.high) + " over " + over
+                : value_text(best.final_value) + " vs " + value_text(next.final_value) + ", " +
+                      over;
+  if (seeds > 1 && !separated(finals_range(best), finals_range(next))) {
+    return best.label + "'s and " + next.label + "'s " + what + " are not separated over " +
+           over + " (" + values + ")";
+  }
+  const double ratio = next.final_value / best.final_value;
+  return best.label + "'s " + what + " is " +
+         (best.final_value > 0 && ratio < 1.1 ? "about equal to " + next.label + "'s"
+          : best.final_value > 0
+              ? physgrad::ratio_text(next.finals, best.finals) + "× below " + next.label + "'s"
+              : "below " + next.label + "'s") +
+         " (" + values + ")";
+}
+
 // " After the same switch, Adam→HIG ends 1.3× below the control Adam→Adam (lr ×0.1) (0.05 vs
 // 0.065); …": each ranked twin's median final value against the ranked control's, the ratio with
-// the digits their spreads support; empty without a ranked control or twin.
+// the digits their spreads support, or "not separated over 3 seeds" where their seeds' ranges
+// overlap; empty without a ranked control or twin.
 std::string against_control(const std::vector<RuleStanding>& all,
                             const std::vector<std::size_t>& ranked) {
   const auto control =
@@ -83,6 +189,13 @@ std::string against_control(const std::vector<RuleStanding>& all,
     const RuleStanding& low = below ? twin : c;
     const RuleStanding& high = below ? c : twin;
     const std::string side = below ? "below" : "above";
+    const int seeds = std::max(twin.credited, c.credited);
+    if (seeds > 1 && !separated(finals_range(twin), finals_range(c))) {
+      out += (out.empty() ? "" : "; ") + twin.label + " and the control " + c.label +
+             " are not separated over " + seeds_text(twin.credited, c.credited) + " (medians " +
+             value_text(twin.final_value) + " vs " + value_text(c.final_value) + ")";
+      continue;
+    }
     out += (out.empty() ? "" : "; ") + twin.label + " ends " +
            (low.final_value > 0 && high.final_value / low.final_value < 1.1
                 ? "about as low as"
@@ -211,20 +324,17 @@ std::string verdict_sentence(const VerdictInput& input) {
     return "No rule ended a run within its limits with a finite " + input.what + ".";
   }
   const RuleStanding& best = all[ranked.front()];
-  std::string out = best.label + "'s " + input.what + " is ";
-  if (ranked.size() == 1) {
-    out += value_text(best.final_value);
-  } else {
-    const RuleStanding& next = all[ranked[1]];
-    const double ratio = next.final_value / best.final_value;
-    out += (best.final_value > 0 && ratio < 1.1 ? "about equal to " + next.label + "'s"
-            : best.final_value > 0 ? physgrad::ratio_text(next.finals, best.finals) + "× below " +
-                                         next.label + "'s"
-                                               : "below " + next.label + "'s") +
-           " (" + value_text(best.final_value) + " vs " + value_text(next.final_value) + ")";
-  }
+  std::string out = ranked.size() == 1
+                        ? best.label + "'s " + input.what + " is " + finals_text(best)
+                        : ranking_text(best, all[ranked[1]], input.what);
   for (std::size_t k = 2; k < ranked.size(); ++k) {
-    out += "; " + all[ranked[k]].label + "'s is " + value_text(all[ranked[k]].final_value);
+    const RuleStanding& s = all[ranked[k]];
+    const RuleStanding& above = all[ranked[k - 1]];
+    out += "; " + s.label + "'s is " + finals_text(s);
+    if (std::max(s.credited, above.credited) > 1 &&
+        !separated(finals_range(s), finals_range(above))) {
+      out += ", not separated from " + above.label + "'s";
+    }
   }
   for (const RuleStanding& s : all) {
     if (s.failed > 0) {

@@ -49,7 +49,15 @@ struct LearningDefaults {
   // --data's default, fixed or fresh, for an experiment that draws fresh samples
   // (LearningSweep::draw_from); empty: the experiment has no --data.
   std::string data{};
+  // --seeds: the paired seeds every rule runs on (seed, seed+1, …), and why the default is what
+  // it is when that needs saying (appended to the option's help).
+  std::string seeds = "3";
+  std::string seeds_why{};
 };
+
+// The paired seeds of a run: --seed, --seed + 1, … (--seeds of them), each giving every rule the
+// same initial network and data.
+std::vector<std::uint64_t> paired_seeds(const Settings& settings);
 
 // The N of --pretrain N (0 for auto, which switches on a plateau); throws Error naming the text
 // when it is neither auto nor a whole number from 0 to 10⁹.

@@ -77,10 +77,13 @@ std::string value_text(double value);
 // there 10–20× sooner (between 48 and 96 vs 4.7 s). …" The ratio of two rules' finals is the
 // ratio of their medians with the digits their spreads support (as the table of finals); counts,
 // seconds and their ratios carry no digit finer than the evaluations' brackets. Failed runs are
-// counted and never ranked; values within 10 % of each other are called about equal. With a
-// ranked control arm (Adam→Adam, RuleStanding::control), each ranked twin's final value is set
-// against it: "After the same switch, Adam→HIG ends 1.3× below the control Adam→Adam (lr ×0.1)
-// (0.05 vs 0.065)."
+// counted and never ranked; values within 10 % of each other are called about equal. Every
+// comparison says over how many seeds it is ("one seed"); over several it gives the medians and
+// the range of the seeds (min–max, for a count or seconds to reach the level from the lowest to
+// the highest bracket end), and where the two rules' ranges overlap it names no winner: "not
+// separated over 3 seeds". With a ranked control arm (Adam→Adam, RuleStanding::control), each
+// ranked twin's final value is set against it: "After the same switch, Adam→HIG ends 1.3× below
+// the control Adam→Adam (lr ×0.1) (0.05 vs 0.065)."
 std::string verdict_sentence(const VerdictInput& input);
 
 }  // namespace physgrad::run
