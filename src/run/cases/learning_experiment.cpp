@@ -157,7 +157,7 @@ std::vector<OptionSpec> learning_options(const LearningDefaults& defaults) {
   };
   // After --batch, the inverses' options; after the pretraining options, the schedule's.
   const std::vector<OptionSpec> inverses = learning_rule_flags(
-      {"rcond", "precision", "eigensolver", "products", "refresh", "damping", "factor_decay"});
+      {"rcond", "precision", "eigensolver", "products", "refresh", "damping", "factor_decay", "samples"});
   options.insert(options.begin() + 1, inverses.begin(), inverses.end());
   const std::vector<OptionSpec> schedule = learning_rule_flags(
       {"schedule", "decay", "decay_every", "t_max", "min_lr", "patience", "threshold"});
