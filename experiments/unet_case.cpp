@@ -61,14 +61,21 @@ void check_unet(const run::Settings& settings, int dims, Index n) {
     }
     if (settings.has("batch")) {
       // The output cotangents of every physics output (one per cell) for every sample, twice:
-      // a 64×64 kfac-hig run at batch 128 (17 GB of cotangents) was killed at 24 GB.
+      // a 64×64 kfac-hig run at batch 128 (17 GB of cotangents) was killed at 24 GB. A rule
+      // given --samples K holds K of them.
       const double cells = std::pow(static_cast<double>(n), dims);
+      double directions = cells;
+      if (settings.has("samples")) {
+        const nlohmann::json params =
+            make_learning_update(id, {{"samples", settings.integer("samples")}})->params();
+        if (params.contains("samples")) directions = params.at("samples").get<double>();
+      }
       const long long batch = settings.integer("batch");
       const double samples = std::min(static_cast<double>(batch),
                                       static_cast<double>(settings.integer("train-size")));
-      require_memory(2 * 8.0 * cells * cells * samples,
+      require_memory(2 * 8.0 * cells * directions * samples,
                      "--batch: " + std::to_string(batch) + " (the stacked Jacobian of '" + id +
-                         "' holds " + std::to_string(static_cast<long long>(cells)) +
+                         "' holds " + std::to_string(static_cast<long long>(directions)) +
                          " output cotangents of every sample's field)");
     }
   }

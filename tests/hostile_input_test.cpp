@@ -233,6 +233,11 @@ TEST_F(Hostile, LearningStepsAndEvaluationsBeyondTimeOrMemoryAreRefused) {
                           "--train-size 4096",
                           "--batch: 4096 (the stacked Jacobian of 'kfac-hig' holds 4096 output "
                           "cotangents of every sample's field) needs ");
+  // --samples counts output directions: a value that is not one is named.
+  expect_refused_promptly("run heat-inverse --batch-norm off --optimizers kfac-hig --samples 2.5",
+                          "--samples: '2.5' is not a whole number");
+  expect_refused_promptly("run heat-inverse --batch-norm off --optimizers kfac-hig --samples -1",
+                          "--samples: must be in [0, 2147483647], got '-1'");
   // Rules without a Jacobian take any batch the samples allow.
   const Outcome adam = run("run heat-inverse --network mlp --dims 1 --optimizers adam --batch "
                            "4096 --iters 1 --train-size 16 --test-size 8 --data fixed --out adam");

@@ -92,7 +92,7 @@ TEST(Catalogue, SettingsReachEveryOptionTheRulesReport) {
       {"inverse_function_tolerance", 1e-9}, {"inverse_rcond", 1e-8}, {"y_step", 0.75},
       {"schedule", "plateau"}, {"decay", 0.5}, {"min_lr", 1e-6}, {"patience", 3},
       {"threshold", 0.01},   {"damping", 0.2},       {"refresh", 3},
-      {"factor_decay", 0.25}, {"products", 9}};
+      {"factor_decay", 0.25}, {"products", 9}, {"samples", 5}};
   nlohmann::json expected(settings);
   expected["initial_step"] = 0.123;  // bfgs and lbfgs take lr as their first trial step
   for (const RuleInfo& rule : rule_catalogue()) {

@@ -79,6 +79,13 @@ py::array_t<double> structured_mlp_step(const std::string& rule, const py::dict&
   }
   state.jacobian = std::make_shared<LocalJacobian>(network, *cache, physics, out,
                                                    std::move(cotangents));
+  // A rule given samples refreshes from weighted factors (the batch as evaluate_batch gives it).
+  state.gradient = state.jacobian->apply_transpose(state.loss_gradient_y);
+  state.outputs = m;
+  state.weighted_factors = [&](const std::vector<Matrix>& weights) {
+    return network.dense_layer_factors(*cache,
+                                       weighted_output_cotangents(physics, out, Matrix(), weights));
+  };
   return to_numpy(update->step(state).delta);
 }
 

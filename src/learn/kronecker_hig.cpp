@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <sstream>
 #include <string>
 
 #include "physgrad/error.hpp"
@@ -54,6 +56,31 @@ void set_kronecker_block(const KroneckerHigUpdate::Layer& layer, const Matrix& b
   v.segment(layer.offset + in * out, out) = block.col(in);
 }
 
+// K orthonormal columns in R^m drawn with `rng`: the Q of the QR of an m × K matrix of
+// standard normals (its span uniform over the K-dimensional subspaces, E[Q Qᵀ] = (K/m)·I).
+Matrix random_orthonormal_columns(Index m, Index k, std::mt19937_64& rng) {
+  std::normal_distribution<double> normal;
+  Matrix g(m, k);
+  for (Index c = 0; c < k; ++c) {
+    for (Index r = 0; r < m; ++r) g(r, c) = normal(rng);
+  }
+  const Eigen::HouseholderQR<Matrix> qr(g);
+  return qr.householderQ() * Matrix::Identity(m, k);
+}
+
+// `samples`, listed in params() only when it is set (a run with all outputs keeps its config).
+RuleOption<KroneckerHigOptions> sampled_directions_option() {
+  RuleOption<KroneckerHigOptions> option =
+      rule_option("samples", &KroneckerHigOptions::samples, integer_at_least(0),
+                  "random output directions per sample at a refresh of the Kronecker factors, at "
+                  "most the physics outputs m (0: all m, the exact factors)");
+  option.applies = [](const KroneckerHigOptions& o) { return o.samples > 0; };
+  return option;
+}
+
+// The seed of the generator of the output directions at reset().
+constexpr std::uint64_t kDirectionSeed = 20261129;
+
 std::string layer_key(std::size_t l, const char* what) {
   return "layer " + std::to_string(l) + " " + what;
 }
@@ -72,13 +99,15 @@ const OptionList<KroneckerHigOptions>& KroneckerHigOptions::descriptors() {
       in_group(OptionGroup::kInversion,
                rule_option("factor_decay", &KroneckerHigOptions::factor_decay, fraction(),
                            "weight of the old Kronecker factors in their running average")),
+      in_group(OptionGroup::kInversion, sampled_directions_option()),
   };
   return options;
 }
 
 KroneckerHigUpdate::KroneckerHigUpdate(Options options, const std::string& id)
     : options_(options),
-      id_(listed_rule_id(rules(), id, rules()[options.cut.kappa == 1.0 ? 0 : 1].id)) {
+      id_(listed_rule_id(rules(), id, rules()[options.cut.kappa == 1.0 ? 0 : 1].id)),
+      rng_(kDirectionSeed) {
   check_options(id_, options_);
 }
 
@@ -91,11 +120,13 @@ void KroneckerHigUpdate::set_learning_rate(double lr) {
 }
 
 UpdateNeed KroneckerHigUpdate::need() const {
-  return steps_ % options_.refresh == 0 ? UpdateNeed::kStackedJacobian : UpdateNeed::kGradient;
+  if (steps_ % options_.refresh != 0) return UpdateNeed::kGradient;
+  return options_.samples > 0 ? UpdateNeed::kWeightedFactors : UpdateNeed::kStackedJacobian;
 }
 
 void KroneckerHigUpdate::reset() {
   steps_ = 0;
+  rng_.seed(kDirectionSeed);
   layers_.clear();
   input_powers_.clear();
   cotangent_powers_.clear();
@@ -144,17 +175,35 @@ void KroneckerHigUpdate::average_factors(Layer& layer, const DenseLayerFactors& 
   }
 }
 
+std::vector<DenseLayerFactors> KroneckerHigUpdate::sampled_factors(const BatchState& batch,
+                                                                   std::mt19937_64& rng) const {
+  if (!batch.weighted_factors) {
+    throw Error(id() + ": this step refreshes the Kronecker factors from sampled directions and "
+                "needs the batch's weighted factors");
+  }
+  const Index m = batch.outputs, k = options_.samples, b = batch.batch_size;
+  if (k > m) {
+    throw Error(id() + ": samples " + std::to_string(k) + " exceeds the " + std::to_string(m) +
+                " physics outputs per sample");
+  }
+  const double scale = std::sqrt(static_cast<double>(m) / static_cast<double>(k));
+  std::vector<Matrix> weights(static_cast<std::size_t>(k), Matrix(m, b));
+  for (Index i = 0; i < b; ++i) {
+    const Matrix q = random_orthonormal_columns(m, k, rng);
+    for (Index j = 0; j < k; ++j) weights[static_cast<std::size_t>(j)].col(i) = scale * q.col(j);
+  }
+  return batch.weighted_factors(weights);
+}
+
 std::vector<KroneckerHigUpdate::Layer> KroneckerHigUpdate::refreshed_layers(
-    const StackedJacobian& jacobian) const {
+    const std::vector<DenseLayerFactors>& factors, double batch_size) const {
   std::vector<Layer> layers = layers_;
-  const std::vector<DenseLayerFactors> factors = jacobian.dense_layer_factors();
   const double weight = layers.empty() ? 0.0 : options_.factor_decay;
   if (!layers.empty() && layers.size() != factors.size()) {
     throw Error(id() + ": the network has " + std::to_string(factors.size()) +
                 " dense layers, the saved factors " + std::to_string(layers.size()));
   }
   layers.resize(factors.size());
-  const auto batch_size = static_cast<double>(jacobian.batch());
   for (std::size_t l = 0; l < factors.size(); ++l) {
     average_factors(layers[l], factors[l], weight, batch_size, l);
   }
@@ -193,22 +242,29 @@ Vector KroneckerHigUpdate::preconditioned_step(const Vector& gradient) const {
 }
 
 Step KroneckerHigUpdate::step(const BatchState& batch) {
-  const bool refreshing = need() == UpdateNeed::kStackedJacobian;
-  if (refreshing && batch.jacobian == nullptr) {
+  const bool refreshing = need() != UpdateNeed::kGradient;
+  const bool sampled = refreshing && options_.samples > 0;
+  if (refreshing && !sampled && batch.jacobian == nullptr) {
     throw Error(id() + ": this step refreshes the Kronecker factors and needs the stacked Jacobian");
   }
   const Vector gradient = parameter_gradient(batch);
   Step step;
-  // The refreshed factors in locals first: nothing changes when something below throws.
+  // The refreshed factors and the generator in locals first: nothing changes when something
+  // below throws.
   std::vector<Layer> layers;
+  std::mt19937_64 rng = rng_;
   if (refreshing) {
     const auto start = std::chrono::steady_clock::now();
-    layers = refreshed_layers(*batch.jacobian);
+    layers = sampled ? refreshed_layers(sampled_factors(batch, rng),
+                                        static_cast<double>(batch.batch_size))
+                     : refreshed_layers(batch.jacobian->dense_layer_factors(),
+                                        static_cast<double>(batch.jacobian->batch()));
     step.jacobian_seconds = seconds_since(start);
   }
   check_covers(refreshing ? layers : layers_, gradient.size());
   const auto start = std::chrono::steady_clock::now();
   install(layers, refreshing);
+  rng_ = rng;
   step.delta = preconditioned_step(gradient);
   ++steps_;
   step.inversion_seconds = seconds_since(start);
@@ -226,7 +282,13 @@ nlohmann::json KroneckerHigUpdate::state() const {
                       {"input_factor", vector_to_json(layer.input_factor.reshaped())},
                       {"cotangent_factor", vector_to_json(layer.cotangent_factor.reshaped())}});
   }
-  return {{"steps", steps_}, {"layers", layers}};
+  nlohmann::json state = {{"steps", steps_}, {"layers", layers}};
+  if (options_.samples > 0) {
+    std::ostringstream text;
+    text << rng_;
+    state["directions_rng"] = text.str();
+  }
+  return state;
 }
 
 void KroneckerHigUpdate::restore(const nlohmann::json& state, Index parameter_count) {
@@ -265,8 +327,20 @@ void KroneckerHigUpdate::restore(const nlohmann::json& state, Index parameter_co
     throw Error("checkpoint field 'layers': they hold " + std::to_string(covered) + " of the " +
                 std::to_string(parameter_count) + " parameters");
   }
+  std::mt19937_64 rng = rng_;
+  if (state.contains("directions_rng")) {  // absent without samples
+    std::istringstream text(state.at("directions_rng").is_string()
+                                ? state.at("directions_rng").get<std::string>()
+                                : std::string());
+    text >> rng;
+    if (text.fail()) {
+      throw Error("checkpoint field 'directions_rng': expected the state of the direction "
+                  "generator");
+    }
+  }
   steps_ = steps;
   layers_ = std::move(layers);
+  rng_ = rng;
 }
 
 }  // namespace physgrad

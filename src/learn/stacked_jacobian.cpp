@@ -80,6 +80,29 @@ std::vector<Matrix> output_cotangents(const Simulator& physics, const Matrix& x,
   return cotangents;
 }
 
+std::vector<Matrix> weighted_output_cotangents(const Simulator& physics, const Matrix& x,
+                                               const Matrix& context,
+                                               const std::vector<Matrix>& weights) {
+  for (const Matrix& w : weights) {
+    if (w.rows() != physics.output_dim() || w.cols() != x.cols()) {
+      throw Error("output weights of " + std::to_string(w.rows()) + "×" +
+                  std::to_string(w.cols()) + ", the batch has " +
+                  std::to_string(physics.output_dim()) + " outputs × " +
+                  std::to_string(x.cols()) + " samples");
+    }
+  }
+  const auto count = static_cast<Index>(weights.size());
+  std::vector<Matrix> cotangents(weights.size());
+  // Worker t takes the matrices c ≡ t (mod threads).
+  on_threads(std::min<Index>(jacobian_threads(), count), [&](Index first, Index stride) {
+    for (Index c = first; c < count; c += stride) {
+      const auto k = static_cast<std::size_t>(c);
+      cotangents[k] = physics.vjp_batch(x, context, weights[k]);
+    }
+  });
+  return cotangents;
+}
+
 LocalJacobian::LocalJacobian(const Network& network, const NetworkCache& cache,
                              const Simulator& physics, Matrix x, Matrix context)
     : LocalJacobian(network, cache, physics, x, output_cotangents(physics, x, context)) {}

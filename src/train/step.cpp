@@ -151,10 +151,23 @@ BatchState evaluate_batch(const Network& network, const LearningProblem& problem
 
   switch (need) {
     case UpdateNeed::kGradient:
+    case UpdateNeed::kWeightedFactors:
       state.gradient = own.count > 0
                            ? network.backward(cache, physics.vjp_batch(x, mine.context, gradient_y))
                            : Vector::Zero(network.num_parameters());
       shard.sum(state.gradient);
+      if (need == UpdateNeed::kWeightedFactors) {
+        if (shard.active()) {
+          throw Error("the sampled Kronecker factors (a rule's samples > 0) run in one process "
+                      "only, this run has ranks");
+        }
+        state.outputs = outputs;
+        state.weighted_factors = [&network, &cache, &physics, x, context = mine.context](
+                                     const std::vector<Matrix>& weights) {
+          return network.dense_layer_factors(cache, weighted_output_cotangents(physics, x, context,
+                                                                               weights));
+        };
+      }
       break;
     case UpdateNeed::kNetworkOutputs:
       state.physics = &physics;

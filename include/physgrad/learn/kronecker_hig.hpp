@@ -2,6 +2,7 @@
 // Δ[W b] = −η S^{−p} ∇[W b] A^{−p}, p = (1+κ)/2 (κ = 1: K-FAC; κ = ½: HIG's (JᵀJ)^{−3/4}).
 #pragma once
 
+#include <random>
 #include <vector>
 
 #include "physgrad/learn/learning_update.hpp"
@@ -26,6 +27,11 @@ namespace physgrad {
 // Cost of a refresh: one backward sweep of the B·m output cotangents (as for J Jᵀ), the factor
 // products Σ w_l²·B·m, and one eigendecomposition per factor (O(w_l³)); of every step: ∇θL and
 // two products per layer, O(Σ w_out·w_in·(w_out + w_in)).
+// With `samples` K > 0 a refresh draws, per sample i, K orthonormal directions Q_i ∈ R^{m×K}
+// (the Q of a Gaussian matrix's QR: E[Q_i Q_iᵀ] = (K/m)·I) and S sums δ δᵀ over the layer's
+// cotangents of the K rows √(m/K)·(Q_i e_j)ᵀ J_i instead of the m rows of J_i: E[S] is the exact
+// S, and S is exact when K = m (Q_i Q_iᵀ = I). Cost: K physics VJPs and K backward sweeps instead
+// of m. The directions come from the rule's own generator (seeded at reset, saved with the state).
 struct KroneckerHigOptions {
   double lr = 1.0;         // η > 0
   // κ ½: id "kfac-hig", 1: K-FAC, id "kfac"; the relative cut τ in [0, 1) (factor eigenvalues
@@ -33,6 +39,7 @@ struct KroneckerHigOptions {
   SpectralCut cut{.kappa = 0.5, .rcond = 1e-6, .damping = 1e-2};
   int refresh = 10;        // steps from one factor refresh to the next, ≥ 1
   double factor_decay = 0.9;      // weight of the old factors in the running average, in [0, 1)
+  int samples = 0;         // K output directions per sample at a refresh, ≤ m; 0: all m outputs
 
   static const OptionList<KroneckerHigOptions>& descriptors();
 };
@@ -60,15 +67,17 @@ class KroneckerHigUpdate final : public LearningUpdate {
   explicit KroneckerHigUpdate(Options options = {}, const std::string& id = {});
   std::string id() const override { return id_; }
   nlohmann::json params() const override;
-  // The stacked Jacobian on the steps that refresh the factors, else the gradient.
+  // The stacked Jacobian on the steps that refresh the factors (with samples: the gradient and
+  // weighted factors), else the gradient.
   UpdateNeed need() const override;
   Step step(const BatchState& batch) override;
   double learning_rate() const override { return options_.lr; }
   void set_learning_rate(double lr) override;
   bool steps_can_be_halved() const override { return true; }
   void reset() override;
-  // The step count and the running-average factors of every layer; their powers are recomputed
-  // from them, so a resumed run continues with the same bits.
+  // The step count, the running-average factors of every layer and (with samples) the
+  // generator's state; the powers are recomputed from them, so a resumed run continues with the
+  // same bits.
   nlohmann::json state() const override;
   void restore(const nlohmann::json& state, Index parameter_count) override;
 
@@ -88,7 +97,12 @@ class KroneckerHigUpdate final : public LearningUpdate {
   Vector parameter_gradient(const BatchState& batch) const;
   void average_factors(Layer& layer, const DenseLayerFactors& f, double weight, double batch_size,
                        std::size_t l) const;
-  std::vector<Layer> refreshed_layers(const StackedJacobian& jacobian) const;
+  std::vector<Layer> refreshed_layers(const std::vector<DenseLayerFactors>& factors,
+                                      double batch_size) const;
+  // The batch's factors over K = samples random directions per sample (weights √(m/K)·Q_i),
+  // drawn with `rng` (a copy of the rule's, installed by step() once nothing can throw).
+  std::vector<DenseLayerFactors> sampled_factors(const BatchState& batch,
+                                                 std::mt19937_64& rng) const;
   void check_covers(const std::vector<Layer>& layers, Index parameters) const;
   void install(std::vector<Layer>& refreshed, bool refreshing);
   Vector preconditioned_step(const Vector& gradient) const;
@@ -98,6 +112,7 @@ class KroneckerHigUpdate final : public LearningUpdate {
   std::string id_;  // the catalogue id it was built as
   long long steps_ = 0;  // steps made since the last reset
   std::vector<Layer> layers_;
+  std::mt19937_64 rng_;  // draws the output directions (samples > 0)
   // S^{−p} and A^{−p} of each layer (empty: to be computed from layers_).
   std::vector<Matrix> input_powers_, cotangent_powers_;
 };

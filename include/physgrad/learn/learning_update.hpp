@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "physgrad/learn/stacked_jacobian.hpp"
 #include "physgrad/loss/loss.hpp"
@@ -23,6 +24,8 @@ enum class UpdateNeed {
   kNetworkOutputs,   // x = f(in; θ), y = P(x), the batch's targets and context, and a backprop
                      // that maps a cotangent at x to ∇θ (for updates that build their own
                      // loss in x, such as SIP)
+  kWeightedFactors,  // ∇θ as kGradient, and the network's dense-layer factors over the output
+                     // cotangents (∂P/∂x)ᵀ w of weights w on the physics outputs the rule gives
 };
 
 // What evaluate_batch() computed for one mini-batch; only the fields the update needs are
@@ -40,6 +43,11 @@ struct BatchState {
   const Loss* loss_function = nullptr;
   Matrix x, y, targets, context;                  // one sample per column
   std::function<Vector(const Matrix&)> backprop;  // cotangent at x (n × B) ↦ ∇θ
+  // [kWeightedFactors] m, and the factors of each dense layer (DenseLayerFactors) over the
+  // cotangents (∂P/∂x_i)ᵀ W_c.col(i) of every given weight matrix W_c (m × B, column i for sample
+  // i): one batched physics VJP and one backward sweep per matrix, never the B·m rows of J.
+  Index outputs = 0;
+  std::function<std::vector<DenseLayerFactors>(const std::vector<Matrix>&)> weighted_factors;
 };
 
 // What the trainer tells a rule after each evaluation of the network (the untrained one

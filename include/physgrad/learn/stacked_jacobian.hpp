@@ -70,6 +70,13 @@ class LocalJacobian final : public StackedJacobian {
 std::vector<Matrix> output_cotangents(const Simulator& physics, const Matrix& x,
                                       const Matrix& context);
 
+// (∂P/∂x_i)ᵀ W_c.col(i) of every sample i for each weight matrix W_c (m × B) of `weights`
+// (n × B each): one batched VJP per matrix on jacobian_threads() threads, each writing only its
+// own result. Throws Error on a weight matrix of another shape.
+std::vector<Matrix> weighted_output_cotangents(const Simulator& physics, const Matrix& x,
+                                               const Matrix& context,
+                                               const std::vector<Matrix>& weights);
+
 // (∂P/∂x)ᵀ W per sample from the output cotangents: column i is Σ_k W_ki·cotangents[k].col(i)
 // (n × B for W m × B); no simulator call.
 Matrix weighted_cotangents(const std::vector<Matrix>& cotangents, const Matrix& weights);

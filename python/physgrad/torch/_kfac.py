@@ -12,6 +12,10 @@ of the layer's output at p,
 P the output positions of the layer (1 for Linear on (B, in) and for a convolution with one
 output position, where the factors are the dense layer's). A Linear applied to (B, …, in) counts
 the middle dimensions as positions.
+With samples = K > 0 a refresh sums S over K directions per sample instead of the m outputs:
+√(m/K)·Q_i e_j, Q_i (m × K) the orthonormal Q of a Gaussian matrix from the optimizer's own
+generator (E[Q_i Q_iᵀ] = (K/m)·I, so E[S] is the exact S; exact for K = m); K backward sweeps
+instead of m.
 """
 
 import torch
@@ -63,18 +67,33 @@ def _patches(module, x):
     return cols.transpose(1, 2).reshape(-1, cols.shape[1]), batch
 
 
-def _cotangents(y, outputs, rows):
-    """∂(rows·y)/∂z for every layer output z: for each of the m output directions e_k, the
-    cotangent of every sample, batched over k; a list of (m·B·P, out) per layer."""
+_DIRECTION_SEED = 20261129
+
+
+def _sampled_directions(generator, samples, batch, m):
+    """(K, B, m): direction j of sample i is √(m/K)·Q_i e_j, Q_i the Q of an m × K matrix of
+    standard normals (float64, CPU, drawn with `generator`)."""
+    gaussian = torch.randn(batch, m, samples, generator=generator, dtype=torch.float64)
+    q, _ = torch.linalg.qr(gaussian)
+    return (q * (m / samples) ** 0.5).permute(2, 0, 1)
+
+
+def _cotangents(y, outputs, rows, directions=None):
+    """∂(rows·y)/∂z for every layer output z: for each output direction (the m unit vectors e_k,
+    or `directions`, (K, B, m)), the cotangent of every sample, batched over the directions; a
+    list of (count·B·P, out) per layer."""
     batch, m = y.shape
-    eye = torch.eye(m, dtype=y.dtype, device=y.device)
-    directions = eye.unsqueeze(1).expand(m, batch, m)
+    if directions is None:
+        eye = torch.eye(m, dtype=y.dtype, device=y.device)
+        directions = eye.unsqueeze(1).expand(m, batch, m)
+    else:
+        directions = directions.to(y.device, y.dtype)
     try:
         grads = torch.autograd.grad(y, outputs, directions, retain_graph=True,
                                     is_grads_batched=True)
     except RuntimeError:  # an operation without a batched backward: one direction at a time
         parts = [torch.autograd.grad(y, outputs, directions[k], retain_graph=True)
-                 for k in range(m)]
+                 for k in range(directions.shape[0])]
         grads = [torch.stack(g) for g in zip(*parts)]
     return [rows(g) for g in grads]
 
@@ -104,8 +123,9 @@ class KFAC(StructuredRule):
     factor eigenvalues λ ≤ rcond²·λ_max dropped and the others damped by damping·λ_max; the
     factors refreshed every `refresh` steps as running averages (weight factor_decay for the
     old ones; the first refresh takes the batch's). KFAC(params, model, lr=None, **options):
-    lr, kappa, rcond, damping, refresh, factor_decay, each defaulting to the library's
-    (physgrad.rule_defaults("kfac")).
+    lr, kappa, rcond, damping, refresh, factor_decay, samples, each defaulting to the library's
+    (physgrad.rule_defaults("kfac")); samples = K > 0 takes S from K random output directions
+    per sample (module docstring), 0 from all m outputs.
     step(closure), closure from structured_closure."""
 
     rule = "kfac"
@@ -117,6 +137,10 @@ class KFAC(StructuredRule):
         self._steps = 0
         self._factors = None  # [(A, S)] per layer, float64 on the CPU
         self._powers = None
+        self._generator = torch.Generator().manual_seed(_DIRECTION_SEED)
+
+    def _samples(self):
+        return self.param_groups[0].get("samples", 0)
 
     def _batch_factors(self, batch):
         records = {}
@@ -132,8 +156,15 @@ class KFAC(StructuredRule):
         outputs = [records[path][1] for path, _, _, _ in self._layers]
         gradients = self._gradients(y, batch)
         factors = []
+        directions = None
+        if self._samples() > 0:
+            k, (count, m) = self._samples(), y.shape
+            if k > m:
+                raise _physgrad.Error(f"{self.rule}: samples {k} exceeds the {m} physics outputs "
+                                      "per sample; nothing was changed")
+            directions = _sampled_directions(self._generator, k, count, m)
         with torch.enable_grad():
-            grads = _cotangents(y, outputs, lambda g: g)
+            grads = _cotangents(y, outputs, lambda g: g, directions)
         for (path, module, weight, bias), g in zip(self._layers, grads):
             with torch.no_grad():
                 rows, samples = _patches(module, records[path][0].detach())
@@ -181,6 +212,14 @@ class KFAC(StructuredRule):
         check_batch(self.rule, batch)
         refreshing = self._steps % self._option("refresh") == 0
         factors = self._factors
+        drawn = self._generator.get_state()  # put back if the step fails
+        try:
+            return self._step(batch, refreshing, factors)
+        except BaseException:
+            self._generator.set_state(drawn)
+            raise
+
+    def _step(self, batch, refreshing, factors):
         if refreshing:
             fresh, gradients = self._batch_factors(batch)
             if factors is not None:
@@ -214,7 +253,8 @@ class KFAC(StructuredRule):
         state = super().state_dict()
         state["physgrad"] = {"steps": self._steps,
                              "factors": None if self._factors is None else
-                             [(a.clone(), s.clone()) for a, s in self._factors]}
+                             [(a.clone(), s.clone()) for a, s in self._factors],
+                             "generator": self._generator.get_state()}
         return state
 
     def load_state_dict(self, state_dict):
@@ -224,7 +264,11 @@ class KFAC(StructuredRule):
         if factors is not None and len(factors) != len(self._layers):
             raise _physgrad.Error(f"{self.rule}: the state has factors of {len(factors)} layers, "
                                   f"the model {len(self._layers)}")
+        generator = torch.Generator().manual_seed(_DIRECTION_SEED)
+        if extra.get("generator") is not None:
+            generator.set_state(extra["generator"])
         super().load_state_dict(state_dict)
+        self._generator = generator
         self._steps = int(extra.get("steps", 0))
         self._factors = None if factors is None else [(a.clone(), s.clone()) for a, s in factors]
         self._powers = None
