@@ -175,7 +175,8 @@ TEST(ExperimentSettings, TheLearningRuleFlagsAreTheRulesGroupedOptions) {
   const std::vector<std::string> schedule =
       grouped_rule_options(RuleKind::kLearning, OptionGroup::kSchedule);
   EXPECT_EQ(inversion, (std::vector<std::string>{"rcond", "precision", "eigensolver", "damping",
-                                                 "refresh", "factor_decay", "products"}));
+                                                 "refresh", "factor_decay", "samples",
+                                                 "products"}));
   EXPECT_EQ(schedule, (std::vector<std::string>{"schedule", "decay", "decay_every", "t_max",
                                                 "min_lr", "patience", "threshold"}));
   std::vector<std::string> expected = inversion;

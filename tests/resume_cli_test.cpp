@@ -113,14 +113,14 @@ TEST_F(Resume, PretrainedRunContinuesFromItsAdamPartOrItsRulePart) {
   }
 }
 
-// poisson on two paired seeds with its Adam→HIG twin (three runs a seed, each checkpointed at
-// iterations 4 and 8 and when it finishes): killed at the 13th checkpoint (the second seed's HIG
-// run at iteration 4) and the 17th (its twin at 8), it continues to the metrics and networks of
-// the uninterrupted run, both seeds' runs numbered as before.
+// poisson on two paired seeds with its Adam→HIG twin and no control (three runs a seed, each
+// checkpointed at iterations 4 and 8 and when it finishes): killed at the 13th checkpoint (the
+// second seed's HIG run at iteration 4) and the 17th (its twin at 8), it continues to the metrics
+// and networks of the uninterrupted run, both seeds' runs numbered as before.
 TEST_F(Resume, SeveralSeedsOfAPretrainedExperimentContinue) {
   const std::string seeds =
       "run poisson --grid 4 --train-size 32 --test-size 8 --batch 8 --iters 10 --eval-every 2 "
-      "--pretrain 4 --seeds 2 --checkpoint-every 4 --out ";
+      "--pretrain 4 --control off --seeds 2 --checkpoint-every 4 --out ";
   ASSERT_EQ(run(seeds + "whole").exit_code, 0);
   for (const auto& [kill, rule, iteration] :
        {std::tuple{13, "hig", 4}, std::tuple{17, "adam-hig", 8}}) {

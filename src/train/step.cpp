@@ -114,6 +114,45 @@ double mean_loss(const Network& user_network, const LearningProblem& problem, co
   return total / static_cast<double>(data.size());
 }
 
+namespace {
+
+// The batch's stacked Jacobian: the network and physics of one process, or (with ranks) this
+// rank's share `x` of the physics with the whole batch's network outputs `whole_x`.
+std::shared_ptr<StackedJacobian> stacked_jacobian(const Network& network, NetworkCache& cache,
+                                                  const Simulator& physics, const Shard& shard,
+                                                  Index global, const Dataset& mine, Matrix x,
+                                                  Matrix whole_x) {
+  if (!shard.active()) {
+    return std::make_shared<LocalJacobian>(network, cache, physics, std::move(x), mine.context);
+  }
+  std::vector<Matrix> cotangents =
+      mine.size() > 0 ? output_cotangents(physics, x, mine.context)
+                      : std::vector<Matrix>(static_cast<std::size_t>(physics.output_dim()),
+                                            Matrix(network.output_dim(), 0));
+  return std::make_shared<ShardedJacobian>(network, cache, physics, shard, global, mine.inputs,
+                                           std::move(x), std::move(cotangents),
+                                           std::move(whole_x));
+}
+
+// The sampled Kronecker factors' hook (UpdateNeed::kWeightedFactors): the layer factors of the
+// output cotangents Jphysᵀ·weights the rule draws, one process only.
+void attach_weighted_factors(BatchState& state, const Network& network, NetworkCache& cache,
+                             const Simulator& physics, const Matrix& x, const Matrix& context,
+                             const Shard& shard) {
+  if (shard.active()) {
+    throw Error("the sampled Kronecker factors (a rule's samples > 0) run in one process only, "
+                "this run has ranks");
+  }
+  state.outputs = physics.output_dim();
+  state.weighted_factors = [&network, &cache, &physics, x, context](
+                               const std::vector<Matrix>& weights) {
+    return network.dense_layer_factors(cache,
+                                       weighted_output_cotangents(physics, x, context, weights));
+  };
+}
+
+}  // namespace
+
 BatchState evaluate_batch(const Network& network, const LearningProblem& problem,
                           const Dataset& batch, UpdateNeed need, NetworkCache& cache,
                           const Shard& shard, BatchTiming* timing) {
@@ -157,16 +196,7 @@ BatchState evaluate_batch(const Network& network, const LearningProblem& problem
                            : Vector::Zero(network.num_parameters());
       shard.sum(state.gradient);
       if (need == UpdateNeed::kWeightedFactors) {
-        if (shard.active()) {
-          throw Error("the sampled Kronecker factors (a rule's samples > 0) run in one process "
-                      "only, this run has ranks");
-        }
-        state.outputs = outputs;
-        state.weighted_factors = [&network, &cache, &physics, x, context = mine.context](
-                                     const std::vector<Matrix>& weights) {
-          return network.dense_layer_factors(cache, weighted_output_cotangents(physics, x, context,
-                                                                               weights));
-        };
+        attach_weighted_factors(state, network, cache, physics, x, mine.context, shard);
       }
       break;
     case UpdateNeed::kNetworkOutputs:
@@ -182,24 +212,13 @@ BatchState evaluate_batch(const Network& network, const LearningProblem& problem
       state.x = std::move(x);
       state.y = std::move(y);
       break;
-    case UpdateNeed::kStackedJacobian: {
+    case UpdateNeed::kStackedJacobian:
       // ∂L/∂y of the whole batch in the one-process order k·B + i (gathered as m × B columns).
       state.loss_gradient_y =
           shard.gather_columns({gradient_y}, outputs, global).front().transpose().reshaped();
-      if (!shard.active()) {
-        state.jacobian =
-            std::make_shared<LocalJacobian>(network, cache, physics, std::move(x), mine.context);
-        break;
-      }
-      std::vector<Matrix> cotangents =
-          own.count > 0 ? output_cotangents(physics, x, mine.context)
-                        : std::vector<Matrix>(static_cast<std::size_t>(outputs),
-                                              Matrix(network.output_dim(), 0));
-      state.jacobian = std::make_shared<ShardedJacobian>(
-          network, cache, physics, shard, global, mine.inputs, std::move(x), std::move(cotangents),
-          std::move(whole_x));
+      state.jacobian = stacked_jacobian(network, cache, physics, shard, global, mine, std::move(x),
+                                        std::move(whole_x));
       break;
-    }
   }
   lap(&BatchTiming::derivatives);
   return state;
