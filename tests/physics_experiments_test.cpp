@@ -56,41 +56,24 @@ TEST(QuantumDipoleExperiment, AdamAndHigLowerTheInfidelity) {
   EXPECT_EQ(expect_every_run_improves(context), 2u);
 }
 
-// The default verdict compares the rules per update, so the default budget is updates, not
-// seconds a loaded machine would shorten.
-TEST(QuantumDipoleExperiment, TheDefaultBudgetIsUpdatesNotSeconds) {
-  const Settings settings =
-      resolve_settings(experiments::builtin_registry().find("quantum-dipole"), {});
-  EXPECT_EQ(settings.integer("iters"), 400);
-  EXPECT_FALSE(settings.has("time"));
-  EXPECT_EQ(settings.integer("seeds"), 3);
-}
-
-// The former time-limited defaults are updates too, evaluated densely enough to bracket a
-// crossing, and run on three paired seeds.
-TEST(OscillatorsExperiment, TheDefaultBudgetIsUpdatesNotSeconds) {
-  const Settings settings = resolve_settings(experiments::builtin_registry().find("oscillators"), {});
-  EXPECT_EQ(settings.integer("iters"), 1000);
-  EXPECT_EQ(settings.integer("eval-every"), 25);
-  EXPECT_FALSE(settings.has("time"));
-  EXPECT_EQ(settings.integer("seeds"), 3);
-}
-
-TEST(SinRotationExperiment, TheDefaultBudgetIsUpdatesNotSeconds) {
-  const Settings settings =
-      resolve_settings(experiments::builtin_registry().find("sin-rotation"), {});
-  EXPECT_EQ(settings.integer("iters"), 20000);
-  EXPECT_EQ(settings.integer("eval-every"), 500);
-  EXPECT_FALSE(settings.has("time"));
-  EXPECT_EQ(settings.integer("seeds"), 3);
-}
-
-TEST(PoissonExperiment, TheDefaultBudgetIsUpdatesNotSeconds) {
-  const Settings settings = resolve_settings(experiments::builtin_registry().find("poisson"), {});
-  EXPECT_EQ(settings.integer("iters"), 12);
-  EXPECT_EQ(settings.integer("eval-every"), 1);
-  EXPECT_FALSE(settings.has("time"));
-  EXPECT_EQ(settings.integer("seeds"), 3);
+// The default verdicts compare the rules per update, so the default budgets are updates, not
+// seconds a loaded machine would shorten, evaluated densely enough to bracket a crossing (the
+// seeds: LearningExperiments.SeedsByDefault).
+TEST(LearningExperiments, TheDefaultBudgetsAreUpdatesNotSeconds) {
+  struct Budget {
+    std::string experiment;
+    long long iters, eval_every;
+  };
+  for (const Budget& b : std::vector<Budget>{{"quantum-dipole", 400, 20},
+                                             {"oscillators", 1000, 25},
+                                             {"sin-rotation", 20000, 500},
+                                             {"poisson", 12, 1}}) {
+    const Settings settings =
+        resolve_settings(experiments::builtin_registry().find(b.experiment), {});
+    EXPECT_EQ(settings.integer("iters"), b.iters) << b.experiment;
+    EXPECT_EQ(settings.integer("eval-every"), b.eval_every) << b.experiment;
+    EXPECT_FALSE(settings.has("time")) << b.experiment;
+  }
 }
 
 // Three paired seeds by default where a run takes a minute or two; the 64×64 U-net experiments

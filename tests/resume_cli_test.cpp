@@ -42,6 +42,29 @@ class Resume : public Cli {
     return interrupt_when(spawn(kRun + folder), dir_ / folder / "checkpoint.pgc", "\"index\":2",
                           signal);
   }
+
+  // Runs `command` into `folder` with a SIGKILL right after its checkpoint number `kill`.
+  void kill_at_checkpoint(const std::string& command, const std::string& folder, int kill) {
+    ASSERT_EQ(run(command + folder, "PHYSGRAD_FAULT=kill@checkpoint:" + std::to_string(kill))
+                  .exit_code,
+              128 + SIGKILL);
+  }
+
+  // The run in progress that the checkpoint of `folder` holds.
+  nlohmann::json run_in_progress(const std::string& folder) {
+    const std::string saved = read_file(dir_ / folder / "checkpoint.pgc");
+    return nlohmann::json::parse(saved.substr(saved.find('\n') + 1))["current"];  // past the header
+  }
+
+  // `physgrad resume folder` ends with the metrics and networks of the uninterrupted run "whole".
+  void expect_resumes_to_whole(const std::string& folder, int kill) {
+    const Outcome resumed = run("resume " + folder);
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+    EXPECT_EQ(metrics_without_time(dir_ / folder), metrics_without_time(dir_ / "whole")) << kill;
+    EXPECT_EQ(read_file(dir_ / folder / "networks.json"),
+              read_file(dir_ / "whole" / "networks.json"))
+        << kill;
+  }
 };
 
 TEST_F(Resume, TerminatedRunContinuesToTheSameResults) {
@@ -96,20 +119,11 @@ TEST_F(Resume, PretrainedRunContinuesFromItsAdamPartOrItsRulePart) {
   ASSERT_EQ(run(pretrained + "whole").exit_code, 0);
   for (const auto& [kill, iteration] : {std::pair{7, 20}, {8, 40}, {9, 60}}) {
     const std::string folder = "part" + std::to_string(kill);
-    ASSERT_EQ(run(pretrained + folder, "PHYSGRAD_FAULT=kill@checkpoint:" + std::to_string(kill))
-                  .exit_code,
-              128 + SIGKILL);
-    const std::string saved = read_file(dir_ / folder / "checkpoint.pgc");
-    const nlohmann::json current =
-        nlohmann::json::parse(saved.substr(saved.find('\n') + 1))["current"];  // past the header
+    ASSERT_NO_FATAL_FAILURE(kill_at_checkpoint(pretrained, folder, kill));
+    const nlohmann::json current = run_in_progress(folder);
     EXPECT_EQ(current["key"]["optimizer"], "adam-hig");
     EXPECT_EQ(current["state"]["summary"]["iterations"], iteration);
-    const Outcome resumed = run("resume " + folder);
-    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
-    EXPECT_EQ(metrics_without_time(dir_ / folder), metrics_without_time(dir_ / "whole")) << kill;
-    EXPECT_EQ(read_file(dir_ / folder / "networks.json"),
-              read_file(dir_ / "whole" / "networks.json"))
-        << kill;
+    ASSERT_NO_FATAL_FAILURE(expect_resumes_to_whole(folder, kill));
   }
 }
 
@@ -125,21 +139,12 @@ TEST_F(Resume, SeveralSeedsOfAPretrainedExperimentContinue) {
   for (const auto& [kill, rule, iteration] :
        {std::tuple{13, "hig", 4}, std::tuple{17, "adam-hig", 8}}) {
     const std::string folder = "seeds" + std::to_string(kill);
-    ASSERT_EQ(run(seeds + folder, "PHYSGRAD_FAULT=kill@checkpoint:" + std::to_string(kill))
-                  .exit_code,
-              128 + SIGKILL);
-    const std::string saved = read_file(dir_ / folder / "checkpoint.pgc");
-    const nlohmann::json current =
-        nlohmann::json::parse(saved.substr(saved.find('\n') + 1))["current"];
+    ASSERT_NO_FATAL_FAILURE(kill_at_checkpoint(seeds, folder, kill));
+    const nlohmann::json current = run_in_progress(folder);
     EXPECT_EQ(current["key"]["seed"], 1) << kill;
     EXPECT_EQ(current["key"]["optimizer"], rule) << kill;
     EXPECT_EQ(current["state"]["summary"]["iterations"], iteration) << kill;
-    const Outcome resumed = run("resume " + folder);
-    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
-    EXPECT_EQ(metrics_without_time(dir_ / folder), metrics_without_time(dir_ / "whole")) << kill;
-    EXPECT_EQ(read_file(dir_ / folder / "networks.json"),
-              read_file(dir_ / "whole" / "networks.json"))
-        << kill;
+    ASSERT_NO_FATAL_FAILURE(expect_resumes_to_whole(folder, kill));
     EXPECT_EQ(final_losses(dir_ / folder), final_losses(dir_ / "whole")) << kill;
   }
 }
@@ -154,15 +159,8 @@ TEST_F(Resume, UNetRunContinuesBitIdentically) {
   ASSERT_EQ(run(unet + "whole").exit_code, 0);
   for (const int kill : {3, 5}) {
     const std::string folder = "unet" + std::to_string(kill);
-    ASSERT_EQ(run(unet + folder, "PHYSGRAD_FAULT=kill@checkpoint:" + std::to_string(kill))
-                  .exit_code,
-              128 + SIGKILL);
-    const Outcome resumed = run("resume " + folder);
-    ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
-    EXPECT_EQ(metrics_without_time(dir_ / folder), metrics_without_time(dir_ / "whole")) << kill;
-    EXPECT_EQ(read_file(dir_ / folder / "networks.json"),
-              read_file(dir_ / "whole" / "networks.json"))
-        << kill;
+    ASSERT_NO_FATAL_FAILURE(kill_at_checkpoint(unet, folder, kill));
+    ASSERT_NO_FATAL_FAILURE(expect_resumes_to_whole(folder, kill));
   }
 }
 

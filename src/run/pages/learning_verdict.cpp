@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 
 #include "physgrad/catalogue.hpp"
@@ -38,10 +39,18 @@ bool separated(const SeedRange& a, const SeedRange& b) { return a.high < b.low |
 
 SeedRange finals_range(const RuleStanding& s) { return {s.finals.low, s.finals.high}; }
 
-// The credited runs of `group` (the seeds a rule's median is over).
-int credited_count(const std::vector<const LearningResult*>& group) {
-  return static_cast<int>(std::count_if(group.begin(), group.end(),
-                                        [](const LearningResult* run) { return credited(*run); }));
+// Whether two rules' finals over several seeds overlap (one seed each: never).
+bool finals_not_separated(const RuleStanding& a, const RuleStanding& b) {
+  return std::max(a.credited, b.credited) > 1 && !separated(finals_range(a), finals_range(b));
+}
+
+// How much lower the median final of `low` lies than that of `high`: "5× " (the digits their
+// spreads support; put before "below" or "above"), "" where `low`'s is not positive, and no value
+// where the two are within 10 % (about equal).
+std::optional<std::string> times_lower(const RuleStanding& low, const RuleStanding& high) {
+  if (!(low.final_value > 0)) return std::string();
+  if (high.final_value / low.final_value < 1.1) return std::nullopt;
+  return physgrad::ratio_text(high.finals, low.finals) + "× ";
 }
 
 // "3 seeds", "3 and 2 seeds" (the credited runs of two rules), "one seed".
@@ -98,10 +107,10 @@ std::string against_adam(const RuleStanding& rule, const std::vector<const Learn
   const Crossing t_rule = group_crossing(runs, level, input.value, true);
   const Crossing t_base = group_crossing(base_runs, level, input.value, true);
   // Over several seeds, a rule is ahead only where the seeds' ranges are apart.
-  const int seeds = std::max(credited_count(runs), credited_count(base_runs));
+  const int seeds = std::max(rule.credited, base.credited);
   const SeedRange s_rule = crossing_range(runs, level, input.value, false);
   const SeedRange s_base = crossing_range(base_runs, level, input.value, false);
-  const std::string over = seeds_text(credited_count(runs), credited_count(base_runs));
+  const std::string over = seeds_text(rule.credited, base.credited);
   std::string out = "to reach " + value_text(level) + " " + rule.label + " needs " +
                     crossing_text(u_rule) + " updates, " + base.label + " " +
                     crossing_text(u_base) + " (" +
@@ -158,17 +167,13 @@ std::string ranking_text(const RuleStanding& best, const RuleStanding& next,
                       range_text(next.finals.low, next.finals.high) + " over " + over
                 : value_text(best.final_value) + " vs " + value_text(next.final_value) + ", " +
                       over;
-  if (seeds > 1 && !separated(finals_range(best), finals_range(next))) {
+  if (finals_not_separated(best, next)) {
     return best.label + "'s and " + next.label + "'s " + what + " are not separated over " +
            over + " (" + values + ")";
   }
-  const double ratio = next.final_value / best.final_value;
+  const std::optional<std::string> times = times_lower(best, next);
   return best.label + "'s " + what + " is " +
-         (best.final_value > 0 && ratio < 1.1 ? "about equal to " + next.label + "'s"
-          : best.final_value > 0
-              ? physgrad::ratio_text(next.finals, best.finals) + "× below " + next.label + "'s"
-              : "below " + next.label + "'s") +
-         " (" + values + ")";
+         (times ? *times + "below " : "about equal to ") + next.label + "'s (" + values + ")";
 }
 
 // " After the same switch, Adam→HIG ends 1.3× below the control Adam→Adam (lr ×0.1) (0.05 vs
@@ -185,22 +190,17 @@ std::string against_control(const std::vector<RuleStanding>& all,
   for (const std::size_t k : ranked) {
     const RuleStanding& twin = all[k];
     if (!twin.twin || twin.control) continue;
-    const bool below = twin.final_value <= c.final_value;
-    const RuleStanding& low = below ? twin : c;
-    const RuleStanding& high = below ? c : twin;
-    const std::string side = below ? "below" : "above";
-    const int seeds = std::max(twin.credited, c.credited);
-    if (seeds > 1 && !separated(finals_range(twin), finals_range(c))) {
-      out += (out.empty() ? "" : "; ") + twin.label + " and the control " + c.label +
-             " are not separated over " + seeds_text(twin.credited, c.credited) + " (medians " +
-             value_text(twin.final_value) + " vs " + value_text(c.final_value) + ")";
+    out += out.empty() ? "" : "; ";
+    if (finals_not_separated(twin, c)) {
+      out += twin.label + " and the control " + c.label + " are not separated over " +
+             seeds_text(twin.credited, c.credited) + " (medians " + value_text(twin.final_value) +
+             " vs " + value_text(c.final_value) + ")";
       continue;
     }
-    out += (out.empty() ? "" : "; ") + twin.label + " ends " +
-           (low.final_value > 0 && high.final_value / low.final_value < 1.1
-                ? "about as low as"
-            : low.final_value > 0 ? physgrad::ratio_text(high.finals, low.finals) + "× " + side
-                                  : side) +
+    const bool below = twin.final_value <= c.final_value;
+    const std::optional<std::string> times = below ? times_lower(twin, c) : times_lower(c, twin);
+    out += twin.label + " ends " +
+           (times ? *times + (below ? "below" : "above") : std::string("about as low as")) +
            " the control " + c.label + " (" + value_text(twin.final_value) + " vs " +
            value_text(c.final_value) + ")";
   }
@@ -331,10 +331,7 @@ std::string verdict_sentence(const VerdictInput& input) {
     const RuleStanding& s = all[ranked[k]];
     const RuleStanding& above = all[ranked[k - 1]];
     out += "; " + s.label + "'s is " + finals_text(s);
-    if (std::max(s.credited, above.credited) > 1 &&
-        !separated(finals_range(s), finals_range(above))) {
-      out += ", not separated from " + above.label + "'s";
-    }
+    if (finals_not_separated(s, above)) out += ", not separated from " + above.label + "'s";
   }
   for (const RuleStanding& s : all) {
     if (s.failed > 0) {
