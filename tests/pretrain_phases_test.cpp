@@ -150,6 +150,27 @@ TEST(PretrainPhases, TheControlFollowsItsFactorAndIsOffWhenAsked) {
   EXPECT_EQ(no_twin.runs().size(), 2u);
 }
 
+// --alone off: a rule with a twin runs only as its twin (with the control beside it); rules without
+// a twin and Adam still run; without --pretrain the flag is refused, as the other twin options.
+TEST(PretrainPhases, AloneOffRunsTheTwinInsteadOfTheRule) {
+  const auto optimizers_of = [](const RunContext& context) {
+    std::vector<std::string> ids;
+    for (const RunEntry& entry : context.runs()) ids.push_back(entry.optimizer);
+    return ids;
+  };
+  const RunContext twins = run_poisson({{"optimizers", "adam,hig,sip"}, {"iters", "8"},
+                                        {"pretrain", "4"}, {"alone", "off"}});
+  EXPECT_EQ(optimizers_of(twins),
+            (std::vector<std::string>{"adam", "adam-hig", "sip", "adam-adam"}));
+  EXPECT_EQ(entry_of(twins, "adam-hig").params["pretrain_iterations"], 4);
+  try {
+    run_poisson({{"optimizers", "adam,hig"}, {"iters", "4"}, {"pretrain", "0"}, {"alone", "off"}});
+    ADD_FAILURE() << "--alone off without --pretrain was accepted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("--alone"), std::string::npos) << error.what();
+  }
+}
+
 // A twin's cost per part: Adam's updates up to the evaluation at the switch, the rule's after it.
 TEST(PretrainPhases, PhaseCostsSplitATwinAtItsSwitch) {
   LearningResult twin;

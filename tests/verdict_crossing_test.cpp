@@ -128,8 +128,8 @@ TEST(VerdictCrossing, NarrowBracketsGiveRoundedCountsAndTheirRatio) {
   const LearningResult hig = exponential("hig", 10, 400, 52, 1e-3);
   const std::string sentence = verdict_sentence({{{&adam}, {&hig}}, kLoss, "final test loss"});
   EXPECT_NE(sentence.find("HIG needs 260 updates, Adam 10000 (40× fewer); its update costs 10× "
-                          "Adam's; in wall time (measured at the same evaluations) HIG gets there "
-                          "4× sooner (0.26 vs 1.00 s)"),
+                          "Adam's (seconds per update of the two runs); in wall time (measured at "
+                          "the same evaluations) HIG gets there 4× sooner (0.26 vs 1.00 s)"),
             std::string::npos)
       << sentence;
 }
@@ -151,11 +151,49 @@ TEST(VerdictCrossing, ATwinsStepCostIsItsRulesPhaseAlone) {
   EXPECT_NEAR(rule_seconds_per_update(twin), 1.0, 1e-12);
   EXPECT_NEAR(rule_seconds_per_update(adam), 1e-3, 1e-12);
   const std::string sentence = verdict_sentence({{{&adam}, {&twin}}, kLoss, "final test loss"});
-  EXPECT_NE(sentence.find("its update after the switch costs 1000× Adam's"), std::string::npos)
+  EXPECT_NE(sentence.find("its update after the switch costs 1000× Adam's (seconds per update"),
+            std::string::npos)
       << sentence;
   // Without an evaluation after the switch there is no cost of the rule to state.
   twin.summary.history.pop_back();
   EXPECT_TRUE(std::isnan(rule_seconds_per_update(twin)));
+}
+
+// With cost probes the cost is theirs, not the ratio of the runs' seconds (10× here, which load
+// could bias): a HIG update timed at 50 Adam updates beside its steps. The counts to the level in
+// Adam-update equivalents follow: HIG's 250–260 updates are 12500–13000, against Adam's 10000.
+TEST(VerdictCrossing, ProbedCostsGiveTheCostInAdamUpdatesAndTheEquivalents) {
+  const LearningResult adam = exponential("adam", 100, 10000, 2000, 1e-4);
+  LearningResult hig = exponential("hig", 10, 400, 52, 1e-3);
+  hig.summary.phases = {{.first_iteration = 0, .batch_size = 32, .probes = 4,
+                         .probed_step_seconds = 50, .reference_seconds = 1}};
+  EXPECT_DOUBLE_EQ(adam_updates_per_update(hig), 50);
+  EXPECT_DOUBLE_EQ(adam_updates_per_update(adam), 1);
+  const std::string sentence = verdict_sentence({{{&adam}, {&hig}}, kLoss, "final test loss"});
+  EXPECT_NE(sentence.find("HIG needs 260 updates, Adam 10000 (40× fewer); its update costs 50 "
+                          "Adam updates (timed beside its steps); in Adam-update equivalents "
+                          "13000, Adam 10000 (1.3× more); in wall time"),
+            std::string::npos)
+      << sentence;
+  EXPECT_EQ(sentence.find("seconds per update of the two runs"), std::string::npos) << sentence;
+}
+
+// A twin's equivalents: its Adam updates count one each, its rule's updates after the switch at
+// the rule's probed cost. Adam→HIG switched at 1000 and reached the level between 1000 and 1010
+// updates, at 3000 Adam updates each after the switch: between 1000 and 31000 equivalents.
+TEST(VerdictCrossing, ATwinsEquivalentsCountItsAdamPartOnceAndItsRulesAtTheirCost) {
+  const LearningResult adam = evaluated("adam", {0, 500, 1000, 1010}, {1.0, 0.5, 0.3, 0.29}, 1e-3);
+  LearningResult twin = evaluated("adam-hig", {0, 500, 1000, 1010}, {1.0, 0.5, 0.3, 0.01}, 1e-3);
+  twin.params = {{"switched", true}, {"pretrain_iterations", 1000}};
+  twin.summary.phases = {{.first_iteration = 0, .batch_size = 32},
+                         {.first_iteration = 1000, .batch_size = 32, .probes = 3,
+                          .probed_step_seconds = 30, .reference_seconds = 0.01}};
+  EXPECT_DOUBLE_EQ(adam_updates_per_update(twin), 3000);
+  const std::string sentence = verdict_sentence({{{&adam}, {&twin}}, kLoss, "final test loss"});
+  EXPECT_NE(sentence.find("its update after the switch costs 3000 Adam updates (timed beside its "
+                          "steps); in Adam-update equivalents between 1000 and 31000, Adam 1010 "),
+            std::string::npos)
+      << sentence;
 }
 
 // The ratio of two rules' median finals keeps the digits their seeds' spreads support, as the

@@ -13,7 +13,19 @@
 #include "training_run.hpp"
 
 namespace physgrad {
+
+double TrainingSummary::Phase::reference_updates() const {
+  return probes > 0 && reference_seconds > 0 ? probed_step_seconds / reference_seconds : NAN;
+}
+
 namespace training {
+
+namespace {
+
+// The most of the training time the cost probes may take (TrainerOptions::cost_reference).
+constexpr double kProbeShare = 0.02;
+
+}  // namespace
 
 TrainingSummary TrainingRun::run() {
   // Ranks stop together at an iteration boundary (requests()); none may leave a step alone.
@@ -62,7 +74,10 @@ TrainingSummary TrainingRun::run() {
       if (ended()) break;
       try {
         const auto step_start = std::chrono::steady_clock::now();
-        const bool stepped = step(batch(order, std::min(batch_size_, n_ - batch_start_)));
+        const Dataset drawn = batch(order, std::min(batch_size_, n_ - batch_start_));
+        const std::string part = update_.part_id();  // before a switch inside the step
+        const bool stepped = step(drawn);
+        if (stepped) probe_cost(drawn, part, seconds_since(step_start));
         step_cost_ = seconds_since(step_start);
         if (!stepped) break;
       } catch (const StopRequested&) {  // train_step() left θ as it was before the step
@@ -187,6 +202,34 @@ bool TrainingRun::step(const Dataset& batch) {
   summary_.train_seconds += report.total_seconds;
   ++summary_.iterations;
   return true;
+}
+
+void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, double step_seconds) {
+  if (!options_.cost_reference || step_state_.shard.active()) return;
+  if (!reference_) {
+    reference_ = options_.cost_reference();
+    reference_cache_ = network_.new_cache();
+  }
+  TrainingSummary::Phase& phase = summary_.phases.back();
+  const bool first_of_part = phase.probes == 0 && summary_.iterations == phase.first_iteration + 1;
+  if (part == reference_->id() ||
+      (!first_of_part && probe_seconds_ > kProbeShare * summary_.train_seconds)) {
+    return;
+  }
+  const Index count = options_.cost_reference_batch > 0
+                          ? std::min(options_.cost_reference_batch, batch.size())
+                          : batch.size();
+  const auto start = std::chrono::steady_clock::now();
+  const BatchState evaluated =
+      evaluate_batch(network_, problem_, count < batch.size() ? batch.columns(0, count) : batch,
+                     reference_->need(), *reference_cache_);
+  const Step unapplied = reference_->step(evaluated);
+  const double seconds = seconds_since(start);
+  probe_seconds_ += seconds;
+  if (unapplied.delta.size() != network_.num_parameters()) return;
+  ++phase.probes;
+  phase.probed_step_seconds += step_seconds;
+  phase.reference_seconds += seconds;
 }
 
 void TrainingRun::stop_for_numbers(const std::string& message) {

@@ -52,7 +52,11 @@ SimulatorCounts counts_from_json(const nlohmann::json& document) {
 nlohmann::json phases_to_json(const std::vector<TrainingSummary::Phase>& phases) {
   nlohmann::json out = nlohmann::json::array();
   for (const TrainingSummary::Phase& phase : phases) {
-    out.push_back({{"first_iteration", phase.first_iteration}, {"batch_size", phase.batch_size}});
+    out.push_back({{"first_iteration", phase.first_iteration},
+                   {"batch_size", phase.batch_size},
+                   {"probes", phase.probes},
+                   {"probed_step_seconds", phase.probed_step_seconds},
+                   {"reference_seconds", phase.reference_seconds}});
   }
   return out;
 }
@@ -62,8 +66,15 @@ std::vector<TrainingSummary::Phase> phases_from_json(const nlohmann::json& docum
   if (!document.is_array()) throw Error("checkpoint field 'phases': expected an array");
   std::vector<TrainingSummary::Phase> phases;
   for (const nlohmann::json& entry : document) {
-    phases.push_back({integer_from_json(entry, "first_iteration"),
-                      static_cast<Index>(integer_from_json(entry, "batch_size", 1))});
+    TrainingSummary::Phase phase{integer_from_json(entry, "first_iteration"),
+                                 static_cast<Index>(integer_from_json(entry, "batch_size", 1))};
+    // Absent from files of earlier versions, which made no cost probes.
+    if (entry.contains("probes")) {
+      phase.probes = integer_from_json(entry, "probes");
+      phase.probed_step_seconds = real_from_json(entry, "probed_step_seconds");
+      phase.reference_seconds = real_from_json(entry, "reference_seconds");
+    }
+    phases.push_back(phase);
   }
   return phases;
 }

@@ -67,6 +67,9 @@ class TrainingRun {
   bool evaluate_now();
   Dataset batch(const std::vector<Index>& order, Index count) const;
   bool step(const Dataset& batch);
+  // Times a step of the cost reference beside the step rule `part` just made on `batch`
+  // (step_seconds), when one is due (TrainerOptions::cost_reference).
+  void probe_cost(const Dataset& batch, const std::string& part, double step_seconds);
   void stop_for_numbers(const std::string& message);
   bool checkpoint_due() const;
   void checkpoint();
@@ -106,6 +109,11 @@ class TrainingRun {
   double step_cost_ = 0;
   double evaluation_cost_ = 0;
   double checkpoint_cost_ = 0;
+  // The cost reference (TrainerOptions::cost_reference), its own forward cache, and the probes'
+  // seconds in this process (what keeps them to their share of the training time).
+  std::unique_ptr<LearningUpdate> reference_;
+  std::unique_ptr<NetworkCache> reference_cache_;
+  double probe_seconds_ = 0;
 };
 
 // Throws Error naming the first option out of range, or a run without a limit.

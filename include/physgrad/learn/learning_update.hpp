@@ -62,6 +62,8 @@ class LearningUpdate {
  public:
   virtual ~LearningUpdate() = default;
   virtual std::string id() const = 0;
+  // The id of the rule making the updates now: id(), or a rule made of parts its current part's.
+  virtual std::string part_id() const { return id(); }
   // Every setting that distinguishes a run, for config and summary files.
   virtual nlohmann::json params() const = 0;
   virtual UpdateNeed need() const = 0;

@@ -35,6 +35,7 @@ class SwitchingUpdate final : public LearningUpdate {
 
   // "adam-hig": the parts' ids.
   std::string id() const override;
+  std::string part_id() const override { return current().part_id(); }
   // The second rule's params(), the first's as "pretrain_<name>", its batch as "pretrain_batch"
   // and the condition: "pretrain_iterations" (after) or "pretrain_window"/"pretrain_fraction".
   nlohmann::json params() const override;

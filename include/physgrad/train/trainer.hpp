@@ -67,9 +67,17 @@ struct TrainingSummary {
   // The parts of the run: one for a plain rule; a rule made of parts in turn
   // (LearningUpdate::phase(), e.g. SwitchingUpdate's Adam→HIG) adds one each time the next part
   // takes over, with the updates made before it and its batch size. Kept in checkpoints.
+  // With TrainerOptions::cost_reference, a part also keeps its cost probes: how many were made,
+  // the seconds of the steps they stood beside and the seconds of the reference steps.
   struct Phase {
     long long first_iteration = 0;
     Index batch_size = 0;
+    long long probes = 0;
+    double probed_step_seconds = 0;
+    double reference_seconds = 0;
+    // The part's cost per update in reference updates (Adam's, say) measured beside its own
+    // steps under the same load; NaN without probes.
+    double reference_updates() const;
   };
   std::vector<Phase> phases;
 
@@ -141,6 +149,17 @@ struct TrainerOptions {
   std::function<void(const Network&, TrainingRecord&)> on_evaluate;
   // Progress line after each evaluation.
   std::function<void(const TrainingRecord&)> on_progress;
+  // The cost yardstick: when set, beside some of its steps the run also times one step of this
+  // rule (made once by the function; Adam, say) on the step's batch (its first
+  // cost_reference_batch samples when that is smaller) at the same θ: the forward pass, the
+  // derivative it needs and its Δθ, which is never applied. So each part's cost per update reads
+  // in the reference's updates measured under the same load (Phase::reference_updates()). The
+  // run's θ, data and results do not depend on it; probes are made after the first step of each
+  // part and then whenever they have taken at most 2 % of the training time, and count toward
+  // the wall time (not train_seconds). A part whose rule has the reference's id is not probed.
+  // Not in data-parallel runs.
+  std::function<std::unique_ptr<LearningUpdate>()> cost_reference;
+  Index cost_reference_batch = 0;  // 0: the step's whole batch
 
   // Checkpoints: on_checkpoint receives the state every checkpoint_every iterations and/or
   // every checkpoint_seconds of wall time, and on a stop request; training then ends with

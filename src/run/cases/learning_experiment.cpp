@@ -82,15 +82,20 @@ void require_learning_sizes(const Settings& settings, const LearningExperiment::
     if (settings.has("optimizers")) {
       const std::vector<std::string> ids = settings.texts("optimizers");
       const bool pretrained = settings.has("pretrain") && settings.text("pretrain") != "0";
+      const bool alone = !(settings.has("alone") && settings.text("alone") == "off");
       runs = static_cast<double>(ids.size());
+      bool twins = false;
       for (const std::string& id : ids) {
-        runs += pretrained && make_learning_update(id)->need() == UpdateNeed::kStackedJacobian;
+        const bool twin =
+            pretrained && make_learning_update(id)->need() == UpdateNeed::kStackedJacobian;
+        runs += twin && alone;  // with --alone off the twin takes the rule's place
+        twins = twins || twin;
       }
       // The control arm beside the twins, unless it is off.
       const bool control = !(settings.has("control") && settings.text("control") == "off") &&
                            !(settings.has("control-lr-factor") &&
                              settings.real("control-lr-factor") == 0);
-      runs += control && runs > static_cast<double>(ids.size());
+      runs += control && twins;
     }
     const long long every = settings.integer("eval-every");
     require_memory(1024 * runs * (iterations / static_cast<double>(every) + 2),
@@ -133,6 +138,11 @@ std::vector<OptionSpec> pretraining_options() {
                               "control)")
                       .at_least(0)
                       .at_most(1));
+  flags.push_back(text_option("alone", "",
+                              "on or off: with --pretrain, each rule that gets an Adam→ twin also "
+                              "runs alone from the start (default on; off: only its twin, e.g. "
+                              "for a long run where the rule alone would take hours)")
+                      .one_of({"on", "off"}));
   return flags;
 }
 

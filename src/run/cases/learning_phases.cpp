@@ -37,10 +37,20 @@ double PhaseCost::seconds_per_update() const {
   return updates > 0 ? seconds / static_cast<double>(updates) : NAN;
 }
 
+double adam_updates_per_update(const LearningResult& run) {
+  const std::string rule = pretrained_rule(run.id);
+  if (run.id == kPretrainingRule || rule == kPretrainingRule) return 1;
+  const std::vector<TrainingSummary::Phase>& phases = run.summary.phases;
+  if (phases.empty() || (!rule.empty() && phases.size() < 2)) return NAN;
+  return phases.back().reference_updates();
+}
+
 std::vector<PhaseCost> phase_costs(const LearningResult& run) {
   if (!run.params.contains("switched")) return {};
   const TrainingSummary& s = run.summary;
-  if (run.params.at("switched") != true) return {{kPretrainingRule, s.iterations, s.train_seconds}};
+  if (run.params.at("switched") != true) {
+    return {{kPretrainingRule, s.iterations, s.train_seconds, 1}};
+  }
   // The trainer evaluates where the rule takes over, before its first update.
   const long long at = run.params.at("pretrain_iterations").get<long long>();
   double adam_seconds = NAN;
@@ -50,8 +60,9 @@ std::vector<PhaseCost> phase_costs(const LearningResult& run) {
       break;
     }
   }
-  return {{kPretrainingRule, at, adam_seconds},
-          {pretrained_rule(run.id), s.iterations - at, s.train_seconds - adam_seconds}};
+  return {{kPretrainingRule, at, adam_seconds, 1},
+          {pretrained_rule(run.id), s.iterations - at, s.train_seconds - adam_seconds,
+           adam_updates_per_update(run)}};
 }
 
 RuleSettings LearningSweep::pretraining_settings() const {
@@ -70,6 +81,10 @@ std::optional<double> LearningSweep::control_factor() const {
       settings_.has("control-lr-factor") ? settings_.real("control-lr-factor") : kControlLrFactor;
   if (!(factor > 0)) return std::nullopt;
   return factor;
+}
+
+bool LearningSweep::rules_alone() const {
+  return !(settings_.has("alone") && settings_.text("alone") == "off");
 }
 
 }  // namespace physgrad::run

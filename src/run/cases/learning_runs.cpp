@@ -160,11 +160,11 @@ std::vector<std::string> LearningSweep::run_ids(const std::vector<std::string>& 
   std::vector<std::string> ids;
   bool twins = false;
   for (const std::string& id : rules) {
-    ids.push_back(id);
-    if (switch_condition() && make_learning_update(id)->need() == UpdateNeed::kStackedJacobian) {
-      ids.push_back(pretrained_run_id(id));
-      twins = true;
-    }
+    const bool twin =
+        switch_condition() && make_learning_update(id)->need() == UpdateNeed::kStackedJacobian;
+    if (!twin || rules_alone()) ids.push_back(id);
+    if (twin) ids.push_back(pretrained_run_id(id));
+    twins = twins || twin;
   }
   // The control arm, once beside the twins.
   if (twins && control_factor()) ids.push_back(pretrained_run_id(kPretrainingRule));
@@ -276,6 +276,9 @@ TrainerOptions LearningSweep::trainer_options(const std::string& rule, long long
     options.fresh_samples = fresh_samples_;
   }
   options.communicator = context_.communicator();
+  // The yardstick of every rule's cost: an Adam update of the sweep's Adam run, timed beside it.
+  options.cost_reference = [this] { return make_update(kPretrainingRule); };
+  options.cost_reference_batch = batch_size(kPretrainingRule);
   return options;
 }
 
@@ -336,12 +339,18 @@ void LearningSweep::record_run(const LearningResult& result, const Network& netw
   entry.step_halvings = s.step_halvings;
   entry.seconds_per_part = SecondsPerPart{s.forward_seconds, s.derivative_seconds,
                                           s.inversion_seconds, s.update_seconds};
-  // A twin's cost per part: Adam's updates and its rule's apart.
+  // The cost per update in Adam updates timed beside the rule's steps; a twin's per part.
+  const double adam_updates = adam_updates_per_update(result);
+  if (std::isfinite(adam_updates)) entry.more["adam_updates_per_update"] = adam_updates;
   for (const PhaseCost& phase : phase_costs(result)) {
-    entry.more["phases"].push_back({{"rule", phase.rule},
-                                    {"updates", phase.updates},
-                                    {"train_seconds", phase.seconds},
-                                    {"seconds_per_update", phase.seconds_per_update()}});
+    nlohmann::json part = {{"rule", phase.rule},
+                           {"updates", phase.updates},
+                           {"train_seconds", phase.seconds},
+                           {"seconds_per_update", phase.seconds_per_update()}};
+    if (std::isfinite(phase.adam_updates_per_update)) {
+      part["adam_updates_per_update"] = phase.adam_updates_per_update;
+    }
+    entry.more["phases"].push_back(std::move(part));
   }
   context_.add_run(std::move(entry));
 }

@@ -143,6 +143,14 @@ void mark_lowest_median(FinalLossTables& t) {
                     "in no median";
 }
 
+// The median of the runs' costs in Adam updates with two digits; "–" unless every run has one.
+std::string adam_updates_text(const std::vector<double>& costs) {
+  const bool all = !costs.empty() && std::all_of(costs.begin(), costs.end(), [](double c) {
+    return std::isfinite(c);
+  });
+  return all ? with_digits(median(costs), 2) : "–";
+}
+
 // Time per step of every rule and setting, summed over the seeds; a twin's total also per part
 // (phase_costs: its Adam updates, then its rule's).
 RunContext::Table step_time_table(const SweepResults& results, const SweepAxes& axes) {
@@ -151,15 +159,18 @@ RunContext::Table step_time_table(const SweepResults& results, const SweepAxes& 
                            "Jacobian; the inversion inside gn/hig; the rest of the update (a "
                            "pretrained run: over its Adam and its rule's steps together); a "
                            "pretrained run's total also per part, its Adam updates before the "
-                           "switch and its rule's after it",
+                           "switch and its rule's after it; and the rule's update (a pretrained "
+                           "run's after the switch) in Adam updates timed beside its steps in the "
+                           "same process, median over seeds, which machine load does not bias",
                            {"rule", "setting", "forward (ms)", "gradient or Jacobian (ms)",
                             "inversion (ms)", "update (ms)", "total (ms)", "Adam part (ms)",
-                            "rule part (ms)"},
+                            "rule part (ms)", "in Adam updates"},
                            {}};
   for (const std::string& tag : axes.tags) {
     for (const std::string& id : axes.ids) {
       TrainingSummary total;
       PhaseCost parts[2];
+      std::vector<double> adam_updates;
       nlohmann::json params;
       for (const LearningResult& r : results) {
         if (r.tag != tag || r.id != id) continue;
@@ -170,6 +181,7 @@ RunContext::Table step_time_table(const SweepResults& results, const SweepAxes& 
         total.inversion_seconds += r.summary.inversion_seconds;
         total.update_seconds += r.summary.update_seconds;
         total.train_seconds += r.summary.train_seconds;
+        adam_updates.push_back(adam_updates_per_update(r));
         const std::vector<PhaseCost> phases = phase_costs(r);
         for (std::size_t p = 0; p < phases.size() && p < 2; ++p) {
           parts[p].updates += phases[p].updates;
@@ -185,7 +197,8 @@ RunContext::Table step_time_table(const SweepResults& results, const SweepAxes& 
                              milliseconds(total.update_seconds, steps),
                              milliseconds(total.train_seconds, steps),
                              twin ? milliseconds(parts[0].seconds, parts[0].updates) : "–",
-                             twin ? milliseconds(parts[1].seconds, parts[1].updates) : "–"});
+                             twin ? milliseconds(parts[1].seconds, parts[1].updates) : "–",
+                             adam_updates_text(adam_updates)});
     }
   }
   return timing;

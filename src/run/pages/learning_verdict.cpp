@@ -14,17 +14,36 @@ namespace physgrad::run {
 
 namespace {
 
-// Where each credited run of `group` crossed `level` over updates (or training seconds), and their
-// median.
-Crossing group_crossing(const std::vector<const LearningResult*>& group, double level,
-                        const std::function<double(const TrainingRecord&)>& value,
-                        bool in_seconds) {
+// Where one run crossed the verdict's level, on one axis.
+using RunCrossing = std::function<Crossing(const LearningResult&)>;
+
+// Over updates, and over training seconds.
+RunCrossing in_updates(double level, const std::function<double(const TrainingRecord&)>& value) {
+  return [=](const LearningResult& run) { return updates_crossing(run.summary, level, value); };
+}
+RunCrossing in_seconds(double level, const std::function<double(const TrainingRecord&)>& value) {
+  return [=](const LearningResult& run) { return seconds_crossing(run.summary, level, value); };
+}
+
+// Over Adam-update equivalents: the run's updates, each of its rule's (a twin's after its switch)
+// counted at the run's cost in Adam updates (adam_updates_per_update), Adam's own as one.
+RunCrossing in_adam_updates(double level,
+                            const std::function<double(const TrainingRecord&)>& value) {
+  return [=](const LearningResult& run) {
+    const Crossing u = updates_crossing(run.summary, level, value);
+    const double cost = adam_updates_per_update(run);
+    const double from = run.params.is_object() ? run.params.value("pretrain_iterations", 0.0) : 0;
+    const auto equivalents = [&](double x) { return x <= from ? x : from + (x - from) * cost; };
+    return Crossing{equivalents(u.low), equivalents(u.high), equivalents(u.estimate)};
+  };
+}
+
+// The median over the credited runs of `group` of where each crossed.
+Crossing group_crossing(const std::vector<const LearningResult*>& group,
+                        const RunCrossing& crossing) {
   std::vector<Crossing> crossings;
   for (const LearningResult* run : group) {
-    if (credited(*run)) {
-      crossings.push_back(in_seconds ? seconds_crossing(run->summary, level, value)
-                                     : updates_crossing(run->summary, level, value));
-    }
+    if (credited(*run)) crossings.push_back(crossing(*run));
   }
   return median_crossing(crossings);
 }
@@ -64,16 +83,14 @@ std::string range_text(double low, double high) {
   return low == high ? value_text(low) : value_text(low) + "–" + value_text(high);
 }
 
-// The range over the credited seeds of `group` of where each crossed `level`: from the lowest
-// bracket end to the highest (high = ∞ when a seed never got there).
-SeedRange crossing_range(const std::vector<const LearningResult*>& group, double level,
-                         const std::function<double(const TrainingRecord&)>& value,
-                         bool in_seconds) {
+// The range over the credited seeds of `group` of where each crossed: from the lowest bracket end
+// to the highest (high = ∞ when a seed never got there).
+SeedRange crossing_range(const std::vector<const LearningResult*>& group,
+                         const RunCrossing& crossing) {
   SeedRange range{INFINITY, -INFINITY};
   for (const LearningResult* run : group) {
     if (!credited(*run)) continue;
-    const Crossing c = in_seconds ? seconds_crossing(run->summary, level, value)
-                                  : updates_crossing(run->summary, level, value);
+    const Crossing c = crossing(*run);
     range.low = std::min(range.low, c.reached() ? c.low : INFINITY);
     range.high = std::max(range.high, c.reached() ? c.high : INFINITY);
   }
@@ -93,57 +110,86 @@ std::string crossing_ranges_text(const SeedRange& a, const SeedRange& b) {
   return one(a) + " vs " + one(b);
 }
 
-// "to reach 0.1 HIG needs 280 updates, Adam 10000 (34–38× fewer); its update costs 3.7× Adam's;
-// in wall time (measured at the same evaluations) HIG gets there 9–11× sooner (0.07 vs 0.72 s)",
-// `rule` against `base`. Counts and seconds are the brackets between the evaluations that
-// straddle the level (crossing_text), and every ratio is the range those brackets allow.
+// "280 updates, Adam 10000 (34–38× fewer)": where `rule` and `base` crossed on one axis (the
+// brackets between the evaluations that straddle the level, crossing_text), `unit` after the
+// rule's count, with the ratio range the brackets allow; over several seeds the medians, the
+// seeds' brackets and "not separated" where their ranges overlap.
+std::string counts_against(const RuleStanding& rule, const std::vector<const LearningResult*>& runs,
+                           const RuleStanding& base,
+                           const std::vector<const LearningResult*>& base_runs,
+                           const RunCrossing& crossing, const std::string& unit) {
+  const Crossing a = group_crossing(runs, crossing), b = group_crossing(base_runs, crossing);
+  const int seeds = std::max(rule.credited, base.credited);
+  const SeedRange s_rule = crossing_range(runs, crossing), s_base = crossing_range(base_runs, crossing);
+  const std::string over = seeds_text(rule.credited, base.credited);
+  const std::string comparison =
+      seeds > 1 && !separated(s_rule, s_base)
+          ? "not separated over " + over + "; medians"
+          : advantage_text(ratio_range(b, a), "fewer", "more", "about as many",
+                           "the brackets do not tell which needs fewer") +
+                (seeds > 1 ? "; medians over " + over : "");
+  return crossing_text(a) + unit + ", " + base.label + " " + crossing_text(b) + " (" + comparison +
+         (seeds > 1 ? ", the seeds' brackets spanning " + crossing_ranges_text(s_rule, s_base)
+                    : "") +
+         ")";
+}
+
+// "; its update costs 3.7 Adam updates (timed beside its steps)", from the cost probes; without
+// them the ratio of the two runs' seconds per update, which machine load can bias, says so.
+std::string cost_text(const RuleStanding& rule, const RuleStanding& base) {
+  if (rule.control) return {};  // an Adam update, by definition
+  const std::string whose = "; its update" + std::string(rule.twin ? " after the switch" : "");
+  if (std::isfinite(rule.adam_updates) && rule.adam_updates > 0) {
+    return whose + " costs " + with_digits(rule.adam_updates, 2) + " " + base.label +
+           " updates (timed beside its steps)";
+  }
+  const double m = rule.seconds_per_update / base.seconds_per_update;
+  if (!(std::isfinite(m) && m > 0)) return {};
+  return whose + " costs " + ratio_text(m) + " " + base.label + "'s (seconds per update of the " +
+         "two runs)";
+}
+
+// "; in wall time (measured at the same evaluations) HIG gets there 9–11× sooner (0.07 vs
+// 0.72 s)", or that the seeds do not separate them; empty when either never got there.
+std::string wall_time_text(const RuleStanding& rule, const std::vector<const LearningResult*>& runs,
+                           const RuleStanding& base,
+                           const std::vector<const LearningResult*>& base_runs,
+                           const RunCrossing& crossing) {
+  const Crossing t_rule = group_crossing(runs, crossing);
+  const Crossing t_base = group_crossing(base_runs, crossing);
+  if (!t_rule.reached() || !t_base.reached()) return {};
+  const RatioRange sooner = ratio_range(t_base, t_rule);
+  const bool rule_sooner = sooner.low >= 1.1, base_sooner = sooner.high <= 1 / 1.1;
+  const bool apart = std::max(rule.credited, base.credited) < 2 ||
+                     separated(crossing_range(runs, crossing), crossing_range(base_runs, crossing));
+  std::string out = "; in wall time (measured at the same evaluations) ";
+  out += !apart ? "they are not separated over " + seeds_text(rule.credited, base.credited)
+         : rule_sooner || base_sooner
+             ? (rule_sooner ? rule.label : base.label) + " gets there " +
+                   advantage_text(sooner, "sooner", "sooner", "", "")
+             : advantage_text(sooner, "", "", "both get there about together",
+                              "the brackets do not tell which gets there sooner");
+  return out + " (" + crossing_text(t_rule) + " vs " + crossing_text(t_base) + " s)";
+}
+
+// "to reach 0.1 HIG needs 280 updates, Adam 10000 (34–38× fewer); its update costs 3.7 Adam
+// updates (timed beside its steps); in Adam-update equivalents 1000, Adam 10000 (9–11× fewer); in
+// wall time (measured at the same evaluations) HIG gets there 9–11× sooner (0.07 vs 0.72 s)",
+// `rule` against `base` (Adam). Every count and ratio carries no digit finer than the brackets.
 std::string against_adam(const RuleStanding& rule, const std::vector<const LearningResult*>& runs,
                          const RuleStanding& base,
                          const std::vector<const LearningResult*>& base_runs,
                          const VerdictInput& input) {
   const double level = std::max(rule.reach_level, base.reach_level);
-  const Crossing u_rule = group_crossing(runs, level, input.value, false);
-  const Crossing u_base = group_crossing(base_runs, level, input.value, false);
-  const Crossing t_rule = group_crossing(runs, level, input.value, true);
-  const Crossing t_base = group_crossing(base_runs, level, input.value, true);
-  // Over several seeds, a rule is ahead only where the seeds' ranges are apart.
-  const int seeds = std::max(rule.credited, base.credited);
-  const SeedRange s_rule = crossing_range(runs, level, input.value, false);
-  const SeedRange s_base = crossing_range(base_runs, level, input.value, false);
-  const std::string over = seeds_text(rule.credited, base.credited);
   std::string out = "to reach " + value_text(level) + " " + rule.label + " needs " +
-                    crossing_text(u_rule) + " updates, " + base.label + " " +
-                    crossing_text(u_base) + " (" +
-                    (seeds > 1 && !separated(s_rule, s_base)
-                         ? "not separated over " + over + "; medians"
-                         : advantage_text(ratio_range(u_base, u_rule), "fewer", "more",
-                                          "about as many",
-                                          "the brackets do not tell which needs fewer") +
-                               (seeds > 1 ? "; medians over " + over : "")) +
-                    (seeds > 1 ? ", the seeds' brackets spanning " +
-                                     crossing_ranges_text(s_rule, s_base)
-                               : "") +
-                    ")";
-  const double m = rule.seconds_per_update / base.seconds_per_update;
-  if (std::isfinite(m) && m > 0) {
-    out += "; its update" + std::string(rule.twin ? " after the switch" : "") + " costs " +
-           ratio_text(m) + " " + base.label + "'s";
+                    counts_against(rule, runs, base, base_runs, in_updates(level, input.value),
+                                   " updates") +
+                    cost_text(rule, base);
+  if (std::isfinite(rule.adam_updates) && !rule.control) {
+    out += "; in " + base.label + "-update equivalents " +
+           counts_against(rule, runs, base, base_runs, in_adam_updates(level, input.value), "");
   }
-  if (t_rule.reached() && t_base.reached()) {
-    const RatioRange sooner = ratio_range(t_base, t_rule);
-    const bool rule_sooner = sooner.low >= 1.1, base_sooner = sooner.high <= 1 / 1.1;
-    out += "; in wall time (measured at the same evaluations) ";
-    const bool apart = seeds < 2 || separated(crossing_range(runs, level, input.value, true),
-                                              crossing_range(base_runs, level, input.value, true));
-    out += !apart ? "they are not separated over " + over
-           : rule_sooner || base_sooner
-               ? (rule_sooner ? rule.label : base.label) + " gets there " +
-                     advantage_text(sooner, "sooner", "sooner", "", "")
-               : advantage_text(sooner, "", "", "both get there about together",
-                                "the brackets do not tell which gets there sooner");
-    out += " (" + crossing_text(t_rule) + " vs " + crossing_text(t_base) + " s)";
-  }
-  return out;
+  return out + wall_time_text(rule, runs, base, base_runs, in_seconds(level, input.value));
 }
 
 // A rule's final value alone: "0.5 (one seed)", "0.5 (range 0.4–0.6 over 3 seeds)".
@@ -259,7 +305,7 @@ RuleStanding standing(const std::vector<const LearningResult*>& group,
   s.id = group.front()->id;
   s.label = run_rule_label(s.id, group.front()->params);
   s.control = is_control_run(s.id);
-  std::vector<double> finals, costs;
+  std::vector<double> finals, costs, adam_updates;
   for (const LearningResult* run : group) {
     if (run->params.contains("switched") && run->params.at("switched") == false) {
       s.never_switched = true;
@@ -275,6 +321,7 @@ RuleStanding standing(const std::vector<const LearningResult*>& group,
     s.twin = s.twin || run->params.contains("pretrain_iterations");
     const double cost = rule_seconds_per_update(*run);
     if (std::isfinite(cost)) costs.push_back(cost);
+    adam_updates.push_back(adam_updates_per_update(*run));
   }
   s.final_value = median(finals);
   s.finals = spread_of(finals);
@@ -286,6 +333,9 @@ RuleStanding standing(const std::vector<const LearningResult*>& group,
     s.reach_level = sorted[sorted.size() / 2];
   }
   s.seconds_per_update = median(costs);
+  const bool probed = std::all_of(adam_updates.begin(), adam_updates.end(),
+                                  [](double c) { return std::isfinite(c); });
+  if (probed) s.adam_updates = median(adam_updates);
   return s;
 }
 

@@ -50,12 +50,18 @@ struct PhaseCost {
   std::string rule;
   long long updates = 0;
   double seconds = 0;
+  // Its cost per update in Adam updates timed beside its steps (1 for Adam; NaN unprobed).
+  double adam_updates_per_update = NAN;
   double seconds_per_update() const;  // NaN without updates
 };
 // The parts of a twin (its params have "switched"): Adam's updates up to the switch, measured at
 // the evaluation made there, and its rule's after it (Adam's alone when it never switched); empty
 // for a plain rule.
 std::vector<PhaseCost> phase_costs(const LearningResult& run);
+// What one update of the run's rule (a twin's: of its rule after the switch) costs in Adam
+// updates, from the cost probes timed beside its steps in its own process
+// (TrainerOptions::cost_reference): 1 for Adam and the control, NaN when it made none.
+double adam_updates_per_update(const LearningResult& run);
 
 // An experiment's choices for one rule where they differ from the catalogue's defaults, and its
 // mini-batch size (unset: TrainerOptions' default); --lr, --rcond and --batch override them for
@@ -90,7 +96,8 @@ class LearningSweep {
   // The runs of `rules`, in order: each rule, and after each rule that needs the stacked
   // Jacobian (gn, hig, kfac, lanczos-hig, …), when --pretrain is auto or N (N > 0 and below the
   // --iters limit), its run pretrained with Adam ("adam-hig"), and after them all, when any ran
-  // and --control is not off, the control ("adam-adam"). An experiment trains each of these ids.
+  // and --control is not off, the control ("adam-adam"). With --alone off a rule that has a twin
+  // runs only as its twin. An experiment trains each of these ids.
   std::vector<std::string> run_ids(const std::vector<std::string>& rules) const;
 
   // Trains `network` (any Network: an Mlp, a ConvNetwork, …) with rule `id` and records it (its
@@ -198,6 +205,8 @@ class LearningSweep {
   // The factor of the control's step over the Adam part's (--control-lr-factor, 0.1 unset);
   // nullopt when it is off (--control off or a factor of 0).
   std::optional<double> control_factor() const;
+  // Whether a rule that gets a twin also runs alone from the start (--alone, on unless off).
+  bool rules_alone() const;
   Index batch_size(const std::string& rule) const;
   // When pretrained runs are made (--pretrain auto, or N > 0 and below the --iters limit), the
   // condition of their switch from Adam to the rule.

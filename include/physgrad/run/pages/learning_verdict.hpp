@@ -1,7 +1,9 @@
 // Learning verdict — the sentence under a learning experiment's message figure: which rule ends
 // lowest in the same budget, and per rule against Adam the update advantage N (Adam's updates to
-// reach a level over the rule's, within the evaluations' brackets), the step-cost ratio M and the
-// wall time to that level measured at the same evaluations (not N/M: costs vary along a run).
+// reach a level over the rule's, within the evaluations' brackets), the step cost C in Adam
+// updates timed beside the rule's steps in its own process (so that machine load does not count),
+// the Adam-update equivalents to the level, and the wall time to it measured at the same
+// evaluations, shown but never the only judge.
 #pragma once
 
 #include <functional>
@@ -30,8 +32,8 @@ struct VerdictInput {
 };
 
 // Per rule (group): the median and spread over its credited runs of the final value, and the
-// median of the seconds per update of the rule (rule_seconds_per_update); the counts of credited
-// and of other runs.
+// medians of the seconds per update of the rule (rule_seconds_per_update) and of its cost in Adam
+// updates (adam_updates_per_update); the counts of credited and of other runs.
 struct RuleStanding {
   std::string label;
   std::string id;
@@ -41,6 +43,7 @@ struct RuleStanding {
   // runs reached, so that the median of their counts to reach it is a number for any seed count.
   double reach_level = NAN;
   double seconds_per_update = NAN;
+  double adam_updates = NAN;  // NaN unless every credited run has its probes
   int credited = 0, failed = 0;
   bool never_switched = false;  // a twin whose rule never took over
   bool twin = false;            // a rule that follows Adam (its cost is its own phase's)
@@ -73,8 +76,10 @@ std::string value_text(double value);
 
 // The sentence: "HIG's final test loss is 12× below Adam's (0.031 vs 0.37); …. Per update and per
 // second against Adam: to reach 0.37 HIG needs between 100 and 200 updates, Adam 3300 (17–33×
-// fewer); its update costs 480× Adam's; in wall time (measured at the same evaluations) Adam gets
-// there 10–20× sooner (between 48 and 96 vs 4.7 s). …" The ratio of two rules' finals is the
+// fewer); its update costs 480 Adam updates (timed beside its steps); in Adam-update equivalents
+// 48000–96000 vs 3300 (15–29× more); in wall time (measured at the same evaluations) Adam gets
+// there 10–20× sooner (between 48 and 96 vs 4.7 s). …" Without cost probes the cost reads as the
+// ratio of the two runs' seconds per update and the equivalents are left out. The ratio of two rules' finals is the
 // ratio of their medians with the digits their spreads support (as the table of finals); counts,
 // seconds and their ratios carry no digit finer than the evaluations' brackets. Failed runs are
 // counted and never ranked; values within 10 % of each other are called about equal. Every

@@ -1,0 +1,85 @@
+// The cost yardstick (TrainerOptions::cost_reference): beside a rule's steps the trainer times an
+// Adam step on the same batch at the same θ, never applied, so that each part's cost per update
+// reads in Adam updates measured under the same load. The probes leave the run's results as they
+// were, skip the reference's own part, and survive a checkpoint.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "learning_fixture.hpp"
+#include "physgrad/learn/switching.hpp"
+#include "test_problems.hpp"
+
+namespace physgrad {
+namespace {
+
+using testing::NetworkThroughPhysics;
+using testing::test_settings;
+
+TrainerOptions probed(long long iterations, bool with_reference) {
+  TrainerOptions options;
+  options.batch_size = 4;
+  options.max_iterations = iterations;
+  options.eval_every = 5;
+  if (with_reference) {
+    options.cost_reference = [] { return make_learning_update("adam"); };
+    options.cost_reference_batch = 2;
+  }
+  return options;
+}
+
+// HIG with probes follows HIG without them to the bit; its part holds probes whose ratio is a
+// positive number; without a reference there are none.
+TEST(CostProbe, ProbesLeaveTheRunAsItWasAndTimeTheRulesPart) {
+  NetworkThroughPhysics a(32), b(32);
+  b.data = a.data;
+  const auto ua = make_learning_update("hig", test_settings("hig"));
+  const auto ub = make_learning_update("hig", test_settings("hig"));
+  const TrainingSummary sa = train(a.network, *ua, a.problem, a.data, nullptr, probed(20, true));
+  const TrainingSummary sb = train(b.network, *ub, b.problem, b.data, nullptr, probed(20, false));
+  EXPECT_EQ(a.network.parameters(), b.network.parameters());
+  ASSERT_EQ(sa.history.size(), sb.history.size());
+  for (std::size_t k = 0; k < sa.history.size(); ++k) {
+    EXPECT_EQ(sa.history[k].train_loss, sb.history[k].train_loss) << k;
+  }
+  ASSERT_EQ(sa.phases.size(), 1u);
+  EXPECT_GE(sa.phases[0].probes, 1);
+  EXPECT_LE(sa.phases[0].probes, 20);
+  EXPECT_GT(sa.phases[0].reference_updates(), 0);
+  EXPECT_TRUE(std::isfinite(sa.phases[0].reference_updates()));
+  EXPECT_EQ(sb.phases[0].probes, 0);
+  EXPECT_TRUE(std::isnan(sb.phases[0].reference_updates()));
+}
+
+// Adam→HIG: the Adam part is the reference's own and is not probed; HIG's part is, from its first
+// step on. The probes' totals go through the checkpoint's JSON and back.
+TEST(CostProbe, TheReferencesOwnPartIsNotProbedAndProbesSurviveACheckpoint) {
+  NetworkThroughPhysics s(32);
+  SwitchingUpdate update(make_learning_update("adam"), 4,
+                         make_learning_update("hig", test_settings("hig")), 4,
+                         SwitchCondition{.after = 10});
+  const TrainingSummary summary =
+      train(s.network, update, s.problem, s.data, nullptr, probed(16, true));
+  ASSERT_EQ(summary.phases.size(), 2u);
+  EXPECT_EQ(summary.phases[0].probes, 0);
+  EXPECT_GE(summary.phases[1].probes, 1);
+  EXPECT_GT(summary.phases[1].probed_step_seconds, 0);
+  EXPECT_GT(summary.phases[1].reference_seconds, 0);
+
+  const TrainingSummary back = training_summary_from_json(training_summary_to_json(summary));
+  ASSERT_EQ(back.phases.size(), 2u);
+  EXPECT_EQ(back.phases[1].probes, summary.phases[1].probes);
+  EXPECT_EQ(back.phases[1].probed_step_seconds, summary.phases[1].probed_step_seconds);
+  EXPECT_EQ(back.phases[1].reference_seconds, summary.phases[1].reference_seconds);
+  // A file of an earlier version has no probes: its parts read as unprobed.
+  nlohmann::json old = training_summary_to_json(summary);
+  for (nlohmann::json& phase : old["phases"]) {
+    phase.erase("probes");
+    phase.erase("probed_step_seconds");
+    phase.erase("reference_seconds");
+  }
+  EXPECT_EQ(training_summary_from_json(old).phases[1].probes, 0);
+}
+
+}  // namespace
+}  // namespace physgrad
