@@ -220,13 +220,19 @@ void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, doub
                           ? std::min(options_.cost_reference_batch, batch.size())
                           : batch.size();
   const auto start = std::chrono::steady_clock::now();
-  const BatchState evaluated =
-      evaluate_batch(network_, problem_, count < batch.size() ? batch.columns(0, count) : batch,
-                     reference_->need(), *reference_cache_);
-  const Step unapplied = reference_->step(evaluated);
+  try {
+    const BatchState evaluated =
+        evaluate_batch(network_, problem_, count < batch.size() ? batch.columns(0, count) : batch,
+                       reference_->need(), *reference_cache_);
+    reference_->step(evaluated);  // its Δθ is timed, never applied
+  } catch (const StopRequested&) {
+    // The step is applied and counted: the stop is taken at the next iteration boundary, where
+    // the request is still pending; this probe is dropped.
+    probe_seconds_ += seconds_since(start);
+    return;
+  }
   const double seconds = seconds_since(start);
   probe_seconds_ += seconds;
-  if (unapplied.delta.size() != network_.num_parameters()) return;
   ++phase.probes;
   phase.probed_step_seconds += step_seconds;
   phase.reference_seconds += seconds;
