@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 
 #include "learning_fixture.hpp"
 #include "physgrad/learn/switching.hpp"
+#include "physgrad/stop.hpp"
 #include "test_problems.hpp"
 
 namespace physgrad {
@@ -79,6 +81,52 @@ TEST(CostProbe, TheReferencesOwnPartIsNotProbedAndProbesSurviveACheckpoint) {
     phase.erase("reference_seconds");
   }
   EXPECT_EQ(training_summary_from_json(old).phases[1].probes, 0);
+}
+
+// A reference whose step asks the process to stop and then polls, as a simulator inside it would:
+// the stop lands inside a probe.
+class StoppingReference final : public LearningUpdate {
+ public:
+  std::string id() const override { return "stopping-reference"; }
+  nlohmann::json params() const override { return nlohmann::json::object(); }
+  UpdateNeed need() const override { return UpdateNeed::kGradient; }
+  Step step(const BatchState& /*batch*/) override {
+    request_stop();
+    throw_if_stop_requested("the probe");
+    return {};
+  }
+  double learning_rate() const override { return 0; }
+  void set_learning_rate(double /*lr*/) override {}
+};
+
+// A stop inside a probe drops the probe, not the step before it: the run stops at the next
+// iteration boundary with that step counted, and its checkpoint resumes to the parameters of a
+// run that was never stopped, to the bit.
+TEST(CostProbe, AStopInsideAProbeStopsAtTheNextIterationAndResumesExactly) {
+  NetworkThroughPhysics a(32), b(32);
+  b.data = a.data;
+  clear_stop_request();
+  TrainerOptions options = probed(6, false);
+  options.stop = &stop_request_flag();
+  options.cost_reference = [] { return std::make_unique<StoppingReference>(); };
+  std::optional<TrainerState> saved;
+  options.on_checkpoint = [&saved](const TrainerState& state) { saved = state; };
+  const auto stopped_rule = make_learning_update("hig", test_settings("hig"));
+  const TrainingSummary stopped =
+      train(a.network, *stopped_rule, a.problem, a.data, nullptr, options);
+  clear_stop_request();
+  EXPECT_EQ(stopped.termination, TrainingTermination::kInterrupted);
+  EXPECT_EQ(stopped.iterations, 1);
+  ASSERT_TRUE(saved.has_value());
+  EXPECT_EQ(saved->summary.phases[0].probes, 0);
+
+  TrainerOptions resumed = probed(6, false);
+  resumed.resume = &*saved;
+  const auto resumed_rule = make_learning_update("hig", test_settings("hig"));
+  train(a.network, *resumed_rule, a.problem, a.data, nullptr, resumed);
+  const auto straight_rule = make_learning_update("hig", test_settings("hig"));
+  train(b.network, *straight_rule, b.problem, b.data, nullptr, probed(6, false));
+  EXPECT_EQ(a.network.parameters(), b.network.parameters());
 }
 
 }  // namespace
