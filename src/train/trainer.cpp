@@ -75,9 +75,10 @@ TrainingSummary TrainingRun::run() {
       try {
         const auto step_start = std::chrono::steady_clock::now();
         const Dataset drawn = batch(order, std::min(batch_size_, n_ - batch_start_));
+        const double draw_seconds = seconds_since(step_start);
         const std::string part = update_.part_id();  // before a switch inside the step
         const bool stepped = step(drawn);
-        if (stepped) probe_cost(drawn, part, seconds_since(step_start));
+        if (stepped) probe_cost(drawn, part, seconds_since(step_start), draw_seconds);
         step_cost_ = seconds_since(step_start);
         if (!stepped) break;
       } catch (const StopRequested&) {  // train_step() left θ as it was before the step
@@ -204,7 +205,8 @@ bool TrainingRun::step(const Dataset& batch) {
   return true;
 }
 
-void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, double step_seconds) {
+void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, double step_seconds,
+                             double draw_seconds) {
   if (!options_.cost_reference || step_state_.shard.active()) return;
   if (!reference_) {
     reference_ = options_.cost_reference();
@@ -235,7 +237,9 @@ void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, doub
   probe_seconds_ += seconds;
   ++phase.probes;
   phase.probed_step_seconds += step_seconds;
-  phase.reference_seconds += seconds;
+  // A reference update in a run of its own would draw its batch too: its share of this draw.
+  phase.reference_seconds += seconds + draw_seconds * static_cast<double>(count) /
+                                           static_cast<double>(batch.size());
 }
 
 void TrainingRun::stop_for_numbers(const std::string& message) {

@@ -68,8 +68,10 @@ class TrainingRun {
   Dataset batch(const std::vector<Index>& order, Index count) const;
   bool step(const Dataset& batch);
   // Times a step of the cost reference beside the step rule `part` just made on `batch`
-  // (step_seconds), when one is due (TrainerOptions::cost_reference).
-  void probe_cost(const Dataset& batch, const std::string& part, double step_seconds);
+  // (step_seconds, of which draw_seconds drew the batch), when one is due
+  // (TrainerOptions::cost_reference).
+  void probe_cost(const Dataset& batch, const std::string& part, double step_seconds,
+                  double draw_seconds);
   void stop_for_numbers(const std::string& message);
   bool checkpoint_due() const;
   void checkpoint();
