@@ -116,7 +116,8 @@ class ScaledToy final : public Experiment {
              std::to_string(first[r].summary.iterations) + ")";
     }
     out = invariant.empty() ? "No rule needs the same iterations at every α"
-                            : out + " need the same iterations at every α from " +
+                            : out + (invariant.size() == 1 ? " needs" : " need") +
+                                  " the same iterations at every α from " +
                                   format_value(alphas.front()) + " to " +
                                   format_value(alphas.back());
     if (varying.empty()) return out + ".";

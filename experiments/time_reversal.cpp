@@ -14,6 +14,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/loss/loss.hpp"
 #include "physgrad/physics/coupled_oscillators.hpp"
+#include "physgrad/report/significant.hpp"
 #include "physgrad/physics/fpu_chain.hpp"
 #include "physgrad/run/cases/sampling.hpp"
 
@@ -265,7 +266,7 @@ class TimeReversal final : public Experiment {
     out += converged[0]->rule.label + " reaches L ≤ " + format_value(tol) + " in " +
            format_value(passes(converged[0])) + " simulator passes";
     if (converged.size() == 1) return out + ", the only rule that does.";
-    return out + ", " + format_value(passes(converged[1]) / std::max(1.0, passes(converged[0]))) +
+    return out + ", " + with_digits(passes(converged[1]) / std::max(1.0, passes(converged[0])), 2) +
            "× fewer than " + converged[1]->rule.label + " (" + format_value(passes(converged[1])) +
            ").";
   }

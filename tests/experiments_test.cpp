@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 
 #include "registry.hpp"
 #include "physgrad/run/life/experiment.hpp"
@@ -39,6 +40,37 @@ TEST(ScaledToyExperiment, InvertedRulesNeedTheSameIterationsForEveryAlphaAndGdDo
   EXPECT_EQ(find_run(context, "gd", 1000.0).termination, "numerical_failure");
   EXPECT_EQ(context.tables().size(), 1u);
   EXPECT_EQ(context.figures().size(), 1u + 2u * 4u);  // iterations vs α, landscape + loss per α
+}
+
+// The message's verb agrees with the count of rules that need the same iterations at every α: one
+// rule "needs" (Newton alone here, as GD's count moves with α), several "need".
+TEST(ScaledToyExperiment, TheInvarianceSentenceAgreesWithItsRuleCount) {
+  const RunContext one =
+      run_experiment("scaled-toy", {{"alpha", "1,1000"}, {"optimizers", "newton,gd"}});
+  EXPECT_NE(one.message().find("Newton (") , std::string::npos) << one.message();
+  EXPECT_NE(one.message().find(") needs the same iterations at every α"), std::string::npos)
+      << one.message();
+  const RunContext two =
+      run_experiment("scaled-toy", {{"alpha", "1,1000"}, {"optimizers", "newton,gn,gd"}});
+  EXPECT_NE(two.message().find(") need the same iterations at every α"), std::string::npos)
+      << two.message();
+}
+
+// time-reversal's "N× fewer" has two significant digits, as every other ratio (664 / 7 passes
+// read "95×", not "94.86×").
+TEST(TimeReversalExperiment, TheFewerPassesRatioHasTwoDigits) {
+  const RunContext context = run_experiment("time-reversal", {});
+  const std::string& message = context.message();
+  std::size_t at = message.find("× fewer than");
+  ASSERT_NE(at, std::string::npos) << message;
+  for (; at != std::string::npos; at = message.find("× fewer than", at + 1)) {
+    const std::size_t start = message.rfind(' ', at) + 1;
+    const std::string number = message.substr(start, at - start);
+    std::size_t digits = 0;
+    for (const char c : number) digits += std::isdigit(static_cast<unsigned char>(c)) != 0;
+    const bool leading_zero = number.rfind("0.", 0) == 0;
+    EXPECT_LE(digits - (leading_zero ? 1 : 0), 2u) << number << " in " << message;
+  }
 }
 
 // A step size that breaks some rules numerically (η = 1e308: GN's normal matrix, IG's Jacobian

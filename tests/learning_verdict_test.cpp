@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "experiment_runs.hpp"
 #include "physgrad/run/cases/learning_runs.hpp"
 #include "physgrad/run/pages/learning_verdict.hpp"
 
@@ -193,6 +194,21 @@ TEST(LearningVerdict, RatiosCarryTwoSignificantDigits) {
   EXPECT_EQ(ratio_text(7712.0), "7700×");
   EXPECT_EQ(ratio_text(0.456), "0.46×");
   EXPECT_EQ(value_text(0.031234), "0.0312");
+}
+
+// After a lead ("After the same budget, ", "At ξ = 32, ") the verdict's own first word is in lower
+// case unless it is a rule's label: a run whose every rule failed reads "After the same budget, no
+// rule ended …", not "…, No rule ended …".
+TEST(LearningVerdict, ALeadBeforeNoRuleReadsInLowerCase) {
+  EXPECT_EQ(verdict_after("At ξ = 32, ", "No rule ended a run."), "At ξ = 32, no rule ended a run.");
+  EXPECT_EQ(verdict_after("At ξ = 32, ", "HIG's final loss is 2× below Adam's."),
+            "At ξ = 32, HIG's final loss is 2× below Adam's.");
+  const RunContext failed = testing::run_experiment(
+      "poisson", {{"grid", "4"}, {"train-size", "64"}, {"test-size", "16"}, {"seeds", "1"},
+                  {"optimizers", "adam"}, {"lr", "1e300"}, {"iters", "3"}, {"pretrain", "0"}});
+  EXPECT_NE(failed.message().find("After the same budget, no rule ended a run"),
+            std::string::npos)
+      << failed.message();
 }
 
 }  // namespace

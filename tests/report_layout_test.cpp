@@ -55,6 +55,9 @@ TEST(Significant, WholeNumbersInFullOthersRounded) {
   EXPECT_EQ(with_digits(1234, 2), "1234");  // a count stays as it is
   EXPECT_EQ(with_digits(0.012345, 3), "0.0123");
   EXPECT_EQ(with_digits(2.5e7, 2), "25000000");
+  EXPECT_EQ(with_digits(3.6e-05, 1), "4e-05");  // not "4.e-05"
+  EXPECT_EQ(with_digits(0.00018, 1), "0.0002");
+  EXPECT_EQ(with_digits(3.6e-05, 2), "3.6e-05");
   EXPECT_EQ(with_digits(25340000.5, 2), "2.5e+07");
   EXPECT_EQ(with_digits(kNaN, 2), "–");
   EXPECT_EQ(with_digits(-INFINITY, 2), "-inf");

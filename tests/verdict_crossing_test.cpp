@@ -196,6 +196,22 @@ TEST(VerdictCrossing, ATwinsEquivalentsCountItsAdamPartOnceAndItsRulesAtTheirCos
       << sentence;
 }
 
+// The level is compared as printed: Adam's curve hovers about its final 0.904637, which the
+// sentence prints as 0.905, and already reads 0.90473 at update 184. Against the printed level
+// Adam got there between 92 and 184, not between 368 and 460 as against the unprinted digits.
+TEST(VerdictCrossing, TheLevelIsComparedAsPrinted) {
+  const LearningResult adam =
+      evaluated("adam", {0, 92, 184, 276, 368, 460},
+                {1.0, 0.90561, 0.90473, 0.90486, 0.90476, 0.904637}, 1e-3);
+  const LearningResult sip = evaluated("sip", {0, 92, 184, 276, 368, 460},
+                                       {1.0, 0.5, 0.3, 0.2, 0.15, 0.1}, 1e-3);
+  const std::string sentence = verdict_sentence({{{&adam}, {&sip}}, kLoss, "final test loss"});
+  EXPECT_NE(sentence.find("to reach 0.905 SIP needs between 0 and 92 updates, Adam between 92 "
+                          "and 184 "),
+            std::string::npos)
+      << sentence;
+}
+
 // The ratio of two rules' median finals keeps the digits their seeds' spreads support, as the
 // table of finals does ("×50"): Gauss-Newton's finals range over two decades, so 45.45 reads 50
 // (its seeds' range stays above HIG's, so the two are separated).

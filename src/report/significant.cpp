@@ -42,7 +42,11 @@ std::string with_digits(double value, int digits) {
   std::array<char, 40> buf{};
   std::snprintf(buf.data(), buf.size(), "%#.*g", digits, value);
   std::string out = buf.data();
-  if (out.back() == '.') out.pop_back();
+  // One digit keeps no point: "4." and "4.e-05" read "4" and "4e-05".
+  const std::size_t point = out.find('.');
+  if (point != std::string::npos && (point + 1 == out.size() || out[point + 1] == 'e')) {
+    out.erase(point, 1);
+  }
   return out;
 }
 

@@ -14,6 +14,18 @@ namespace physgrad::run {
 
 namespace {
 
+// The verdict's first words when no rule can be ranked.
+constexpr const char* kNoRule = "No rule";
+
+// The level as value_text prints it: rounded up to three significant digits, so that every run
+// whose final value set the level still reaches it and each bracket is that of the printed
+// number, not of a digit the sentence does not show.
+double printed_level(double level) {
+  if (!(level > 0) || !std::isfinite(level)) return level;
+  const double unit = std::pow(10, std::floor(std::log10(level)) - 2);
+  return std::ceil(level / unit * (1 - 1e-12)) * unit;
+}
+
 // Where one run crossed the verdict's level, on one axis.
 using RunCrossing = std::function<Crossing(const LearningResult&)>;
 
@@ -180,7 +192,7 @@ std::string against_adam(const RuleStanding& rule, const std::vector<const Learn
                          const RuleStanding& base,
                          const std::vector<const LearningResult*>& base_runs,
                          const VerdictInput& input) {
-  const double level = std::max(rule.reach_level, base.reach_level);
+  const double level = printed_level(std::max(rule.reach_level, base.reach_level));
   std::string out = "to reach " + value_text(level) + " " + rule.label + " needs " +
                     counts_against(rule, runs, base, base_runs, in_updates(level, input.value),
                                    " updates") +
@@ -339,6 +351,11 @@ RuleStanding standing(const std::vector<const LearningResult*>& group,
   return s;
 }
 
+std::string verdict_after(const std::string& lead, std::string sentence) {
+  if (sentence.rfind(kNoRule, 0) == 0) sentence[0] = 'n';
+  return lead + sentence;
+}
+
 std::string ratio_text(double ratio) {
   if (!(ratio > 0)) return "–";
   if (!std::isfinite(ratio)) return "∞×";
@@ -371,7 +388,7 @@ std::string verdict_sentence(const VerdictInput& input) {
   std::sort(ranked.begin(), ranked.end(),
             [&](std::size_t a, std::size_t b) { return all[a].final_value < all[b].final_value; });
   if (ranked.empty()) {
-    return "No rule ended a run within its limits with a finite " + input.what + ".";
+    return std::string(kNoRule) + " ended a run within its limits with a finite " + input.what + ".";
   }
   const RuleStanding& best = all[ranked.front()];
   std::string out = ranked.size() == 1

@@ -70,6 +70,10 @@ double seconds_to_reach(const TrainingSummary& run, double level,
 // before it are not mixed in; NaN when the rule made no update between two evaluations.
 double rule_seconds_per_update(const LearningResult& run);
 
+// A verdict sentence after `lead` ("After the same budget, ", "At ξ = 32, "): its first word in
+// lower case where it is not a rule's label ("No rule ended …" reads "no rule ended …").
+std::string verdict_after(const std::string& lead, std::string sentence);
+
 // A ratio with two significant digits ("12×", "1.5×", "480×"), a value with three.
 std::string ratio_text(double ratio);
 std::string value_text(double value);
