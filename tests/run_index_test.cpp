@@ -5,11 +5,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "report_pages_fixture.hpp"
@@ -206,6 +208,60 @@ TEST_F(RunIndex, CurvesOverUpdatesAreNotLabelledAsFinals) {
     EXPECT_EQ(svg.find("median final test loss"), std::string::npos);
     EXPECT_TRUE(svg.find(">test loss at λ = 1</text>") != std::string::npos ||
                 svg.find(">test loss at λ = 1 (log scale)</text>") != std::string::npos);
+  }
+}
+
+// A folder whose run failed at lr 10 (its test loss climbing to 1e105 before the failure) beside
+// a folder of healthy runs: the failed curve does not stretch the index figure's axis (no tick
+// beyond 1e+02), and two healthy rules whose finals differ (SGD 0.777, Adam 0.873) are not said to
+// coincide.
+TEST_F(RunIndex, AFailedRunNeitherStretchesTheAxisNorMakesHealthyCurvesCoincide) {
+  const auto write_folder = [this](const std::string& name,
+                                   const std::vector<std::tuple<std::string, std::string, double,
+                                                                std::vector<double>>>& rules) {
+    nlohmann::json runs = nlohmann::json::array();
+    std::string csv = "label,optimizer,seed,lr,iteration,wall_seconds,test_loss\n";
+    for (const auto& [label, id, lr, losses] : rules) {
+      const bool failed = losses.back() > 1e10;
+      runs.push_back({{"label", label}, {"optimizer", id}, {"params", {{"seed", 0}, {"lr", lr}}},
+                      {"initial", {{"loss", losses.front()}}},
+                      {"final", {{"loss", losses.back()}, {"test_loss", losses.back()}}},
+                      {"iterations", 10 * (losses.size() - 1)}, {"epochs", 1},
+                      {"wall_seconds", 0.1},
+                      {"termination", failed ? "numerical_failure" : "max_iterations"}});
+      for (std::size_t k = 0; k < losses.size(); ++k) {
+        csv += label + "," + id + ",0," + std::to_string(lr) + "," + std::to_string(10 * k) + "," +
+               std::to_string(0.01 * static_cast<double>(k)) + "," + std::to_string(losses[k]) +
+               "\n";
+      }
+    }
+    const nlohmann::json summary = {
+        {"experiment", "hand-learning"},
+        {"runs", runs},
+        {"message", {{"figure", "x.svg"}, {"sentence", "Hand."}, {"metric", "test_loss"},
+                     {"metric_text", "final test loss"}, {"labels", {}}}}};
+    fs::create_directories(dir_ / "runs" / name);
+    std::ofstream(dir_ / "runs" / name / "summary.json") << summary.dump();
+    std::ofstream(dir_ / "runs" / name / "metrics.csv") << csv;
+  };
+  write_folder("healthy", {{"SGD", "sgd", 0.01, {1.0, 0.9, 0.777}},
+                           {"Adam", "adam", 0.001, {1.0, 0.95, 0.873}}});
+  write_folder("lr10", {{"Adam (lr 10)", "adam", 10, {1.0, 1e50, 1e105}}});
+  const physgrad::testing::Outcome index = run("report runs");
+  ASSERT_EQ(index.exit_code, 0) << index.err;
+  const std::string html = read_file(dir_ / "runs" / "index.html");
+  const std::vector<std::string> svgs = inline_svgs(html);
+  ASSERT_FALSE(svgs.empty());
+  EXPECT_NE(html.find("ends off scale at 1e+105"), std::string::npos);
+  for (const std::string& svg : svgs) {
+    // Every power of ten the figure prints is a tick, except the failed curve's own end label.
+    for (std::size_t at = svg.find("e+"); at != std::string::npos; at = svg.find("e+", at + 2)) {
+      const std::string before = svg.substr(at > 20 ? at - 20 : 0, at > 20 ? 20 : at);
+      if (before.find("off scale at ") != std::string::npos) continue;
+      EXPECT_LE(std::atoi(svg.c_str() + at + 2), 2) << before << svg.substr(at, 8);
+    }
+    EXPECT_EQ(svg.find("SGD (coincides with Adam"), std::string::npos);
+    EXPECT_EQ(svg.find("coincides with SGD"), std::string::npos);
   }
 }
 
