@@ -176,6 +176,15 @@ TEST(VerdictCrossing, ProbedCostsGiveTheCostInAdamUpdatesAndTheEquivalents) {
             std::string::npos)
       << sentence;
   EXPECT_EQ(sentence.find("seconds per update of the two runs"), std::string::npos) << sentence;
+  // Equivalents are whole updates, also at a cost with decimals (100 / 3 Adam updates).
+  hig.summary.phases[0].probed_step_seconds = 100;
+  hig.summary.phases[0].reference_seconds = 3;
+  const std::string thirds = verdict_sentence({{{&adam}, {&hig}}, kLoss, "final test loss"});
+  // 8333–8667 against 9900–10000: 1.14–1.2× fewer, which one digit would round to "1×".
+  EXPECT_NE(thirds.find("in Adam-update equivalents 8700, Adam 10000 (1.1–1.2× fewer)"),
+            std::string::npos)
+      << thirds;
+  EXPECT_EQ(thirds.find("e+0"), std::string::npos) << thirds;
 }
 
 // A twin's equivalents: its Adam updates count one each, its rule's updates after the switch at

@@ -105,7 +105,8 @@ std::string ratio_range_text(double low, double high) {
   if (!std::isfinite(high)) return "at least " + ratio_text(low);
   const std::string a = ratio_text(low), b = ratio_text(high);
   if (a == b) return a;
-  if (one_digit(low) == one_digit(high)) return one_digit(low);
+  // One digit where both ends share it, but never "1×", which would read as no advantage.
+  if (one_digit(low) == one_digit(high) && one_digit(low) != "1×") return one_digit(low);
   return a.substr(0, a.size() - std::string("×").size()) + "–" + b;
 }
 

@@ -46,7 +46,9 @@ RunCrossing in_adam_updates(double level,
     const double cost = adam_updates_per_update(run);
     const double from = run.params.is_object() ? run.params.value("pretrain_iterations", 0.0) : 0;
     const auto equivalents = [&](double x) { return x <= from ? x : from + (x - from) * cost; };
-    return Crossing{equivalents(u.low), equivalents(u.high), equivalents(u.estimate)};
+    // Whole updates, the bracket widened to them.
+    return Crossing{std::floor(equivalents(u.low)), std::ceil(equivalents(u.high)),
+                    std::round(equivalents(u.estimate))};
   };
 }
 

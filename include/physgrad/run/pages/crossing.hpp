@@ -45,8 +45,8 @@ struct RatioRange {
 RatioRange ratio_range(const Crossing& a, const Crossing& b);
 
 // A ratio range with no digit the brackets do not support: "36×" when both ends read so at two
-// significant digits, "40×" when they agree at one, else "30–40×"; "at least 33×" for an open
-// upper end.
+// significant digits, "40×" when they agree at one (but not "1×": 1.1–1.2× stays so), else
+// "30–40×"; "at least 33×" for an open upper end.
 std::string ratio_range_text(double low, double high);
 
 // How `r` = a / b compares a's count with b's: "36× fewer" (low ≥ 1.1), "2× more" (high ≤
