@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <optional>
+#include <vector>
 
 #include "learning_fixture.hpp"
 #include "physgrad/learn/switching.hpp"
@@ -98,6 +99,40 @@ class StoppingReference final : public LearningUpdate {
   double learning_rate() const override { return 0; }
   void set_learning_rate(double /*lr*/) override {}
 };
+
+// A reference that records the batch sizes it is given.
+class SizeRecordingReference final : public LearningUpdate {
+ public:
+  explicit SizeRecordingReference(std::vector<Index>& sizes) : sizes_(sizes) {}
+  std::string id() const override { return "size-recording-reference"; }
+  nlohmann::json params() const override { return nlohmann::json::object(); }
+  UpdateNeed need() const override { return UpdateNeed::kGradient; }
+  Step step(const BatchState& batch) override {
+    sizes_.push_back(batch.batch_size);
+    return {Vector::Zero(batch.gradient.size())};
+  }
+  double learning_rate() const override { return 0; }
+  void set_learning_rate(double /*lr*/) override {}
+
+ private:
+  std::vector<Index>& sizes_;
+};
+
+// The reference steps at its own batch size: the rule's batch of 4 is cut to 2, or its samples
+// repeated to 12 (an Adam run at batch 12 beside a rule at batch 4 costs a batch of 12).
+TEST(CostProbe, TheReferenceStepsAtItsOwnBatchSize) {
+  for (const Index reference_batch : {2, 12}) {
+    NetworkThroughPhysics s(32);
+    std::vector<Index> sizes;
+    TrainerOptions options = probed(6, false);
+    options.cost_reference = [&sizes] { return std::make_unique<SizeRecordingReference>(sizes); };
+    options.cost_reference_batch = reference_batch;
+    const auto rule = make_learning_update("hig", test_settings("hig"));
+    train(s.network, *rule, s.problem, s.data, nullptr, options);
+    ASSERT_FALSE(sizes.empty());
+    for (const Index size : sizes) EXPECT_EQ(size, reference_batch);
+  }
+}
 
 // A stop inside a probe drops the probe, not the step before it: the run stops at the next
 // iteration boundary with that step counted, and its checkpoint resumes to the parameters of a

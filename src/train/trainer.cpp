@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "physgrad/error.hpp"
 #include "physgrad/stop.hpp"
@@ -218,14 +219,16 @@ void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, doub
       (!first_of_part && probe_seconds_ > kProbeShare * summary_.train_seconds)) {
     return;
   }
-  const Index count = options_.cost_reference_batch > 0
-                          ? std::min(options_.cost_reference_batch, batch.size())
-                          : batch.size();
+  // The reference's own batch size: the step's samples, cut short or repeated to it.
+  const Index count =
+      options_.cost_reference_batch > 0 ? options_.cost_reference_batch : batch.size();
+  std::vector<Index> samples(static_cast<std::size_t>(count));
+  for (Index i = 0; i < count; ++i) samples[static_cast<std::size_t>(i)] = i % batch.size();
+  const Dataset reference_batch = count == batch.size() ? batch : batch.select(samples);
   const auto start = std::chrono::steady_clock::now();
   try {
-    const BatchState evaluated =
-        evaluate_batch(network_, problem_, count < batch.size() ? batch.columns(0, count) : batch,
-                       reference_->need(), *reference_cache_);
+    const BatchState evaluated = evaluate_batch(network_, problem_, reference_batch,
+                                                reference_->need(), *reference_cache_);
     reference_->step(evaluated);  // its Δθ is timed, never applied
   } catch (const StopRequested&) {
     // The step is applied and counted: the stop is taken at the next iteration boundary, where

@@ -150,11 +150,11 @@ struct TrainerOptions {
   // Progress line after each evaluation.
   std::function<void(const TrainingRecord&)> on_progress;
   // The cost yardstick: when set, beside some of its steps the run also times one step of this
-  // rule (made once by the function; Adam, say) on the step's batch (its first
-  // cost_reference_batch samples when that is smaller) at the same θ: the forward pass, the
-  // derivative it needs and its Δθ, which is never applied, plus its share of the batch's draw
-  // (as in a run of its own; the step it stands beside includes its draw). So each part's cost
-  // per update reads in the reference's updates measured under the same load
+  // rule (made once by the function; Adam, say) at the same θ on the step's batch, cut short or
+  // its samples repeated to cost_reference_batch (the reference's own batch size): the forward
+  // pass, the derivative it needs and its Δθ, which is never applied, plus its share of the
+  // batch's draw (as in a run of its own; the step it stands beside includes its draw). So each
+  // part's cost per update reads in the reference's updates measured under the same load
   // (Phase::reference_updates()). The run's θ, data and results do not depend on it; probes are
   // made after the first step of each part and then whenever they have taken at most 2 % of the
   // training time, and count toward the wall time (not train_seconds). A part whose rule has the
