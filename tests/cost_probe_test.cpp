@@ -66,20 +66,20 @@ TEST(CostProbe, TheReferencesOwnPartIsNotProbedAndProbesSurviveACheckpoint) {
   ASSERT_EQ(summary.phases.size(), 2u);
   EXPECT_EQ(summary.phases[0].probes, 0);
   EXPECT_GE(summary.phases[1].probes, 1);
-  EXPECT_GT(summary.phases[1].probed_step_seconds, 0);
-  EXPECT_GT(summary.phases[1].reference_seconds, 0);
+  EXPECT_GT(summary.phases[1].probed_step_cpu_seconds, 0);
+  EXPECT_GT(summary.phases[1].reference_cpu_seconds, 0);
 
   const TrainingSummary back = training_summary_from_json(training_summary_to_json(summary));
   ASSERT_EQ(back.phases.size(), 2u);
   EXPECT_EQ(back.phases[1].probes, summary.phases[1].probes);
-  EXPECT_EQ(back.phases[1].probed_step_seconds, summary.phases[1].probed_step_seconds);
-  EXPECT_EQ(back.phases[1].reference_seconds, summary.phases[1].reference_seconds);
+  EXPECT_EQ(back.phases[1].probed_step_cpu_seconds, summary.phases[1].probed_step_cpu_seconds);
+  EXPECT_EQ(back.phases[1].reference_cpu_seconds, summary.phases[1].reference_cpu_seconds);
   // A file of an earlier version has no probes: its parts read as unprobed.
   nlohmann::json old = training_summary_to_json(summary);
   for (nlohmann::json& phase : old["phases"]) {
     phase.erase("probes");
-    phase.erase("probed_step_seconds");
-    phase.erase("reference_seconds");
+    phase.erase("probed_step_cpu_seconds");
+    phase.erase("reference_cpu_seconds");
   }
   EXPECT_EQ(training_summary_from_json(old).phases[1].probes, 0);
 }

@@ -16,7 +16,8 @@
 namespace physgrad {
 
 double TrainingSummary::Phase::reference_updates() const {
-  return probes > 0 && reference_seconds > 0 ? probed_step_seconds / reference_seconds : NAN;
+  return probes > 0 && reference_cpu_seconds > 0 ? probed_step_cpu_seconds / reference_cpu_seconds
+                                                 : NAN;
 }
 
 namespace training {
@@ -75,11 +76,12 @@ TrainingSummary TrainingRun::run() {
       if (ended()) break;
       try {
         const auto step_start = std::chrono::steady_clock::now();
+        const double cpu_start = process_cpu_seconds();
         const Dataset drawn = batch(order, std::min(batch_size_, n_ - batch_start_));
-        const double draw_seconds = seconds_since(step_start);
+        const double draw_cpu = process_cpu_seconds() - cpu_start;
         const std::string part = update_.part_id();  // before a switch inside the step
         const bool stepped = step(drawn);
-        if (stepped) probe_cost(drawn, part, seconds_since(step_start), draw_seconds);
+        if (stepped) probe_cost(drawn, part, process_cpu_seconds() - cpu_start, draw_cpu);
         step_cost_ = seconds_since(step_start);
         if (!stepped) break;
       } catch (const StopRequested&) {  // train_step() left θ as it was before the step
@@ -206,8 +208,8 @@ bool TrainingRun::step(const Dataset& batch) {
   return true;
 }
 
-void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, double step_seconds,
-                             double draw_seconds) {
+void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, double step_cpu,
+                             double draw_cpu) {
   if (!options_.cost_reference || step_state_.shard.active()) return;
   if (!reference_) {
     reference_ = options_.cost_reference();
@@ -226,6 +228,7 @@ void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, doub
   for (Index i = 0; i < count; ++i) samples[static_cast<std::size_t>(i)] = i % batch.size();
   const Dataset reference_batch = count == batch.size() ? batch : batch.select(samples);
   const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = process_cpu_seconds();
   try {
     const BatchState evaluated = evaluate_batch(network_, problem_, reference_batch,
                                                 reference_->need(), *reference_cache_);
@@ -236,13 +239,13 @@ void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, doub
     probe_seconds_ += seconds_since(start);
     return;
   }
-  const double seconds = seconds_since(start);
-  probe_seconds_ += seconds;
+  const double cpu = process_cpu_seconds() - cpu_start;
+  probe_seconds_ += seconds_since(start);
   ++phase.probes;
-  phase.probed_step_seconds += step_seconds;
+  phase.probed_step_cpu_seconds += step_cpu;
   // A reference update in a run of its own would draw its batch too: its share of this draw.
-  phase.reference_seconds += seconds + draw_seconds * static_cast<double>(count) /
-                                           static_cast<double>(batch.size());
+  phase.reference_cpu_seconds +=
+      cpu + draw_cpu * static_cast<double>(count) / static_cast<double>(batch.size());
 }
 
 void TrainingRun::stop_for_numbers(const std::string& message) {

@@ -55,8 +55,8 @@ nlohmann::json phases_to_json(const std::vector<TrainingSummary::Phase>& phases)
     out.push_back({{"first_iteration", phase.first_iteration},
                    {"batch_size", phase.batch_size},
                    {"probes", phase.probes},
-                   {"probed_step_seconds", phase.probed_step_seconds},
-                   {"reference_seconds", phase.reference_seconds}});
+                   {"probed_step_cpu_seconds", phase.probed_step_cpu_seconds},
+                   {"reference_cpu_seconds", phase.reference_cpu_seconds}});
   }
   return out;
 }
@@ -71,8 +71,8 @@ std::vector<TrainingSummary::Phase> phases_from_json(const nlohmann::json& docum
     // Absent from files of earlier versions, which made no cost probes.
     if (entry.contains("probes")) {
       phase.probes = integer_from_json(entry, "probes");
-      phase.probed_step_seconds = real_from_json(entry, "probed_step_seconds");
-      phase.reference_seconds = real_from_json(entry, "reference_seconds");
+      phase.probed_step_cpu_seconds = real_from_json(entry, "probed_step_cpu_seconds");
+      phase.reference_cpu_seconds = real_from_json(entry, "reference_cpu_seconds");
     }
     phases.push_back(phase);
   }

@@ -67,11 +67,11 @@ class TrainingRun {
   bool evaluate_now();
   Dataset batch(const std::vector<Index>& order, Index count) const;
   bool step(const Dataset& batch);
-  // Times a step of the cost reference beside the step rule `part` just made on `batch`
-  // (step_seconds, of which draw_seconds drew the batch), when one is due
+  // Times a step of the cost reference beside the step rule `part` just made on `batch` (step_cpu
+  // CPU seconds, of which draw_cpu drew the batch), when one is due
   // (TrainerOptions::cost_reference).
-  void probe_cost(const Dataset& batch, const std::string& part, double step_seconds,
-                  double draw_seconds);
+  void probe_cost(const Dataset& batch, const std::string& part, double step_cpu,
+                  double draw_cpu);
   void stop_for_numbers(const std::string& message);
   bool checkpoint_due() const;
   void checkpoint();
@@ -112,7 +112,7 @@ class TrainingRun {
   double evaluation_cost_ = 0;
   double checkpoint_cost_ = 0;
   // The cost reference (TrainerOptions::cost_reference), its own forward cache, and the probes'
-  // seconds in this process (what keeps them to their share of the training time).
+  // wall seconds in this process (what keeps them to their share of the training time).
   std::unique_ptr<LearningUpdate> reference_;
   std::unique_ptr<NetworkCache> reference_cache_;
   double probe_seconds_ = 0;

@@ -68,13 +68,13 @@ struct TrainingSummary {
   // (LearningUpdate::phase(), e.g. SwitchingUpdate's Adam→HIG) adds one each time the next part
   // takes over, with the updates made before it and its batch size. Kept in checkpoints.
   // With TrainerOptions::cost_reference, a part also keeps its cost probes: how many were made,
-  // the seconds of the steps they stood beside and the seconds of the reference steps.
+  // the CPU seconds of the steps they stood beside and those of the reference steps.
   struct Phase {
     long long first_iteration = 0;
     Index batch_size = 0;
     long long probes = 0;
-    double probed_step_seconds = 0;
-    double reference_seconds = 0;
+    double probed_step_cpu_seconds = 0;
+    double reference_cpu_seconds = 0;
     // The part's cost per update in reference updates (Adam's, say) measured beside its own
     // steps under the same load; NaN without probes.
     double reference_updates() const;
@@ -153,9 +153,10 @@ struct TrainerOptions {
   // rule (made once by the function; Adam, say) at the same θ on the step's batch, cut short or
   // its samples repeated to cost_reference_batch (the reference's own batch size): the forward
   // pass, the derivative it needs and its Δθ, which is never applied, plus its share of the
-  // batch's draw (as in a run of its own; the step it stands beside includes its draw). So each
-  // part's cost per update reads in the reference's updates measured under the same load
-  // (Phase::reference_updates()). The run's θ, data and results do not depend on it; probes are
+  // batch's draw (as in a run of its own; the step it stands beside includes its draw). Both are
+  // timed in the process's CPU seconds (process_cpu_seconds(), all threads), which time spent
+  // waiting for a core does not enter. So each part's cost per update reads in the reference's
+  // updates, whatever else the machine runs (Phase::reference_updates()). The run's θ, data and results do not depend on it; probes are
   // made after the first step of each part and then whenever they have taken at most 2 % of the
   // training time, and count toward the wall time (not train_seconds). A part whose rule has the
   // reference's id is not probed. A stop request inside a probe drops the probe; the run stops
