@@ -75,15 +75,7 @@ TrainingSummary TrainingRun::run() {
       }
       if (ended()) break;
       try {
-        const auto step_start = std::chrono::steady_clock::now();
-        const double cpu_start = process_cpu_seconds();
-        const Dataset drawn = batch(order, std::min(batch_size_, n_ - batch_start_));
-        const double draw_cpu = process_cpu_seconds() - cpu_start;
-        const std::string part = update_.part_id();  // before a switch inside the step
-        const bool stepped = step(drawn);
-        if (stepped) probe_cost(drawn, part, process_cpu_seconds() - cpu_start, draw_cpu);
-        step_cost_ = seconds_since(step_start);
-        if (!stepped) break;
+        if (!timed_step(order)) break;
       } catch (const StopRequested&) {  // train_step() left θ as it was before the step
         return interrupted("stopped on request during iteration " +
                            std::to_string(summary_.iterations + 1) + " (not applied)");
@@ -186,6 +178,18 @@ Dataset TrainingRun::batch(const std::vector<Index>& order, Index count) const {
   }
   drawn.validate("fresh samples");
   return drawn;
+}
+
+bool TrainingRun::timed_step(const std::vector<Index>& order) {
+  const auto step_start = std::chrono::steady_clock::now();
+  const double cpu_start = process_cpu_seconds();
+  const Dataset drawn = batch(order, std::min(batch_size_, n_ - batch_start_));
+  const double draw_cpu = process_cpu_seconds() - cpu_start;
+  const std::string part = update_.part_id();  // before a switch inside the step
+  const bool stepped = step(drawn);
+  if (stepped) probe_cost(drawn, part, process_cpu_seconds() - cpu_start, draw_cpu);
+  step_cost_ = seconds_since(step_start);
+  return stepped;
 }
 
 // One update on `batch`; false when training must stop. Every rank of a data-parallel run sees

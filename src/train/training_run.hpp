@@ -67,6 +67,9 @@ class TrainingRun {
   bool evaluate_now();
   Dataset batch(const std::vector<Index>& order, Index count) const;
   bool step(const Dataset& batch);
+  // The next batch of the epoch's `order` drawn and stepped on, its wall time kept as the last
+  // step's cost (step_cost_) and its CPU time handed to probe_cost(); false as step().
+  bool timed_step(const std::vector<Index>& order);
   // Times a step of the cost reference beside the step rule `part` just made on `batch` (step_cpu
   // CPU seconds, of which draw_cpu drew the batch), when one is due
   // (TrainerOptions::cost_reference).
