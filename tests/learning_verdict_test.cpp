@@ -200,7 +200,8 @@ TEST(LearningVerdict, RatiosCarryTwoSignificantDigits) {
 // case unless it is a rule's label: a run whose every rule failed reads "After the same budget, no
 // rule ended …", not "…, No rule ended …".
 TEST(LearningVerdict, ALeadBeforeNoRuleReadsInLowerCase) {
-  EXPECT_EQ(verdict_after("At ξ = 32, ", "No rule ended a run."), "At ξ = 32, no rule ended a run.");
+  EXPECT_EQ(verdict_after("At ξ = 32, ", "No rule ended a run."),
+            "At ξ = 32, no rule ended a run.");
   EXPECT_EQ(verdict_after("At ξ = 32, ", "HIG's final loss is 2× below Adam's."),
             "At ξ = 32, HIG's final loss is 2× below Adam's.");
   const RunContext failed = testing::run_experiment(

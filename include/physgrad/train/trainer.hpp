@@ -156,11 +156,12 @@ struct TrainerOptions {
   // batch's draw (as in a run of its own; the step it stands beside includes its draw). Both are
   // timed in the process's CPU seconds (process_cpu_seconds(), all threads), which time spent
   // waiting for a core does not enter. So each part's cost per update reads in the reference's
-  // updates, whatever else the machine runs (Phase::reference_updates()). The run's θ, data and results do not depend on it; probes are
-  // made after the first step of each part and then whenever they have taken at most 2 % of the
-  // training time, and count toward the wall time (not train_seconds). A part whose rule has the
-  // reference's id is not probed. A stop request inside a probe drops the probe; the run stops
-  // at the next iteration boundary. Not in data-parallel runs.
+  // updates, whatever else the machine runs (Phase::reference_updates()). The run's θ, data and
+  // results do not depend on it; probes are made after the first step of each part and then
+  // whenever they have taken at most 2 % of the training time, and count toward the wall time
+  // (not train_seconds). A part whose rule has the reference's id is not probed. A stop request
+  // inside a probe drops the probe; the run stops at the next iteration boundary. Not in
+  // data-parallel runs.
   std::function<std::unique_ptr<LearningUpdate>()> cost_reference;
   Index cost_reference_batch = 0;  // 0: the step's whole batch
 

@@ -195,7 +195,7 @@ void LearningSweep::set_time_message(const std::string& tag, const std::string& 
   context_.add_figure(progress_figure(tag, file, test_loss, "Test loss", "mean test loss"));
   context_.set_message(file,
                        verdict_after("After the same budget, ",
-                           verdict_sentence({rule_groups(tag), test_loss, what})),
+                                     verdict_sentence({rule_groups(tag), test_loss, what})),
                        {"test_loss", what, labels(tag)});
 }
 
@@ -206,8 +206,8 @@ void LearningSweep::set_metric_message(const std::string& tag, const std::string
   const auto test_loss = [](const TrainingRecord& r) { return r.test_loss; };
   context_.set_message(
       file,
-      verdict_after(prefix, verdict_sentence({rule_groups(tag), extra(metric), what_metric})) + " " + loss_lead +
-          ": " + verdict_sentence({rule_groups(tag), test_loss, what_loss}),
+      verdict_after(prefix, verdict_sentence({rule_groups(tag), extra(metric), what_metric})) +
+          " " + loss_lead + ": " + verdict_sentence({rule_groups(tag), test_loss, what_loss}),
       {metric, what_metric, labels(tag)});
 }
 

@@ -134,7 +134,8 @@ std::string counts_against(const RuleStanding& rule, const std::vector<const Lea
                            const RunCrossing& crossing, const std::string& unit) {
   const Crossing a = group_crossing(runs, crossing), b = group_crossing(base_runs, crossing);
   const int seeds = std::max(rule.credited, base.credited);
-  const SeedRange s_rule = crossing_range(runs, crossing), s_base = crossing_range(base_runs, crossing);
+  const SeedRange s_rule = crossing_range(runs, crossing);
+  const SeedRange s_base = crossing_range(base_runs, crossing);
   const std::string over = seeds_text(rule.credited, base.credited);
   const std::string comparison =
       seeds > 1 && !separated(s_rule, s_base)
@@ -390,7 +391,8 @@ std::string verdict_sentence(const VerdictInput& input) {
   std::sort(ranked.begin(), ranked.end(),
             [&](std::size_t a, std::size_t b) { return all[a].final_value < all[b].final_value; });
   if (ranked.empty()) {
-    return std::string(kNoRule) + " ended a run within its limits with a finite " + input.what + ".";
+    return std::string(kNoRule) + " ended a run within its limits with a finite " + input.what +
+           ".";
   }
   const RuleStanding& best = all[ranked.front()];
   std::string out = ranked.size() == 1

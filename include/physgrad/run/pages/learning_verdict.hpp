@@ -81,18 +81,18 @@ std::string value_text(double value);
 // The sentence: "HIG's final test loss is 12× below Adam's (0.031 vs 0.37); …. Per update and per
 // second against Adam: to reach 0.37 HIG needs between 100 and 200 updates, Adam 3300 (17–33×
 // fewer); its update costs 480 Adam updates (timed beside its steps); in Adam-update equivalents
-// 48000–96000 vs 3300 (15–29× more); in wall time (measured at the same evaluations) Adam gets
-// there 10–20× sooner (between 48 and 96 vs 4.7 s). …" Without cost probes the cost reads as the
-// ratio of the two runs' seconds per update and the equivalents are left out. The ratio of two rules' finals is the
-// ratio of their medians with the digits their spreads support (as the table of finals); counts,
-// seconds and their ratios carry no digit finer than the evaluations' brackets. Failed runs are
-// counted and never ranked; values within 10 % of each other are called about equal. Every
-// comparison says over how many seeds it is ("one seed"); over several it gives the medians and
-// the range of the seeds (min–max, for a count or seconds to reach the level from the lowest to
-// the highest bracket end), and where the two rules' ranges overlap it names no winner: "not
-// separated over 3 seeds". With a ranked control arm (Adam→Adam, RuleStanding::control), each
-// ranked twin's final value is set against it: "After the same switch, Adam→HIG ends 1.3× below
-// the control Adam→Adam (lr ×0.1) (0.05 vs 0.065)."
+// between 48000 and 96000, Adam 3300 (15–29× more); in wall time (measured at the same evaluations)
+// Adam gets there 10–20× sooner (between 48 and 96 vs 4.7 s). …" Without cost probes the cost reads
+// as the ratio of the two runs' seconds per update and the equivalents are left out. The ratio of
+// two rules' finals is the ratio of their medians with the digits their spreads support (as the
+// table of finals); counts, seconds and their ratios carry no digit finer than the evaluations'
+// brackets. Failed runs are counted and never ranked; values within 10 % of each other are called
+// about equal. Every comparison says over how many seeds it is ("one seed"); over several it gives
+// the medians and the range of the seeds (min–max, for a count or seconds to reach the level from
+// the lowest to the highest bracket end), and where the two rules' ranges overlap it names no
+// winner: "not separated over 3 seeds". With a ranked control arm (Adam→Adam,
+// RuleStanding::control), each ranked twin's final value is set against it: "After the same switch,
+// Adam→HIG ends 1.3× below the control Adam→Adam (lr ×0.1) (0.05 vs 0.065)."
 std::string verdict_sentence(const VerdictInput& input);
 
 }  // namespace physgrad::run
