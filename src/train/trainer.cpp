@@ -228,9 +228,13 @@ void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, doub
   // The reference's own batch size: the step's samples, cut short or repeated to it.
   const Index count =
       options_.cost_reference_batch > 0 ? options_.cost_reference_batch : batch.size();
-  std::vector<Index> samples(static_cast<std::size_t>(count));
-  for (Index i = 0; i < count; ++i) samples[static_cast<std::size_t>(i)] = i % batch.size();
-  const Dataset reference_batch = count == batch.size() ? batch : batch.select(samples);
+  Dataset resized;
+  if (count != batch.size()) {
+    std::vector<Index> samples(static_cast<std::size_t>(count));
+    for (Index i = 0; i < count; ++i) samples[static_cast<std::size_t>(i)] = i % batch.size();
+    resized = batch.select(samples);
+  }
+  const Dataset& reference_batch = count != batch.size() ? resized : batch;
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = process_cpu_seconds();
   try {

@@ -1,5 +1,6 @@
 // The parts of a twin as LearningSweep runs them: the options of its Adam part (--pretrain-lr, …),
 // the control arm Adam→Adam beside the twins, and each part's training seconds per update.
+#include <algorithm>
 #include <cmath>
 
 #include "physgrad/catalogue.hpp"
@@ -35,6 +36,21 @@ std::string taking_over_label(const std::string& id, const nlohmann::json& param
 
 double PhaseCost::seconds_per_update() const {
   return updates > 0 ? seconds / static_cast<double>(updates) : NAN;
+}
+
+double rule_seconds_per_update(const LearningResult& run) {
+  const TrainingSummary& s = run.summary;
+  if (!run.params.contains("pretrain_iterations")) {
+    return s.iterations > 0 ? s.train_seconds / static_cast<double>(s.iterations) : NAN;
+  }
+  // A twin: from its own evaluations after the switch (one is made where the rule takes over).
+  const double from = run.params.at("pretrain_iterations").get<double>();
+  const auto first = std::find_if(s.history.begin(), s.history.end(), [&](const TrainingRecord& r) {
+    return static_cast<double>(r.iteration) >= from;
+  });
+  if (first == s.history.end() || s.history.back().iteration <= first->iteration) return NAN;
+  return (s.history.back().train_seconds - first->train_seconds) /
+         static_cast<double>(s.history.back().iteration - first->iteration);
 }
 
 double adam_updates_per_update(const LearningResult& run) {

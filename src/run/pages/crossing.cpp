@@ -71,6 +71,29 @@ Crossing crossing_of(const std::vector<TrainingRecord>& history, double level,
   return {};
 }
 
+Crossing updates_crossing(const TrainingSummary& run, double level,
+                          const std::function<double(const TrainingRecord&)>& value) {
+  return crossing_of(run.history, level, value, [](const TrainingRecord& r) {
+    return static_cast<double>(r.iteration);
+  });
+}
+
+Crossing seconds_crossing(const TrainingSummary& run, double level,
+                          const std::function<double(const TrainingRecord&)>& value) {
+  return crossing_of(run.history, level, value,
+                     [](const TrainingRecord& r) { return r.train_seconds; });
+}
+
+double updates_to_reach(const TrainingSummary& run, double level,
+                        const std::function<double(const TrainingRecord&)>& value) {
+  return updates_crossing(run, level, value).estimate;
+}
+
+double seconds_to_reach(const TrainingSummary& run, double level,
+                        const std::function<double(const TrainingRecord&)>& value) {
+  return seconds_crossing(run, level, value).estimate;
+}
+
 Crossing median_crossing(const std::vector<Crossing>& runs) {
   std::vector<double> low, high, estimate;
   for (const Crossing& c : runs) {

@@ -276,44 +276,6 @@ bool credited(const LearningResult& run) {
   return end && ended_by_limit(*end) && switched;
 }
 
-Crossing updates_crossing(const TrainingSummary& run, double level,
-                          const std::function<double(const TrainingRecord&)>& value) {
-  return crossing_of(run.history, level, value, [](const TrainingRecord& r) {
-    return static_cast<double>(r.iteration);
-  });
-}
-
-Crossing seconds_crossing(const TrainingSummary& run, double level,
-                          const std::function<double(const TrainingRecord&)>& value) {
-  return crossing_of(run.history, level, value,
-                     [](const TrainingRecord& r) { return r.train_seconds; });
-}
-
-double updates_to_reach(const TrainingSummary& run, double level,
-                        const std::function<double(const TrainingRecord&)>& value) {
-  return updates_crossing(run, level, value).estimate;
-}
-
-double seconds_to_reach(const TrainingSummary& run, double level,
-                        const std::function<double(const TrainingRecord&)>& value) {
-  return seconds_crossing(run, level, value).estimate;
-}
-
-double rule_seconds_per_update(const LearningResult& run) {
-  const TrainingSummary& s = run.summary;
-  if (!run.params.contains("pretrain_iterations")) {
-    return s.iterations > 0 ? s.train_seconds / static_cast<double>(s.iterations) : NAN;
-  }
-  // A twin: from its own evaluations after the switch (one is made where the rule takes over).
-  const double from = run.params.at("pretrain_iterations").get<double>();
-  const auto first = std::find_if(s.history.begin(), s.history.end(), [&](const TrainingRecord& r) {
-    return static_cast<double>(r.iteration) >= from;
-  });
-  if (first == s.history.end() || s.history.back().iteration <= first->iteration) return NAN;
-  return (s.history.back().train_seconds - first->train_seconds) /
-         static_cast<double>(s.history.back().iteration - first->iteration);
-}
-
 RuleStanding standing(const std::vector<const LearningResult*>& group,
                       const std::function<double(const TrainingRecord&)>& value) {
   RuleStanding s;

@@ -58,6 +58,11 @@ struct PhaseCost {
 // the evaluation made there, and its rule's after it (Adam's alone when it never switched); empty
 // for a plain rule.
 std::vector<PhaseCost> phase_costs(const LearningResult& run);
+// The training seconds per update of a run's rule: the whole run's, or for a twin (params with
+// "pretrain_iterations") its evaluations' from the switch on, so that Adam's cheaper updates
+// before it are not mixed in; NaN when the rule made no update between two evaluations.
+double rule_seconds_per_update(const LearningResult& run);
+
 // What one update of the run's rule (a twin's: of its rule after the switch) costs in Adam
 // updates, from the cost probes timed beside its steps in its own process
 // (TrainerOptions::cost_reference): 1 for Adam and the control, NaN when it made none.

@@ -25,6 +25,19 @@ Crossing crossing_of(const std::vector<TrainingRecord>& history, double level,
                      const std::function<double(const TrainingRecord&)>& value,
                      const std::function<double(const TrainingRecord&)>& progress);
 
+// The updates and the training seconds in which a run brought `value` down to `level`: the
+// bracket between the evaluations that straddle it and the estimate inside (crossing_of).
+Crossing updates_crossing(const TrainingSummary& run, double level,
+                          const std::function<double(const TrainingRecord&)>& value);
+Crossing seconds_crossing(const TrainingSummary& run, double level,
+                          const std::function<double(const TrainingRecord&)>& value);
+// The estimates alone (interpolated between evaluations, log-linearly in the value); NaN when it
+// never did.
+double updates_to_reach(const TrainingSummary& run, double level,
+                        const std::function<double(const TrainingRecord&)>& value);
+double seconds_to_reach(const TrainingSummary& run, double level,
+                        const std::function<double(const TrainingRecord&)>& value);
+
 // The median over runs of each of low, high and estimate, a run that never got there counting as
 // the largest: NaN when fewer than half the runs got there. The median crossing lies in the
 // bracket of the medians, since a median is monotone in each value.

@@ -32,8 +32,8 @@ struct VerdictInput {
 };
 
 // Per rule (group): the median and spread over its credited runs of the final value, and the
-// medians of the seconds per update of the rule (rule_seconds_per_update) and of its cost in Adam
-// updates (adam_updates_per_update); the counts of credited and of other runs.
+// medians of the seconds per update of the rule (rule_seconds_per_update, learning_runs.hpp) and
+// of its cost in Adam updates (adam_updates_per_update); the counts of credited and of other runs.
 struct RuleStanding {
   std::string label;
   std::string id;
@@ -51,24 +51,6 @@ struct RuleStanding {
 };
 RuleStanding standing(const std::vector<const LearningResult*>& group,
                       const std::function<double(const TrainingRecord&)>& value);
-
-// The updates and the training seconds in which a run brought `value` down to `level`: the
-// bracket between the evaluations that straddle it and the estimate inside (crossing_of).
-Crossing updates_crossing(const TrainingSummary& run, double level,
-                          const std::function<double(const TrainingRecord&)>& value);
-Crossing seconds_crossing(const TrainingSummary& run, double level,
-                          const std::function<double(const TrainingRecord&)>& value);
-// The estimates alone (interpolated between evaluations, log-linearly in the value); NaN when it
-// never did.
-double updates_to_reach(const TrainingSummary& run, double level,
-                        const std::function<double(const TrainingRecord&)>& value);
-double seconds_to_reach(const TrainingSummary& run, double level,
-                        const std::function<double(const TrainingRecord&)>& value);
-
-// The training seconds per update of a run's rule: the whole run's, or for a twin (params with
-// "pretrain_iterations") its evaluations' from the switch on, so that Adam's cheaper updates
-// before it are not mixed in; NaN when the rule made no update between two evaluations.
-double rule_seconds_per_update(const LearningResult& run);
 
 // A verdict sentence after `lead` ("After the same budget, ", "At ξ = 32, "): its first word in
 // lower case where it is not a rule's label ("No rule ended …" reads "no rule ended …").
