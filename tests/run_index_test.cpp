@@ -447,6 +447,22 @@ TEST_F(RunIndex, APretrainedRunIsMarkedWhereItSwitched) {
   EXPECT_NE(overlays[0].find("(◆ switched from Adam after 4)"), std::string::npos);
 }
 
+// Integer settings and parameters read in full on both pages: seed 12345 was shown as
+// "1.234e+04", which is 12340.
+TEST_F(RunIndex, IntegersReadInFullOnTheReportAndTheIndex) {
+  ASSERT_EQ(run("run oscillators --train-size 32 --test-size 16 --iters 8 --eval-every 2 "
+                "--batch 16 --pretrain 4 --seeds 1 --seed 12345 --out runs/osc")
+                .exit_code,
+            0);
+  ASSERT_EQ(run("report runs").exit_code, 0);
+  const fs::path runs = dir_ / "runs";
+  for (const fs::path& page : {runs / "osc" / "report.html", runs / "index.html"}) {
+    const std::string html = read_file(page);
+    EXPECT_NE(html.find("seed = 12345"), std::string::npos) << page;
+    EXPECT_EQ(html.find("1.234e+04"), std::string::npos) << page;
+  }
+}
+
 // A run folder may be named index.html: the page then takes the next free name, index-2.html,
 // and the folder is listed like any other.
 TEST_F(RunIndex, ARunFolderNamedIndexHtmlMovesThePageAside) {

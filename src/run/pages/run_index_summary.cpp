@@ -9,6 +9,7 @@
 #include "physgrad/error.hpp"
 #include "physgrad/run/life/experiment.hpp"
 #include "physgrad/run/life/run_summary.hpp"
+#include "physgrad/run/pages/report_page.hpp"
 #include "physgrad/text.hpp"
 
 namespace physgrad::run {
@@ -23,7 +24,7 @@ bool IndexedMessage::compares(const std::string& label) const {
 }
 
 std::string index_text(const json& value) {
-  return value.is_string() ? value.get<std::string>() : format_value(value.get<double>());
+  return value.is_string() ? value.get<std::string>() : format_number(value);
 }
 
 std::string index_clipped(std::string text, std::size_t bytes) {

@@ -24,7 +24,8 @@ void write_report_file(const FolderHandle& staging, const Experiment& experiment
                        const Settings& settings, const RunContext& context,
                        const std::string& command_line, const RunSummary& summary);
 
-// A number of a summary or settings document with 4 significant digits ("–" for null).
+// A number of a summary or settings document: an integer (seed, iterations, batch) in full, any
+// other number with 4 significant digits; "–" for null.
 std::string format_number(const nlohmann::json& value);
 
 // A setting's value as the command line takes it: whole numbers as integers ("10000"), other

@@ -127,7 +127,7 @@ std::string index_setting(const IndexedRun& run, const std::vector<std::string>&
 // passes): a direct run that did not converge has none.
 bool is_cost_metric(const std::string& metric);
 
-// A JSON value as a cell shows it: text as it is, a number with 4 significant digits.
+// A JSON value as a cell shows it: text as it is, a number as format_number() writes it.
 std::string index_text(const nlohmann::json& value);
 // `text` cut to at most `bytes` bytes at a character's start, "…" added where it was cut.
 std::string index_clipped(std::string text, std::size_t bytes);
