@@ -5,17 +5,20 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <vector>
 
 #include "learning_fixture.hpp"
 #include "physgrad/learn/switching.hpp"
 #include "physgrad/stop.hpp"
+#include "physgrad/timing.hpp"
 #include "test_problems.hpp"
 
 namespace physgrad {
 namespace {
 
+using testing::AdamWithDelay;
 using testing::NetworkThroughPhysics;
 using testing::test_settings;
 
@@ -66,16 +69,28 @@ TEST(CostProbe, TheReferencesOwnPartIsNotProbedAndProbesSurviveACheckpoint) {
   ASSERT_EQ(summary.phases.size(), 2u);
   EXPECT_EQ(summary.phases[0].probes, 0);
   EXPECT_GE(summary.phases[1].probes, 1);
-  EXPECT_GT(summary.phases[1].probed_step_cpu_seconds, 0);
+  EXPECT_EQ(summary.phases[1].timed_steps, 6);
+  EXPECT_GT(summary.phases[1].step_cpu_seconds, 0);
   EXPECT_GT(summary.phases[1].reference_cpu_seconds, 0);
 
   const TrainingSummary back = training_summary_from_json(training_summary_to_json(summary));
   ASSERT_EQ(back.phases.size(), 2u);
   EXPECT_EQ(back.phases[1].probes, summary.phases[1].probes);
-  EXPECT_EQ(back.phases[1].probed_step_cpu_seconds, summary.phases[1].probed_step_cpu_seconds);
+  EXPECT_EQ(back.phases[1].timed_steps, summary.phases[1].timed_steps);
+  EXPECT_EQ(back.phases[1].step_cpu_seconds, summary.phases[1].step_cpu_seconds);
   EXPECT_EQ(back.phases[1].reference_cpu_seconds, summary.phases[1].reference_cpu_seconds);
+  // A file of the first version with probes timed the rule at its probes alone.
+  nlohmann::json probed_only = training_summary_to_json(summary);
+  for (nlohmann::json& phase : probed_only["phases"]) {
+    phase["probed_step_cpu_seconds"] = phase["step_cpu_seconds"];
+    phase.erase("timed_steps");
+    phase.erase("step_cpu_seconds");
+  }
+  const TrainingSummary::Phase read = training_summary_from_json(probed_only).phases[1];
+  EXPECT_EQ(read.timed_steps, summary.phases[1].probes);
+  EXPECT_EQ(read.step_cpu_seconds, summary.phases[1].step_cpu_seconds);
   // A file of an earlier version has no probes: its parts read as unprobed.
-  nlohmann::json old = training_summary_to_json(summary);
+  nlohmann::json old = probed_only;
   for (nlohmann::json& phase : old["phases"]) {
     phase.erase("probes");
     phase.erase("probed_step_cpu_seconds");
@@ -132,6 +147,54 @@ TEST(CostProbe, TheReferenceStepsAtItsOwnBatchSize) {
     ASSERT_FALSE(sizes.empty());
     for (const Index size : sizes) EXPECT_EQ(size, reference_batch);
   }
+}
+
+// Spends `seconds` of the process's CPU time.
+void burn_cpu(double seconds) {
+  const double until = process_cpu_seconds() + seconds;
+  volatile double sink = 0;
+  while (process_cpu_seconds() < until) sink = sink + 1;
+}
+
+// A reference whose step takes `burn` CPU seconds, so that probes are rare (2 % of the time).
+class BurningReference final : public LearningUpdate {
+ public:
+  explicit BurningReference(double burn) : burn_(burn) {}
+  std::string id() const override { return "burning-reference"; }
+  nlohmann::json params() const override { return nlohmann::json::object(); }
+  UpdateNeed need() const override { return UpdateNeed::kGradient; }
+  Step step(const BatchState& batch) override {
+    burn_cpu(burn_);
+    return {Vector::Zero(batch.gradient.size())};
+  }
+  double learning_rate() const override { return 0; }
+  void set_learning_rate(double /*lr*/) override {}
+
+ private:
+  double burn_;
+};
+
+// A rule whose every tenth step costs 5 ms more is charged its mean cost per update: at least the
+// burns' 0.5 ms per step, at most the whole run's CPU time per step. Charged at the probed steps
+// alone it read several times that: with probes as rare as here, a long step is the one that
+// most often makes the next probe due.
+TEST(CostProbe, ARuleWithUnevenStepsIsChargedItsMeanCost) {
+  NetworkThroughPhysics s(32);
+  AdamWithDelay rule([](long long k) {
+    if (k % 10 == 9) burn_cpu(5e-3);
+  });
+  TrainerOptions options = probed(400, false);
+  options.cost_reference = [] { return std::make_unique<BurningReference>(1e-3); };
+  const double start = process_cpu_seconds();
+  const TrainingSummary summary = train(s.network, rule, s.problem, s.data, nullptr, options);
+  const double per_step = (process_cpu_seconds() - start) / 400;  // steps, evaluations, probes
+  const TrainingSummary::Phase& phase = summary.phases.back();
+  ASSERT_GE(phase.probes, 2);
+  EXPECT_EQ(phase.timed_steps, 400);
+  const double charged = phase.reference_updates() * phase.reference_cpu_seconds /
+                         static_cast<double>(phase.probes);
+  EXPECT_GE(charged, 0.999 * 0.5e-3);
+  EXPECT_LE(charged, per_step);
 }
 
 // A stop inside a probe drops the probe, not the step before it: the run stops at the next

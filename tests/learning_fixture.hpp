@@ -4,7 +4,11 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <random>
+#include <string>
+#include <utility>
 
 #include "physgrad/catalogue.hpp"
 #include "physgrad/nn/mlp.hpp"
@@ -71,5 +75,28 @@ inline RuleSettings test_settings(const std::string& id) {
   if (source == "gn" || source == "hig") settings["lr"] = 0.1;
   return settings;
 }
+
+// Adam whose k-th step (k = 0, 1, …) first calls delay(k): a rule whose steps take longer, all
+// of them or some (as one that refreshes costly factors every few steps).
+class AdamWithDelay final : public LearningUpdate {
+ public:
+  explicit AdamWithDelay(std::function<void(long long)> delay)
+      : adam_(make_learning_update("adam")), delay_(std::move(delay)) {}
+  std::string id() const override { return "adam-with-delay"; }
+  nlohmann::json params() const override { return adam_->params(); }
+  UpdateNeed need() const override { return adam_->need(); }
+  void reset() override { adam_->reset(); }
+  Step step(const BatchState& batch) override {
+    delay_(steps_++);
+    return adam_->step(batch);
+  }
+  double learning_rate() const override { return adam_->learning_rate(); }
+  void set_learning_rate(double lr) override { adam_->set_learning_rate(lr); }
+
+ private:
+  std::unique_ptr<LearningUpdate> adam_;
+  std::function<void(long long)> delay_;
+  long long steps_ = 0;
+};
 
 }  // namespace physgrad::testing

@@ -19,34 +19,16 @@
 namespace physgrad {
 namespace {
 
+using testing::AdamWithDelay;
 using testing::NetworkThroughPhysics;
 using Clock = std::chrono::steady_clock;
-
-// Adam whose every step first sleeps `pause` seconds: a rule with a slow step.
-class SlowAdam : public LearningUpdate {
- public:
-  explicit SlowAdam(double pause) : adam_(make_learning_update("adam")), pause_(pause) {}
-  std::string id() const override { return "slow-adam"; }
-  nlohmann::json params() const override { return adam_->params(); }
-  UpdateNeed need() const override { return adam_->need(); }
-  void reset() override { adam_->reset(); }
-  Step step(const BatchState& batch) override {
-    std::this_thread::sleep_for(std::chrono::duration<double>(pause_));
-    return adam_->step(batch);
-  }
-  double learning_rate() const override { return adam_->learning_rate(); }
-  void set_learning_rate(double lr) override { adam_->set_learning_rate(lr); }
-
- private:
-  std::unique_ptr<LearningUpdate> adam_;
-  double pause_;
-};
 
 // A budget of 1 s and steps of at least 0.6 s: the second step would end past the budget, so
 // it is not started, and the termination says why.
 TEST(TrainerTime, AStepThatCannotFitInTheBudgetIsNotStarted) {
   NetworkThroughPhysics s(8);
-  SlowAdam rule(0.6);
+  AdamWithDelay rule(
+      [](long long) { std::this_thread::sleep_for(std::chrono::milliseconds(600)); });
   TrainerOptions options;
   options.batch_size = 4;
   options.time_budget_seconds = 1.0;

@@ -165,8 +165,8 @@ TEST(VerdictCrossing, ATwinsStepCostIsItsRulesPhaseAlone) {
 TEST(VerdictCrossing, ProbedCostsGiveTheCostInAdamUpdatesAndTheEquivalents) {
   const LearningResult adam = exponential("adam", 100, 10000, 2000, 1e-4);
   LearningResult hig = exponential("hig", 10, 400, 52, 1e-3);
-  hig.summary.phases = {{.first_iteration = 0, .batch_size = 32, .probes = 4,
-                         .probed_step_cpu_seconds = 50, .reference_cpu_seconds = 1}};
+  hig.summary.phases = {{.first_iteration = 0, .batch_size = 32, .probes = 4, .reference_cpu_seconds = 1,
+                         .timed_steps = 4, .step_cpu_seconds = 50}};
   EXPECT_DOUBLE_EQ(adam_updates_per_update(hig), 50);
   EXPECT_DOUBLE_EQ(adam_updates_per_update(adam), 1);
   const std::string sentence = verdict_sentence({{{&adam}, {&hig}}, kLoss, "final test loss"});
@@ -177,7 +177,7 @@ TEST(VerdictCrossing, ProbedCostsGiveTheCostInAdamUpdatesAndTheEquivalents) {
       << sentence;
   EXPECT_EQ(sentence.find("seconds per update of the two runs"), std::string::npos) << sentence;
   // Equivalents are whole updates, also at a cost with decimals (100 / 3 Adam updates).
-  hig.summary.phases[0].probed_step_cpu_seconds = 100;
+  hig.summary.phases[0].step_cpu_seconds = 100;
   hig.summary.phases[0].reference_cpu_seconds = 3;
   const std::string thirds = verdict_sentence({{{&adam}, {&hig}}, kLoss, "final test loss"});
   // 8333–8667 against 9900–10000: 1.14–1.2× fewer, which one digit would round to "1×".
@@ -196,7 +196,8 @@ TEST(VerdictCrossing, ATwinsEquivalentsCountItsAdamPartOnceAndItsRulesAtTheirCos
   twin.params = {{"switched", true}, {"pretrain_iterations", 1000}};
   twin.summary.phases = {{.first_iteration = 0, .batch_size = 32},
                          {.first_iteration = 1000, .batch_size = 32, .probes = 3,
-                          .probed_step_cpu_seconds = 30, .reference_cpu_seconds = 0.01}};
+                          .reference_cpu_seconds = 0.01, .timed_steps = 3,
+                          .step_cpu_seconds = 30}};
   EXPECT_DOUBLE_EQ(adam_updates_per_update(twin), 3000);
   const std::string sentence = verdict_sentence({{{&adam}, {&twin}}, kLoss, "final test loss"});
   EXPECT_NE(sentence.find("its update after the switch costs 3000 Adam updates (timed beside its "

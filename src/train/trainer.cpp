@@ -16,8 +16,9 @@
 namespace physgrad {
 
 double TrainingSummary::Phase::reference_updates() const {
-  return probes > 0 && reference_cpu_seconds > 0 ? probed_step_cpu_seconds / reference_cpu_seconds
-                                                 : NAN;
+  if (probes == 0 || timed_steps == 0 || reference_cpu_seconds <= 0) return NAN;
+  return (step_cpu_seconds / static_cast<double>(timed_steps)) /
+         (reference_cpu_seconds / static_cast<double>(probes));
 }
 
 namespace training {
@@ -219,12 +220,15 @@ void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, doub
     reference_ = options_.cost_reference();
     reference_cache_ = network_.new_cache();
   }
+  if (part == reference_->id()) return;
   TrainingSummary::Phase& phase = summary_.phases.back();
+  // Every step counts toward the part's cost; only the reference is sampled, whose steps cost
+  // the same. (Timing the rule only at the probed steps would favour its long steps: a step
+  // that pushes the training time past the probes' share is more likely a long one.)
+  ++phase.timed_steps;
+  phase.step_cpu_seconds += step_cpu;
   const bool first_of_part = phase.probes == 0 && summary_.iterations == phase.first_iteration + 1;
-  if (part == reference_->id() ||
-      (!first_of_part && probe_seconds_ > kProbeShare * summary_.train_seconds)) {
-    return;
-  }
+  if (!first_of_part && probe_seconds_ > kProbeShare * summary_.train_seconds) return;
   // The reference's own batch size: the step's samples, cut short or repeated to it.
   const Index count =
       options_.cost_reference_batch > 0 ? options_.cost_reference_batch : batch.size();
@@ -250,7 +254,6 @@ void TrainingRun::probe_cost(const Dataset& batch, const std::string& part, doub
   const double cpu = process_cpu_seconds() - cpu_start;
   probe_seconds_ += seconds_since(start);
   ++phase.probes;
-  phase.probed_step_cpu_seconds += step_cpu;
   // A reference update in a run of its own would draw its batch too: its share of this draw.
   phase.reference_cpu_seconds +=
       cpu + draw_cpu * static_cast<double>(count) / static_cast<double>(batch.size());

@@ -55,8 +55,9 @@ nlohmann::json phases_to_json(const std::vector<TrainingSummary::Phase>& phases)
     out.push_back({{"first_iteration", phase.first_iteration},
                    {"batch_size", phase.batch_size},
                    {"probes", phase.probes},
-                   {"probed_step_cpu_seconds", phase.probed_step_cpu_seconds},
-                   {"reference_cpu_seconds", phase.reference_cpu_seconds}});
+                   {"reference_cpu_seconds", phase.reference_cpu_seconds},
+                   {"timed_steps", phase.timed_steps},
+                   {"step_cpu_seconds", phase.step_cpu_seconds}});
   }
   return out;
 }
@@ -68,11 +69,15 @@ std::vector<TrainingSummary::Phase> phases_from_json(const nlohmann::json& docum
   for (const nlohmann::json& entry : document) {
     TrainingSummary::Phase phase{integer_from_json(entry, "first_iteration"),
                                  static_cast<Index>(integer_from_json(entry, "batch_size", 1))};
-    // Absent from files of earlier versions, which made no cost probes.
+    // Absent from files of earlier versions, which made no cost probes; those that did timed
+    // the rule's steps at the probes alone ("probed_step_cpu_seconds").
     if (entry.contains("probes")) {
       phase.probes = integer_from_json(entry, "probes");
-      phase.probed_step_cpu_seconds = real_from_json(entry, "probed_step_cpu_seconds");
       phase.reference_cpu_seconds = real_from_json(entry, "reference_cpu_seconds");
+      const bool every_step = entry.contains("timed_steps");
+      phase.timed_steps = every_step ? integer_from_json(entry, "timed_steps") : phase.probes;
+      phase.step_cpu_seconds =
+          real_from_json(entry, every_step ? "step_cpu_seconds" : "probed_step_cpu_seconds");
     }
     phases.push_back(phase);
   }

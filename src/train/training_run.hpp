@@ -70,9 +70,9 @@ class TrainingRun {
   // The next batch of the epoch's `order` drawn and stepped on, its wall time kept as the last
   // step's cost (step_cost_) and its CPU time handed to probe_cost(); false as step().
   bool timed_step(const std::vector<Index>& order);
-  // Times a step of the cost reference beside the step rule `part` just made on `batch` (step_cpu
-  // CPU seconds, of which draw_cpu drew the batch), when one is due
-  // (TrainerOptions::cost_reference).
+  // Counts the step rule `part` just made on `batch` (step_cpu CPU seconds, of which draw_cpu drew
+  // the batch) toward its part's cost, and times a step of the cost reference beside it when one
+  // is due (TrainerOptions::cost_reference).
   void probe_cost(const Dataset& batch, const std::string& part, double step_cpu,
                   double draw_cpu);
   void stop_for_numbers(const std::string& message);

@@ -67,16 +67,17 @@ struct TrainingSummary {
   // The parts of the run: one for a plain rule; a rule made of parts in turn
   // (LearningUpdate::phase(), e.g. SwitchingUpdate's Adam→HIG) adds one each time the next part
   // takes over, with the updates made before it and its batch size. Kept in checkpoints.
-  // With TrainerOptions::cost_reference, a part also keeps its cost probes: how many were made,
-  // the CPU seconds of the steps they stood beside and those of the reference steps.
+  // With TrainerOptions::cost_reference, a part also keeps its cost: the CPU seconds of every one
+  // of its steps, and the number and CPU seconds of the reference steps probed beside them.
   struct Phase {
     long long first_iteration = 0;
     Index batch_size = 0;
     long long probes = 0;
-    double probed_step_cpu_seconds = 0;
     double reference_cpu_seconds = 0;
-    // The part's cost per update in reference updates (Adam's, say) measured beside its own
-    // steps under the same load; NaN without probes.
+    long long timed_steps = 0;
+    double step_cpu_seconds = 0;
+    // The part's cost per update in reference updates (Adam's, say): the mean CPU seconds of its
+    // steps over those of the reference steps timed beside them; NaN without probes.
     double reference_updates() const;
   };
   std::vector<Phase> phases;
@@ -155,12 +156,14 @@ struct TrainerOptions {
   // pass, the derivative it needs and its Δθ, which is never applied, plus its share of the
   // batch's draw (as in a run of its own; the step it stands beside includes its draw). Both are
   // timed in the process's CPU seconds (process_cpu_seconds(), all threads), which time spent
-  // waiting for a core does not enter. So each part's cost per update reads in the reference's
-  // updates, whatever else the machine runs (Phase::reference_updates()). The run's θ, data and
-  // results do not depend on it; probes are made after the first step of each part and then
-  // whenever they have taken at most 2 % of the training time, and count toward the wall time
-  // (not train_seconds). A part whose rule has the reference's id is not probed. A stop request
-  // inside a probe drops the probe; the run stops at the next iteration boundary. Not in
+  // waiting for a core does not enter; every step of a part is timed, so a rule whose steps
+  // differ in cost (a Kronecker rule refreshing its factors every k steps) is charged its mean,
+  // not the cost of the steps a probe happened to follow. So each part's cost per update reads
+  // in the reference's updates, whatever else the machine runs (Phase::reference_updates()). The
+  // run's θ, data and results do not depend on it; probes are made after the first step of each
+  // part and then whenever they have taken at most 2 % of the training time, and count toward the
+  // wall time (not train_seconds). A part whose rule has the reference's id is not probed. A stop
+  // request inside a probe drops the probe; the run stops at the next iteration boundary. Not in
   // data-parallel runs.
   std::function<std::unique_ptr<LearningUpdate>()> cost_reference;
   Index cost_reference_batch = 0;  // 0: the step's whole batch
