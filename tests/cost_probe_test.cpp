@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "learning_fixture.hpp"
@@ -99,38 +101,24 @@ TEST(CostProbe, TheReferencesOwnPartIsNotProbedAndProbesSurviveACheckpoint) {
   EXPECT_EQ(training_summary_from_json(old).phases[1].probes, 0);
 }
 
-// A reference whose step asks the process to stop and then polls, as a simulator inside it would:
-// the stop lands inside a probe.
-class StoppingReference final : public LearningUpdate {
+// A reference whose step runs `body` on the batch and proposes no change: it records, burns CPU
+// time or asks to stop, as a test needs.
+class ScriptedReference final : public LearningUpdate {
  public:
-  std::string id() const override { return "stopping-reference"; }
-  nlohmann::json params() const override { return nlohmann::json::object(); }
-  UpdateNeed need() const override { return UpdateNeed::kGradient; }
-  Step step(const BatchState& /*batch*/) override {
-    request_stop();
-    throw_if_stop_requested("the probe");
-    return {};
-  }
-  double learning_rate() const override { return 0; }
-  void set_learning_rate(double /*lr*/) override {}
-};
-
-// A reference that records the batch sizes it is given.
-class SizeRecordingReference final : public LearningUpdate {
- public:
-  explicit SizeRecordingReference(std::vector<Index>& sizes) : sizes_(sizes) {}
-  std::string id() const override { return "size-recording-reference"; }
+  explicit ScriptedReference(std::function<void(const BatchState&)> body)
+      : body_(std::move(body)) {}
+  std::string id() const override { return "scripted-reference"; }
   nlohmann::json params() const override { return nlohmann::json::object(); }
   UpdateNeed need() const override { return UpdateNeed::kGradient; }
   Step step(const BatchState& batch) override {
-    sizes_.push_back(batch.batch_size);
+    body_(batch);
     return {Vector::Zero(batch.gradient.size())};
   }
   double learning_rate() const override { return 0; }
   void set_learning_rate(double /*lr*/) override {}
 
  private:
-  std::vector<Index>& sizes_;
+  std::function<void(const BatchState&)> body_;
 };
 
 // The reference steps at its own batch size: the rule's batch of 4 is cut to 2, or its samples
@@ -140,7 +128,10 @@ TEST(CostProbe, TheReferenceStepsAtItsOwnBatchSize) {
     NetworkThroughPhysics s(32);
     std::vector<Index> sizes;
     TrainerOptions options = probed(6, false);
-    options.cost_reference = [&sizes] { return std::make_unique<SizeRecordingReference>(sizes); };
+    options.cost_reference = [&sizes] {
+      return std::make_unique<ScriptedReference>(
+          [&sizes](const BatchState& batch) { sizes.push_back(batch.batch_size); });
+    };
     options.cost_reference_batch = reference_batch;
     const auto rule = make_learning_update("hig", test_settings("hig"));
     train(s.network, *rule, s.problem, s.data, nullptr, options);
@@ -156,24 +147,6 @@ void burn_cpu(double seconds) {
   while (process_cpu_seconds() < until) sink = sink + 1;
 }
 
-// A reference whose step takes `burn` CPU seconds, so that probes are rare (2 % of the time).
-class BurningReference final : public LearningUpdate {
- public:
-  explicit BurningReference(double burn) : burn_(burn) {}
-  std::string id() const override { return "burning-reference"; }
-  nlohmann::json params() const override { return nlohmann::json::object(); }
-  UpdateNeed need() const override { return UpdateNeed::kGradient; }
-  Step step(const BatchState& batch) override {
-    burn_cpu(burn_);
-    return {Vector::Zero(batch.gradient.size())};
-  }
-  double learning_rate() const override { return 0; }
-  void set_learning_rate(double /*lr*/) override {}
-
- private:
-  double burn_;
-};
-
 // A rule whose every tenth step costs 5 ms more is charged its mean cost per update: at least the
 // burns' 0.5 ms per step, at most the whole run's CPU time per step. Charged at the probed steps
 // alone it read several times that: with probes as rare as here, a long step is the one that
@@ -184,7 +157,10 @@ TEST(CostProbe, ARuleWithUnevenStepsIsChargedItsMeanCost) {
     if (k % 10 == 9) burn_cpu(5e-3);
   });
   TrainerOptions options = probed(400, false);
-  options.cost_reference = [] { return std::make_unique<BurningReference>(1e-3); };
+  // A reference step of 1 ms keeps the probes rare (2 % of the time).
+  options.cost_reference = [] {
+    return std::make_unique<ScriptedReference>([](const BatchState&) { burn_cpu(1e-3); });
+  };
   const double start = process_cpu_seconds();
   const TrainingSummary summary = train(s.network, rule, s.problem, s.data, nullptr, options);
   const double per_step = (process_cpu_seconds() - start) / 400;  // steps, evaluations, probes
@@ -206,7 +182,14 @@ TEST(CostProbe, AStopInsideAProbeStopsAtTheNextIterationAndResumesExactly) {
   clear_stop_request();
   TrainerOptions options = probed(6, false);
   options.stop = &stop_request_flag();
-  options.cost_reference = [] { return std::make_unique<StoppingReference>(); };
+  // The reference asks the process to stop and then polls, as a simulator inside it would: the
+  // stop lands inside a probe.
+  options.cost_reference = [] {
+    return std::make_unique<ScriptedReference>([](const BatchState&) {
+      request_stop();
+      throw_if_stop_requested("the probe");
+    });
+  };
   std::optional<TrainerState> saved;
   options.on_checkpoint = [&saved](const TrainerState& state) { saved = state; };
   const auto stopped_rule = make_learning_update("hig", test_settings("hig"));

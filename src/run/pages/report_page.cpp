@@ -5,7 +5,6 @@
 
 #include <charconv>
 #include <cmath>
-#include <sstream>
 
 #include "physgrad/error.hpp"
 #include "physgrad/io/atomic_file.hpp"
@@ -119,10 +118,7 @@ void write_report_file(const FolderHandle& staging, const Experiment& experiment
 std::string format_number(const nlohmann::json& value) {
   if (!value.is_number()) return value.is_null() ? "–" : value.dump();
   if (value.is_number_integer()) return value.dump();  // a seed 12345, never 1.234e+04
-  std::ostringstream out;
-  out.precision(4);
-  out << value.get<double>();
-  return out.str();
+  return format_value(value.get<double>());
 }
 
 std::string option_value_text(const nlohmann::json& value) {
